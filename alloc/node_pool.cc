@@ -1,0 +1,227 @@
+#include "alloc/node_pool.h"
+
+#include <sys/mman.h>
+
+#include <cstdlib>
+#include <new>
+
+#include "alloc/check.h"
+
+namespace grove {
+namespace {
+
+constexpr size_t kPageBytes = size_t{64} << 10;
+constexpr size_t kSlabBytes = size_t{4} << 20;
+constexpr size_t kHugePageBytes = size_t{2} << 20;
+constexpr size_t kNodeAlign = 16;
+
+// Maps a slab aligned to the huge-page size, so the kernel can back it with huge pages.
+void* MapSlab() {
+  size_t span = kSlabBytes + kHugePageBytes;
+  void* raw = mmap(nullptr, span, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (raw == MAP_FAILED) return nullptr;
+  uintptr_t begin = reinterpret_cast<uintptr_t>(raw);
+  uintptr_t aligned = (begin + kHugePageBytes - 1) & ~(kHugePageBytes - 1);
+  if (aligned > begin) munmap(raw, aligned - begin);
+  uintptr_t end = begin + span;
+  if (end > aligned + kSlabBytes) munmap(reinterpret_cast<void*>(aligned + kSlabBytes), end - (aligned + kSlabBytes));
+#ifdef MADV_HUGEPAGE
+  madvise(reinterpret_cast<void*>(aligned), kSlabBytes, MADV_HUGEPAGE);
+#endif
+  return reinterpret_cast<void*>(aligned);
+}
+
+}  // namespace
+
+struct NodePool::Page {
+  Heap* owner;
+  FreeNode* free;      // nodes freed back to this page (owner only)
+  uint32_t bump;       // index of the next never-used node
+  uint32_t in_avail;   // 1 while on the owner's list of pages with free nodes
+  Page* next_avail;
+};
+
+struct alignas(128) NodePool::Heap {
+  Page* current = nullptr;     // the page allocations come from
+  Page* avail = nullptr;       // other pages that have free nodes
+  char* slab_cursor = nullptr;
+  char* slab_end = nullptr;
+  std::vector<void*> slabs;
+  // Written only by the owning slot (load + store, no read-modify-write); relaxed because it is
+  // a statistic: readers need a recent value, not an ordering with the nodes themselves.
+  std::atomic<int64_t> live{0};
+  // Pushed by other threads, drained by the owner. Release on push publishes the node's `next`
+  // to the owner's acquire exchange.
+  alignas(64) std::atomic<FreeNode*> remote{nullptr};
+  // Nodes on `remote` not yet drained; relaxed: a statistic, like `live`.
+  std::atomic<int64_t> remote_pending{0};
+};
+
+NodePool::NodePool(size_t node_bytes, int slots)
+    : node_bytes_((node_bytes + kNodeAlign - 1) & ~(kNodeAlign - 1)) {
+  GROVE_CHECK(node_bytes >= sizeof(FreeNode) && node_bytes <= (size_t{16} << 10));
+  GROVE_CHECK(slots >= 1);
+  size_t header = (sizeof(Page) + kNodeAlign - 1) & ~(kNodeAlign - 1);
+  first_node_offset_ = static_cast<uint32_t>(header);
+  nodes_per_page_ = static_cast<uint32_t>((kPageBytes - header) / node_bytes_);
+  heaps_.reserve(slots);
+  for (int i = 0; i < slots; ++i) heaps_.push_back(std::make_unique<Heap>());
+}
+
+NodePool::~NodePool() {
+  for (auto& heap : heaps_) {
+    for (void* slab : heap->slabs) munmap(slab, kSlabBytes);
+  }
+}
+
+#ifdef GROVE_NODE_POOL
+
+void* NodePool::Allocate(int slot) {
+  Heap* heap = heaps_[slot].get();
+  Page* page = heap->current;
+  void* result;
+  if (page != nullptr && page->free != nullptr) {
+    FreeNode* node = page->free;
+    page->free = node->next;
+    result = node;
+  } else if (page != nullptr && page->bump < nodes_per_page_) {
+    result = reinterpret_cast<char*>(page) + first_node_offset_ + size_t{page->bump++} * node_bytes_;
+  } else {
+    page = Refill(heap);
+    if (page->free != nullptr) {
+      FreeNode* node = page->free;
+      page->free = node->next;
+      result = node;
+    } else {
+      result =
+          reinterpret_cast<char*>(page) + first_node_offset_ + size_t{page->bump++} * node_bytes_;
+    }
+  }
+  heap->live.store(heap->live.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+  return result;
+}
+
+void NodePool::Free(void* p, int slot) {
+  Page* page = reinterpret_cast<Page*>(reinterpret_cast<uintptr_t>(p) & ~(kPageBytes - 1));
+  Heap* owner = page->owner;
+  FreeNode* node = static_cast<FreeNode*>(p);
+  if (slot >= 0 && heaps_[slot].get() == owner) {
+    LocalFree(owner, page, node);
+    owner->live.store(owner->live.load(std::memory_order_relaxed) - 1, std::memory_order_relaxed);
+    return;
+  }
+  FreeNode* head = owner->remote.load(std::memory_order_relaxed);
+  do {
+    node->next = head;
+    // Release: the owner's acquire exchange must see node->next. Relaxed on failure: we only
+    // retry with the new head.
+  } while (!owner->remote.compare_exchange_weak(head, node, std::memory_order_release,
+                                                std::memory_order_relaxed));
+  owner->remote_pending.fetch_add(1, std::memory_order_relaxed);
+}
+
+void NodePool::LocalFree(Heap* heap, Page* page, FreeNode* node) {
+  node->next = page->free;
+  page->free = node;
+  if (!page->in_avail && page != heap->current) {
+    page->in_avail = 1;
+    page->next_avail = heap->avail;
+    heap->avail = page;
+  }
+}
+
+void NodePool::DrainRemote(Heap* heap) {
+  if (heap->remote.load(std::memory_order_relaxed) == nullptr) return;
+  // Acquire pairs with the producers' release CAS: every `next` in the list is visible.
+  FreeNode* node = heap->remote.exchange(nullptr, std::memory_order_acquire);
+  int64_t drained = 0;
+  while (node != nullptr) {
+    FreeNode* next = node->next;
+    Page* page = reinterpret_cast<Page*>(reinterpret_cast<uintptr_t>(node) & ~(kPageBytes - 1));
+    LocalFree(heap, page, node);
+    node = next;
+    ++drained;
+  }
+  heap->remote_pending.fetch_sub(drained, std::memory_order_relaxed);
+  heap->live.store(heap->live.load(std::memory_order_relaxed) - drained, std::memory_order_relaxed);
+}
+
+NodePool::Page* NodePool::Refill(Heap* heap) {
+  DrainRemote(heap);
+  NotePeak();
+  // Draining may have refilled the current page itself (it is never on the avail list).
+  if (heap->current != nullptr && heap->current->free != nullptr) return heap->current;
+  if (heap->avail != nullptr) {
+    Page* page = heap->avail;
+    heap->avail = page->next_avail;
+    page->in_avail = 0;
+    heap->current = page;
+    return page;
+  }
+  if (heap->slab_cursor == heap->slab_end) {
+    void* slab = MapSlab();
+    if (slab == nullptr) throw std::bad_alloc();
+    heap->slabs.push_back(slab);
+    heap->slab_cursor = static_cast<char*>(slab);
+    heap->slab_end = heap->slab_cursor + kSlabBytes;
+    reserved_bytes_.fetch_add(kSlabBytes, std::memory_order_relaxed);
+  }
+  Page* page = reinterpret_cast<Page*>(heap->slab_cursor);
+  heap->slab_cursor += kPageBytes;
+  page->owner = heap;
+  page->free = nullptr;
+  page->bump = 0;
+  page->in_avail = 0;
+  page->next_avail = nullptr;
+  heap->current = page;
+  return page;
+}
+
+#else  // !GROVE_NODE_POOL: plain allocation, same counters.
+
+void* NodePool::Allocate(int slot) {
+  void* p = ::operator new(node_bytes_, std::align_val_t{kNodeAlign});
+  // Relaxed: a statistic.
+  heaps_[slot < 0 ? 0 : slot]->live.fetch_add(1, std::memory_order_relaxed);
+  NotePeak();
+  return p;
+}
+
+void NodePool::Free(void* p, int slot) {
+  ::operator delete(p, std::align_val_t{kNodeAlign});
+  heaps_[slot < 0 ? 0 : slot]->live.fetch_sub(1, std::memory_order_relaxed);
+}
+
+void NodePool::LocalFree(Heap*, Page*, FreeNode*) {}
+void NodePool::DrainRemote(Heap*) {}
+NodePool::Page* NodePool::Refill(Heap*) { return nullptr; }
+
+#endif  // GROVE_NODE_POOL
+
+void NodePool::NotePeak() const {
+  int64_t live = 0;
+  for (const auto& heap : heaps_) {
+    live += heap->live.load(std::memory_order_relaxed) -
+            heap->remote_pending.load(std::memory_order_relaxed);
+  }
+  int64_t peak = peak_live_.load(std::memory_order_relaxed);
+  // Relaxed: the peak is a statistic; the CAS loop only keeps it monotone.
+  while (live > peak &&
+         !peak_live_.compare_exchange_weak(peak, live, std::memory_order_relaxed)) {
+  }
+}
+
+PoolStats NodePool::Stats() const {
+  NotePeak();
+  PoolStats stats;
+  stats.node_bytes = static_cast<int64_t>(node_bytes_);
+  for (const auto& heap : heaps_) {
+    stats.live_nodes += heap->live.load(std::memory_order_relaxed) -
+                        heap->remote_pending.load(std::memory_order_relaxed);
+  }
+  stats.peak_live_nodes = peak_live_.load(std::memory_order_relaxed);
+  stats.reserved_bytes = reserved_bytes_.load(std::memory_order_relaxed);
+  return stats;
+}
+
+}  // namespace grove

@@ -1,0 +1,78 @@
+// WorkerPool: a fixed set of worker threads, owned by one engine, that runs loops over particle
+// ranges and hands each loop body its worker slot (Ceres' ParallelFor with a thread id).
+//
+// It owns a tbb::task_arena with an explicit concurrency, so two engines in one process never
+// share or resize each other's threads; library code never touches tbb::global_control.
+// With one thread every loop runs inline on the caller: a serial executor for tests.
+//
+// Thread safety: one caller at a time (the engine's driving thread). Inside a loop, a slot is
+// held by exactly one thread at a time, so per-slot state (node pools, scratch) needs no locks.
+#ifndef GROVE_CONCURRENCY_WORKER_POOL_H_
+#define GROVE_CONCURRENCY_WORKER_POOL_H_
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/partitioner.h>
+#include <oneapi/tbb/task_arena.h>
+
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+namespace grove {
+
+class WorkerPool {
+ public:
+  // A thread count below 1 is taken as 1 (configurations are validated before this point).
+  explicit WorkerPool(int threads);
+  WorkerPool(const WorkerPool&) = delete;
+  WorkerPool& operator=(const WorkerPool&) = delete;
+
+  int num_threads() const { return threads_; }
+  // Slots are numbered 0 .. num_slots() - 1; the driving thread outside loops uses slot 0.
+  int num_slots() const { return threads_; }
+
+  // Calls body(slot, begin, end) over [0, n) in chunks of at most `grain` items.
+  template <typename F>
+  void ParallelFor(size_t n, size_t grain, F&& body) {
+    if (n == 0) return;
+    if (grain == 0) grain = 1;
+    if (threads_ == 1 || n <= grain) {
+      for (size_t b = 0; b < n; b += grain) body(0, b, b + grain < n ? b + grain : n);
+      return;
+    }
+    arena_->execute([&] {
+      tbb::parallel_for(
+          tbb::blocked_range<size_t>(0, n, grain),
+          [&](const tbb::blocked_range<size_t>& r) {
+            body(tbb::this_task_arena::current_thread_index(), r.begin(), r.end());
+          },
+          tbb::simple_partitioner());
+    });
+  }
+
+  // Splits [0, n) into fixed blocks of `block` items, computes f(block_index, begin, end) -> T for
+  // each in parallel and returns the results in block order. Combining them in that order gives
+  // sums that do not depend on the thread count.
+  template <typename T, typename F>
+  std::vector<T> MapBlocks(size_t n, size_t block, F&& f) {
+    size_t blocks = n == 0 ? 0 : (n + block - 1) / block;
+    std::vector<T> out(blocks);
+    ParallelFor(blocks, 1, [&](int, size_t b0, size_t b1) {
+      for (size_t b = b0; b < b1; ++b) {
+        size_t begin = b * block;
+        size_t end = begin + block < n ? begin + block : n;
+        out[b] = f(b, begin, end);
+      }
+    });
+    return out;
+  }
+
+ private:
+  int threads_;
+  std::unique_ptr<tbb::task_arena> arena_;
+};
+
+}  // namespace grove
+
+#endif  // GROVE_CONCURRENCY_WORKER_POOL_H_

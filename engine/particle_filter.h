@@ -1,0 +1,207 @@
+// ParticleFilter: the sequential importance resampling loop of a Rao-Blackwellized particle
+// filter, generic over a model that owns the particles' state (structure of arrays).
+//
+// One Step():
+//   1. advance: the model propagates, weights and updates the map of every particle, in parallel
+//      over batches (log-domain weight increments);
+//   2. normalise: log-sum-exp over fixed blocks, then the effective sample size 1 / sum(w^2);
+//   3. resample when ESS / N < threshold (threshold 1 resamples every step): parents are drawn
+//      (systematic by default, in parallel), the model gathers the new generation (O(1) per
+//      particle: maps are shared) and releases the dead one, both in parallel.
+// Sums over particles are taken over fixed blocks and every draw comes from a counter-based
+// stream, so the same seed gives bit-identical weights at any thread count.
+//
+// The Model provides:
+//   size_t size() const;
+//   void Advance(const Input&, uint64_t step, size_t begin, size_t end, int slot, double* log_w);
+//       adds each particle's log-likelihood increment to log_w[i], i in [begin, end)
+//   void Gather(std::span<const uint32_t> parents, WorkerPool&);  // next generation from parents
+//   void ReleaseDead(WorkerPool&);                                  // frees the previous one
+//
+// Thread safety: one thread drives a filter; the filter uses its WorkerPool inside Step().
+#ifndef GROVE_ENGINE_PARTICLE_FILTER_H_
+#define GROVE_ENGINE_PARTICLE_FILTER_H_
+
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "concurrency/worker_pool.h"
+#include "engine/resampler.h"
+#include "grove/status.h"
+
+namespace grove {
+
+struct FilterOptions {
+  // Which resampling scheme draws the next generation. Default: systematic.
+  ResamplingScheme resampling = ResamplingScheme::kSystematic;
+  // Resample when ESS / N falls below this, in (0, 1]; 1 resamples every step. Default: 0.5.
+  double resample_threshold = 0.5;
+  // Particles per parallel batch (affects speed only). Default: 512.
+  size_t batch = 512;
+  // Seed of every random stream. Default: 1.
+  uint64_t seed = 1;
+};
+
+// Wall time spent in each phase, summed over steps (seconds).
+struct PhaseTimes {
+  double advance_s = 0;    // propagate, weight and update maps
+  double normalize_s = 0;  // log-sum-exp and ESS
+  double resample_s = 0;   // drawing parents and gathering the new generation
+  double release_s = 0;    // freeing the dead generation
+};
+
+template <typename Model>
+class ParticleFilter {
+ public:
+  ParticleFilter(Model* model, WorkerPool* workers, const FilterOptions& options)
+      : model_(model),
+        workers_(workers),
+        options_(options),
+        log_w_(model->size(), -std::log(static_cast<double>(model->size()))),
+        parents_(model->size()) {}
+
+  // Runs one filter step on `input`. Returns FailedPrecondition when every particle weight is
+  // zero or non-finite after the update (the filter has degenerated; the particles keep the
+  // state of this step and the weights are left as computed).
+  template <typename Input>
+  Status Step(const Input& input) {
+    using Clock = std::chrono::steady_clock;
+    const size_t n = log_w_.size();
+    auto t0 = Clock::now();
+    workers_->ParallelFor(n, options_.batch, [&](int slot, size_t begin, size_t end) {
+      model_->Advance(input, step_, begin, end, slot, log_w_.data());
+    });
+    auto t1 = Clock::now();
+    Status status = Normalize();
+    auto t2 = Clock::now();
+    times_.advance_s += Seconds(t1 - t0);
+    times_.normalize_s += Seconds(t2 - t1);
+    if (!status.ok()) {
+      ++step_;
+      return status;
+    }
+    ess_sum_ += ess_;
+    if (options_.resample_threshold >= 1.0 || ess_ < options_.resample_threshold * n) {
+      Resample(input);
+    }
+    ++step_;
+    return Status::Ok();
+  }
+
+  // Normalised log weights (log w_i, sum of w_i = 1).
+  std::span<const double> log_weights() const { return log_w_; }
+  // Effective sample size after the last step's update, before any resampling.
+  double ess() const { return ess_; }
+  double mean_ess() const { return step_ == 0 ? 0 : ess_sum_ / static_cast<double>(step_); }
+  uint64_t steps() const { return step_; }
+  uint64_t resamplings() const { return resamplings_; }
+  const PhaseTimes& phase_times() const { return times_; }
+  const FilterOptions& options() const { return options_; }
+  // Index of the heaviest particle (lowest index on ties).
+  size_t Heaviest() const {
+    size_t best = 0;
+    for (size_t i = 1; i < log_w_.size(); ++i) {
+      if (log_w_[i] > log_w_[best]) best = i;
+    }
+    return best;
+  }
+
+ private:
+  template <typename D>
+  static double Seconds(D d) {
+    return std::chrono::duration<double>(d).count();
+  }
+
+  Status Normalize() {
+    const size_t n = log_w_.size();
+    struct Partial {
+      double max = -std::numeric_limits<double>::infinity();
+      bool nan = false;
+    };
+    std::vector<Partial> maxes =
+        workers_->MapBlocks<Partial>(n, kSumBlock, [&](size_t, size_t begin, size_t end) {
+          Partial p;
+          for (size_t i = begin; i < end; ++i) {
+            if (std::isnan(log_w_[i])) p.nan = true;
+            if (log_w_[i] > p.max) p.max = log_w_[i];
+          }
+          return p;
+        });
+    double max = -std::numeric_limits<double>::infinity();
+    for (const Partial& p : maxes) {
+      if (p.nan) return Degenerate("a particle weight is NaN");
+      if (p.max > max) max = p.max;
+    }
+    if (!std::isfinite(max)) return Degenerate("every particle weight is zero or infinite");
+    std::vector<double> sums = workers_->MapBlocks<double>(
+        n, kSumBlock, [&](size_t, size_t begin, size_t end) {
+          double s = 0;
+          for (size_t i = begin; i < end; ++i) s += std::exp(log_w_[i] - max);
+          return s;
+        });
+    double total = 0;
+    for (double s : sums) total += s;
+    const double log_total = max + std::log(total);
+    std::vector<double> squares = workers_->MapBlocks<double>(
+        n, kSumBlock, [&](size_t, size_t begin, size_t end) {
+          double s = 0;
+          for (size_t i = begin; i < end; ++i) {
+            log_w_[i] -= log_total;
+            double w = std::exp(log_w_[i]);
+            s += w * w;
+          }
+          return s;
+        });
+    double sum_sq = 0;
+    for (double s : squares) sum_sq += s;
+    ess_ = 1.0 / sum_sq;
+    return Status::Ok();
+  }
+
+  Status Degenerate(const char* what) {
+    return FailedPreconditionError("filter degenerated at step " + std::to_string(step_) + ": " +
+                                   what);
+  }
+
+  template <typename Input>
+  void Resample(const Input&) {
+    using Clock = std::chrono::steady_clock;
+    auto t0 = Clock::now();
+    const size_t n = log_w_.size();
+    weights_.resize(n);
+    workers_->ParallelFor(n, kSumBlock, [&](int, size_t begin, size_t end) {
+      for (size_t i = begin; i < end; ++i) weights_[i] = std::exp(log_w_[i]);
+    });
+    grove::Resample(options_.resampling, weights_, options_.seed, step_, *workers_, parents_);
+    model_->Gather(parents_, *workers_);
+    auto t1 = Clock::now();
+    model_->ReleaseDead(*workers_);
+    auto t2 = Clock::now();
+    const double uniform = -std::log(static_cast<double>(n));
+    std::fill(log_w_.begin(), log_w_.end(), uniform);
+    ++resamplings_;
+    times_.resample_s += Seconds(t1 - t0);
+    times_.release_s += Seconds(t2 - t1);
+  }
+
+  Model* model_;
+  WorkerPool* workers_;
+  FilterOptions options_;
+  std::vector<double> log_w_;
+  std::vector<double> weights_;
+  std::vector<uint32_t> parents_;
+  uint64_t step_ = 0;
+  uint64_t resamplings_ = 0;
+  double ess_ = 0;
+  double ess_sum_ = 0;
+  PhaseTimes times_;
+};
+
+}  // namespace grove
+
+#endif  // GROVE_ENGINE_PARTICLE_FILTER_H_

@@ -1,0 +1,327 @@
+// PersistentTrie: a persistent, fixed-height trie over integer keys whose versions share nodes
+// (path copying: Thrun, Burgard and Fox, "Probabilistic Robotics" §13.8; the geographic H-tree of
+// Garcia Puyol et al., "Complexity-reduced FootSLAM", §IV).
+//
+// A version is a root pointer (nullptr: the empty map) that owns one reference. Copying a
+// version is one increment; Update() copies only the nodes on the key's path that other
+// versions share and mutates uniquely owned nodes in place (immer's `update() &&`).
+// Leaf payloads live inline in the bottom nodes: kDegree of them per node, with a presence mask.
+//
+// Node layout: inner nodes hold kDegree child pointers; bottom nodes (level height - 1) hold the
+// leaves. Key digit `level` (base kDegree, most significant first) picks the child at that level.
+//
+// Invariants:
+//   1. A node's reference count equals the number of parent links plus version roots pointing
+//      at it.
+//   2. A node reachable from a version is never changed unless its count is 1 and every node on
+//      the path to it is uniquely owned by that version.
+//   3. A node lives at one position (key prefix) only.
+//
+// Thread safety: distinct versions may be updated, read and released concurrently from distinct
+// worker slots, even when they share nodes. One version must not be used by two threads at once.
+#ifndef GROVE_ENGINE_PERSISTENT_TRIE_H_
+#define GROVE_ENGINE_PERSISTENT_TRIE_H_
+
+#include <array>
+#include <cstdint>
+#include <cstring>
+#include <new>
+#include <span>
+#include <type_traits>
+#include <unordered_map>
+#include <vector>
+
+#include "alloc/check.h"
+#include "alloc/node_pool.h"
+#include "concurrency/ref_count.h"
+
+namespace grove {
+
+template <typename Leaf, int kLog2Degree>
+class PersistentTrie {
+  static_assert(kLog2Degree >= 1 && kLog2Degree <= 8, "degree must be 2 .. 256");
+  static_assert(std::is_trivially_copyable_v<Leaf> && std::is_trivially_destructible_v<Leaf>,
+                "leaves are copied with memcpy when a bottom node is copied");
+
+ public:
+  static constexpr int kDegree = 1 << kLog2Degree;
+  static constexpr int kMaxHeight = 64 / kLog2Degree;
+
+  struct Node {
+    RefCount rc;
+  };
+  using Root = Node*;
+
+  // REQUIRES: 1 <= height <= kMaxHeight, slots >= 1 (the worker slots that will use it).
+  PersistentTrie(int height, int slots)
+      : height_(height),
+        inner_pool_(sizeof(Inner), slots),
+        bottom_pool_(sizeof(Bottom), slots) {
+    GROVE_CHECK(height >= 1 && height <= kMaxHeight);
+  }
+  PersistentTrie(const PersistentTrie&) = delete;
+  PersistentTrie& operator=(const PersistentTrie&) = delete;
+
+  int height() const { return height_; }
+  // Number of distinct keys, kDegree^height (0 when it does not fit in 64 bits: all keys valid).
+  uint64_t key_count() const {
+    return height_ * kLog2Degree >= 64 ? 0 : uint64_t{1} << (height_ * kLog2Degree);
+  }
+
+  // Returns the leaf stored under `key`, or nullptr. The pointer is valid while the version is.
+  const Leaf* Find(const Node* root, uint64_t key) const {
+    const Node* cur = root;
+    for (int level = 0; cur != nullptr && level < height_ - 1; ++level) {
+      cur = static_cast<const Inner*>(cur)->child[Digit(key, level)];
+    }
+    if (cur == nullptr) return nullptr;
+    const Bottom* b = static_cast<const Bottom*>(cur);
+    int d = Digit(key, height_ - 1);
+    return b->Has(d) ? &b->leaf[d] : nullptr;
+  }
+
+  // A second reference to the same version: O(1).
+  static Node* Share(Node* root) {
+    if (root != nullptr) root->rc.Acquire();
+    return root;
+  }
+
+  // Applies f(Leaf& leaf, bool existed) to the leaf under `key` (value-initialised if it did not
+  // exist) and returns the updated version. Consumes the caller's reference to `root`: use the
+  // returned root instead. Copies only shared nodes on the path; O(height).
+  template <typename F>
+  Node* Update(Node* root, uint64_t key, int slot, F&& f) {
+    Node* new_root = nullptr;
+    Node** link = &new_root;
+    Node* cur = root;
+    for (int level = 0; level < height_ - 1; ++level) {
+      int d = Digit(key, level);
+      Inner* n;
+      if (cur == nullptr) {
+        n = NewInner(slot);
+      } else if (cur->rc.unique()) {
+        n = static_cast<Inner*>(cur);
+      } else {
+        // Shared: copy it; every child gains the copy as a parent. The path child is counted
+        // too: once `cur` loses our reference another version may own it alone and change it
+        // in place, so the copy must not lean on `cur`'s link.
+        Inner* old = static_cast<Inner*>(cur);
+        n = NewInner(slot);
+        std::memcpy(n->child, old->child, sizeof(n->child));
+        for (Node* c : old->child) {
+          if (c != nullptr) c->rc.Acquire();
+        }
+        if (old->rc.Release()) {
+          // Every other owner dropped `old` meanwhile: its references were the ones just added.
+          for (Node* c : old->child) {
+            if (c != nullptr) c->rc.Release();
+          }
+          FreeNode(old, /*bottom=*/false, slot);
+        }
+      }
+      *link = n;
+      link = &n->child[d];
+      cur = n->child[d];
+    }
+    int d = Digit(key, height_ - 1);
+    Bottom* b;
+    if (cur == nullptr) {
+      b = NewBottom(slot);
+    } else if (cur->rc.unique()) {
+      b = static_cast<Bottom*>(cur);
+    } else {
+      Bottom* old = static_cast<Bottom*>(cur);
+      b = NewBottom(slot);
+      std::memcpy(b->present, old->present, sizeof(b->present));
+      std::memcpy(static_cast<void*>(b->leaf), old->leaf, sizeof(b->leaf));
+      if (old->rc.Release()) FreeNode(old, /*bottom=*/true, slot);
+    }
+    bool existed = b->Has(d);
+    if (!existed) {
+      b->leaf[d] = Leaf{};
+      b->present[d >> 6] |= uint64_t{1} << (d & 63);
+    }
+    f(b->leaf[d], existed);
+    *link = b;
+    return new_root;
+  }
+
+  // Drops one reference to a version, freeing every node no other version reaches. Iterative
+  // with an explicit stack: a chain of any length cannot overflow the call stack.
+  void Release(Node* root, int slot) {
+    if (root == nullptr || !root->rc.Release()) return;
+    struct Item {
+      Node* node;
+      int level;
+    };
+    std::array<Item, (kDegree - 1) * kMaxHeight + 1> stack;
+    int top = 0;
+    stack[top++] = {root, 0};
+    while (top > 0) {
+      Item item = stack[--top];
+      if (item.level < height_ - 1) {
+        Inner* n = static_cast<Inner*>(item.node);
+        for (int i = 0; i < kDegree; ++i) {
+          Node* c = n->child[i];
+          if (c != nullptr && c->rc.Release()) stack[top++] = {c, item.level + 1};
+        }
+        FreeNode(n, /*bottom=*/false, slot);
+      } else {
+        FreeNode(item.node, /*bottom=*/true, slot);
+      }
+    }
+  }
+
+  // Calls f(key, const Leaf&) for every leaf of one version in increasing key order.
+  template <typename F>
+  void ForEach(const Node* root, F&& f) const {
+    if (root == nullptr) return;
+    struct Item {
+      const Node* node;
+      int level;
+      uint64_t prefix;
+    };
+    std::vector<Item> stack;
+    stack.push_back({root, 0, 0});
+    while (!stack.empty()) {
+      Item item = stack.back();
+      stack.pop_back();
+      if (item.level < height_ - 1) {
+        const Inner* n = static_cast<const Inner*>(item.node);
+        for (int i = kDegree - 1; i >= 0; --i) {  // pushed in reverse: popped in key order
+          if (n->child[i] != nullptr) {
+            stack.push_back({n->child[i], item.level + 1, (item.prefix << kLog2Degree) | i});
+          }
+        }
+      } else {
+        const Bottom* b = static_cast<const Bottom*>(item.node);
+        for (int i = 0; i < kDegree; ++i) {
+          if (b->Has(i)) f((item.prefix << kLog2Degree) | i, b->leaf[i]);
+        }
+      }
+    }
+  }
+
+  // Visits every distinct node reachable from `roots` once, with the summed weight of the roots
+  // that reach it, and calls on_leaf(key, const Leaf&, W weight) for each leaf of each distinct
+  // bottom node. Cost: the number of distinct nodes, not roots x map size. Returns the number of
+  // distinct nodes. Sharing between versions may depend on thread timing (a node can be copied
+  // or updated in place), so for sums that are bit-identical at any thread count use an exact W
+  // (an integer); the visit order is deterministic given the roots.
+  template <typename W, typename F>
+  size_t VisitDistinct(std::span<Node* const> roots, std::span<const W> weights, F&& on_leaf) const {
+    GROVE_CHECK(roots.size() == weights.size());
+    std::vector<const Node*> level_nodes;
+    std::vector<uint64_t> level_prefix;
+    std::vector<W> level_weight;
+    std::unordered_map<const Node*, size_t> index;
+    auto add = [&](const Node* n, uint64_t prefix, W w) {
+      auto [it, inserted] = index.try_emplace(n, level_nodes.size());
+      if (inserted) {
+        level_nodes.push_back(n);
+        level_prefix.push_back(prefix);
+        level_weight.push_back(w);
+      } else {
+        level_weight[it->second] += w;
+      }
+    };
+    for (size_t i = 0; i < roots.size(); ++i) {
+      if (roots[i] != nullptr) add(roots[i], 0, weights[i]);
+    }
+    size_t distinct = level_nodes.size();
+    for (int level = 0; level < height_ - 1; ++level) {
+      std::vector<const Node*> parents;
+      std::vector<uint64_t> parent_prefix;
+      std::vector<W> parent_weight;
+      parents.swap(level_nodes);
+      parent_prefix.swap(level_prefix);
+      parent_weight.swap(level_weight);
+      index.clear();
+      for (size_t k = 0; k < parents.size(); ++k) {
+        const Inner* n = static_cast<const Inner*>(parents[k]);
+        for (int i = 0; i < kDegree; ++i) {
+          if (n->child[i] != nullptr) {
+            add(n->child[i], (parent_prefix[k] << kLog2Degree) | i, parent_weight[k]);
+          }
+        }
+      }
+      distinct += level_nodes.size();
+    }
+    for (size_t k = 0; k < level_nodes.size(); ++k) {
+      const Bottom* b = static_cast<const Bottom*>(level_nodes[k]);
+      for (int i = 0; i < kDegree; ++i) {
+        if (b->Has(i)) on_leaf((level_prefix[k] << kLog2Degree) | i, b->leaf[i], level_weight[k]);
+      }
+    }
+    return distinct;
+  }
+
+  // Number of nodes of one version (shared ones included). For tests and statistics.
+  size_t CountNodes(const Node* root) const {
+    size_t count = 0;
+    if (root == nullptr) return 0;
+    std::vector<std::pair<const Node*, int>> stack{{root, 0}};
+    while (!stack.empty()) {
+      auto [n, level] = stack.back();
+      stack.pop_back();
+      ++count;
+      if (level < height_ - 1) {
+        for (const Node* c : static_cast<const Inner*>(n)->child) {
+          if (c != nullptr) stack.push_back({c, level + 1});
+        }
+      }
+    }
+    return count;
+  }
+
+  PoolStats inner_stats() const { return inner_pool_.Stats(); }
+  PoolStats bottom_stats() const { return bottom_pool_.Stats(); }
+  int64_t live_nodes() const { return inner_stats().live_nodes + bottom_stats().live_nodes; }
+  int64_t live_bytes() const { return inner_stats().live_bytes() + bottom_stats().live_bytes(); }
+  static constexpr size_t kInnerNodeBytes = sizeof(Node) + kDegree * sizeof(Node*);
+  static constexpr size_t kBottomNodeBytes =
+      sizeof(Node) + ((kDegree + 63) / 64) * 8 + kDegree * sizeof(Leaf);
+
+ private:
+  struct Inner : Node {
+    Node* child[kDegree];
+  };
+  struct Bottom : Node {
+    uint64_t present[(kDegree + 63) / 64];
+    Leaf leaf[kDegree];
+    bool Has(int d) const { return (present[d >> 6] >> (d & 63)) & 1; }
+  };
+
+  int Digit(uint64_t key, int level) const {
+    return static_cast<int>((key >> (kLog2Degree * (height_ - 1 - level))) & (kDegree - 1));
+  }
+
+  Inner* NewInner(int slot) {
+    Inner* n = new (inner_pool_.Allocate(slot)) Inner;
+    std::memset(n->child, 0, sizeof(n->child));
+    return n;
+  }
+  Bottom* NewBottom(int slot) {
+    Bottom* b = new (bottom_pool_.Allocate(slot)) Bottom;
+    std::memset(b->present, 0, sizeof(b->present));
+    std::memset(static_cast<void*>(b->leaf), 0, sizeof(b->leaf));
+    return b;
+  }
+  void FreeNode(Node* n, bool bottom, int slot) {
+    if (bottom) {
+      static_cast<Bottom*>(n)->~Bottom();
+      bottom_pool_.Free(n, slot);
+    } else {
+      static_cast<Inner*>(n)->~Inner();
+      inner_pool_.Free(n, slot);
+    }
+  }
+
+  int height_;
+  NodePool inner_pool_;
+  NodePool bottom_pool_;
+};
+
+}  // namespace grove
+
+#endif  // GROVE_ENGINE_PERSISTENT_TRIE_H_

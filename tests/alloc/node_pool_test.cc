@@ -1,0 +1,136 @@
+#include "alloc/node_pool.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <random>
+#include <set>
+#include <thread>
+#include <vector>
+
+namespace grove {
+namespace {
+
+TEST(NodePoolTest, LiveCountFollowsAllocationsAndFrees) {
+  NodePool pool(48, 1);
+  std::vector<void*> nodes;
+  for (int i = 0; i < 10000; ++i) nodes.push_back(pool.Allocate(0));
+  EXPECT_EQ(pool.Stats().live_nodes, 10000);
+  EXPECT_EQ(pool.Stats().live_bytes(), 10000 * 48);
+  for (int i = 0; i < 4000; ++i) pool.Free(nodes[i], 0);
+  EXPECT_EQ(pool.Stats().live_nodes, 6000);
+  EXPECT_GE(pool.Stats().peak_live_nodes, 6000);
+  for (int i = 4000; i < 10000; ++i) pool.Free(nodes[i], 0);
+  EXPECT_EQ(pool.Stats().live_nodes, 0);
+}
+
+TEST(NodePoolTest, NodesAreDistinctAlignedAndWritable) {
+  NodePool pool(40, 1);
+  std::set<void*> seen;
+  std::vector<void*> nodes;
+  for (int i = 0; i < 5000; ++i) {
+    void* p = pool.Allocate(0);
+    ASSERT_EQ(reinterpret_cast<uintptr_t>(p) % 16, 0u);
+    ASSERT_TRUE(seen.insert(p).second);
+    std::fill_n(static_cast<unsigned char*>(p), 40, static_cast<unsigned char>(i));
+    nodes.push_back(p);
+  }
+  for (int i = 0; i < 5000; ++i) {
+    ASSERT_EQ(static_cast<unsigned char*>(nodes[i])[39], static_cast<unsigned char>(i));
+  }
+  for (void* p : nodes) pool.Free(p, 0);
+}
+
+TEST(NodePoolTest, FreedNodesAreReused) {
+  NodePool pool(64, 1);
+  std::vector<void*> first;
+  for (int i = 0; i < 20000; ++i) first.push_back(pool.Allocate(0));
+  int64_t reserved = pool.Stats().reserved_bytes;
+  for (void* p : first) pool.Free(p, 0);
+  for (int round = 0; round < 5; ++round) {
+    std::vector<void*> again;
+    for (int i = 0; i < 20000; ++i) again.push_back(pool.Allocate(0));
+    for (void* p : again) pool.Free(p, 0);
+  }
+  EXPECT_EQ(pool.Stats().reserved_bytes, reserved);
+}
+
+// After a generation dies in random order, consecutive allocations must still come mostly from
+// the same 64 KiB page: the free lists are per page, not one LIFO list over the whole pool.
+TEST(NodePoolTest, RandomOrderFreesKeepAllocationsPageLocal) {
+  if (!NodePool::kPooling) GTEST_SKIP() << "pooling is off in this build";
+  NodePool pool(128, 1);
+  std::vector<void*> nodes;
+  for (int i = 0; i < 50000; ++i) nodes.push_back(pool.Allocate(0));
+  std::mt19937_64 rng(7);
+  std::shuffle(nodes.begin(), nodes.end(), rng);
+  for (void* p : nodes) pool.Free(p, 0);
+  int page_changes = 0;
+  uintptr_t last_page = 0;
+  for (int i = 0; i < 50000; ++i) {
+    uintptr_t page = reinterpret_cast<uintptr_t>(pool.Allocate(0)) >> 16;
+    if (page != last_page) ++page_changes;
+    last_page = page;
+  }
+  // ~511 nodes per page: about 100 page changes; a single shuffled LIFO list would give ~50000.
+  EXPECT_LT(page_changes, 200);
+}
+
+TEST(NodePoolTest, CrossThreadFreeReturnsNodeToOwner) {
+  NodePool pool(32, 2);
+  std::vector<void*> nodes;
+  for (int i = 0; i < 1000; ++i) nodes.push_back(pool.Allocate(0));
+  std::thread other([&] {
+    for (void* p : nodes) pool.Free(p, 1);  // slot 1 frees slot 0's nodes
+  });
+  other.join();
+  EXPECT_EQ(pool.Stats().live_nodes, 0);
+  // The owner gets them back once its current page runs out and it drains its remote list.
+  std::set<void*> old(nodes.begin(), nodes.end());
+  std::vector<void*> again;
+  int reused = 0;
+  for (int i = 0; i < 5000; ++i) {
+    again.push_back(pool.Allocate(0));
+    reused += old.count(again.back());
+  }
+  if (NodePool::kPooling) {
+    EXPECT_EQ(reused, 1000);
+  }
+  for (void* p : again) pool.Free(p, kForeignSlot);
+  EXPECT_EQ(pool.Stats().live_nodes, 0);
+}
+
+TEST(NodePoolTest, ConcurrentSlotsWithRemoteFreesBalance) {
+  constexpr int kThreads = 4;
+  NodePool pool(48, kThreads);
+  std::vector<std::vector<void*>> handoff(kThreads);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&, t] {
+      std::mt19937 rng(t);
+      std::vector<void*> mine;
+      for (int i = 0; i < 20000; ++i) {
+        mine.push_back(pool.Allocate(t));
+        if (rng() % 3 == 0) {
+          pool.Free(mine.back(), t);
+          mine.pop_back();
+        }
+      }
+      handoff[t] = std::move(mine);
+    });
+  }
+  for (auto& th : threads) th.join();
+  threads.clear();
+  // Each thread frees the next thread's nodes: every free is remote.
+  for (int t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&, t] {
+      for (void* p : handoff[(t + 1) % kThreads]) pool.Free(p, t);
+    });
+  }
+  for (auto& th : threads) th.join();
+  EXPECT_EQ(pool.Stats().live_nodes, 0);
+}
+
+}  // namespace
+}  // namespace grove

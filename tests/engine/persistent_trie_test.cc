@@ -1,0 +1,187 @@
+#include "engine/persistent_trie.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <map>
+#include <random>
+#include <vector>
+
+namespace grove {
+namespace {
+
+struct Value {
+  uint64_t v;
+};
+
+// Random operations on a handful of live versions, each checked against a std::map copy
+// (immer's model-based fuzzing).
+template <int kLog2Degree>
+void RunModelCheck(int height, uint64_t seed, int ops, uint64_t key_space) {
+  SCOPED_TRACE(testing::Message() << "seed " << seed << " degree " << (1 << kLog2Degree)
+                                  << " height " << height);
+  using Trie = PersistentTrie<Value, kLog2Degree>;
+  Trie trie(height, 1);
+  constexpr int kVersions = 8;
+  std::vector<typename Trie::Root> roots(kVersions, nullptr);
+  std::vector<std::map<uint64_t, uint64_t>> models(kVersions);
+  std::mt19937_64 rng(seed);
+  uint64_t limit = trie.key_count() == 0 ? key_space : std::min(key_space, trie.key_count());
+  auto check = [&](int v) {
+    std::map<uint64_t, uint64_t> seen;
+    trie.ForEach(roots[v], [&](uint64_t k, const Value& x) { seen[k] = x.v; });
+    ASSERT_EQ(seen, models[v]) << "version " << v;
+  };
+  for (int op = 0; op < ops; ++op) {
+    int v = rng() % kVersions;
+    switch (rng() % 10) {
+      case 0: {  // copy another version over this one
+        int from = rng() % kVersions;
+        typename Trie::Root copy = Trie::Share(roots[from]);
+        trie.Release(roots[v], 0);
+        roots[v] = copy;
+        models[v] = models[from];
+        break;
+      }
+      case 1:  // drop the version
+        if (rng() % 4 == 0) {
+          trie.Release(roots[v], 0);
+          roots[v] = nullptr;
+          models[v].clear();
+        }
+        break;
+      case 2: case 3: {  // look up
+        uint64_t k = rng() % limit;
+        const Value* found = trie.Find(roots[v], k);
+        auto it = models[v].find(k);
+        ASSERT_EQ(found != nullptr, it != models[v].end()) << "key " << k;
+        if (found != nullptr) {
+          ASSERT_EQ(found->v, it->second);
+        }
+        break;
+      }
+      default: {  // update
+        uint64_t k = rng() % limit;
+        uint64_t add = rng() % 1000 + 1;
+        bool expect_existed = models[v].count(k) > 0;
+        bool existed = false;
+        roots[v] = trie.Update(roots[v], k, 0, [&](Value& x, bool e) {
+          existed = e;
+          x.v += add;
+        });
+        ASSERT_EQ(existed, expect_existed);
+        models[v][k] += add;
+        break;
+      }
+    }
+    if (op % 97 == 0) {
+      for (int w = 0; w < kVersions; ++w) check(w);
+    }
+  }
+  for (int w = 0; w < kVersions; ++w) check(w);
+  for (auto& r : roots) trie.Release(r, 0);
+  EXPECT_EQ(trie.live_nodes(), 0) << "nodes leaked";
+}
+
+TEST(PersistentTrieTest, MatchesReferenceMapDegree2) {
+  for (uint64_t seed = 1; seed <= 3; ++seed) RunModelCheck<1>(10, seed, 20000, 1 << 10);
+}
+TEST(PersistentTrieTest, MatchesReferenceMapDegree4) {
+  for (uint64_t seed = 1; seed <= 3; ++seed) RunModelCheck<2>(8, seed, 20000, 300);
+}
+TEST(PersistentTrieTest, MatchesReferenceMapDegree16) {
+  for (uint64_t seed = 1; seed <= 3; ++seed) RunModelCheck<4>(4, seed, 20000, 1 << 16);
+}
+TEST(PersistentTrieTest, MatchesReferenceMapDegree64) {
+  RunModelCheck<6>(2, 11, 20000, 4096);
+}
+TEST(PersistentTrieTest, MatchesReferenceMapDegree256) {
+  RunModelCheck<8>(2, 12, 10000, 1 << 16);
+}
+TEST(PersistentTrieTest, MatchesReferenceMapHeightOne) { RunModelCheck<4>(1, 13, 5000, 16); }
+TEST(PersistentTrieTest, MatchesReferenceMapFullWidthKeys) {
+  RunModelCheck<4>(16, 14, 20000, ~uint64_t{0});
+}
+
+TEST(PersistentTrieTest, UpdateDoesNotChangeOtherVersions) {
+  PersistentTrie<Value, 4> trie(4, 1);
+  auto* a = trie.Update(nullptr, 1234, 0, [](Value& x, bool) { x.v = 1; });
+  auto* b = decltype(trie)::Share(a);
+  b = trie.Update(b, 1234, 0, [](Value& x, bool) { x.v = 2; });
+  b = trie.Update(b, 999, 0, [](Value& x, bool) { x.v = 3; });
+  EXPECT_EQ(trie.Find(a, 1234)->v, 1u);
+  EXPECT_EQ(trie.Find(a, 999), nullptr);
+  EXPECT_EQ(trie.Find(b, 1234)->v, 2u);
+  EXPECT_EQ(trie.Find(b, 999)->v, 3u);
+  trie.Release(a, 0);
+  trie.Release(b, 0);
+  EXPECT_EQ(trie.live_nodes(), 0);
+}
+
+TEST(PersistentTrieTest, UniqueVersionIsUpdatedInPlace) {
+  PersistentTrie<Value, 4> trie(4, 1);
+  auto* root = trie.Update(nullptr, 77, 0, [](Value& x, bool) { x.v = 1; });
+  EXPECT_EQ(trie.live_nodes(), 4);
+  auto* again = trie.Update(root, 77, 0, [](Value& x, bool) { x.v++; });
+  EXPECT_EQ(again, root);
+  EXPECT_EQ(trie.live_nodes(), 4);
+  // A key in the same bottom node adds nothing; one in another subtree adds only its path.
+  root = trie.Update(root, 78, 0, [](Value& x, bool) { x.v = 5; });
+  EXPECT_EQ(trie.live_nodes(), 4);
+  root = trie.Update(root, 77 + (1 << 12), 0, [](Value& x, bool) { x.v = 5; });
+  EXPECT_EQ(trie.live_nodes(), 7);
+  trie.Release(root, 0);
+  EXPECT_EQ(trie.live_nodes(), 0);
+}
+
+TEST(PersistentTrieTest, SharedVersionCopiesOnlyThePath) {
+  PersistentTrie<Value, 4> trie(4, 1);
+  decltype(trie)::Root root = nullptr;
+  for (uint64_t k = 0; k < 65536; k += 97) {
+    root = trie.Update(root, k, 0, [&](Value& x, bool) { x.v = k; });
+  }
+  int64_t before = trie.live_nodes();
+  auto* copy = decltype(trie)::Share(root);
+  EXPECT_EQ(trie.live_nodes(), before);  // O(1) copy: no node allocated
+  copy = trie.Update(copy, 97 * 5, 0, [](Value& x, bool) { x.v = 0; });
+  EXPECT_EQ(trie.live_nodes(), before + 4);  // one path of height 4
+  EXPECT_EQ(trie.CountNodes(copy), trie.CountNodes(root));
+  trie.Release(root, 0);
+  trie.Release(copy, 0);
+  EXPECT_EQ(trie.live_nodes(), 0);
+}
+
+TEST(PersistentTrieTest, DistinctVisitSumsEqualBruteForce) {
+  using Trie = PersistentTrie<Value, 2>;
+  Trie trie(6, 1);
+  std::mt19937_64 rng(5);
+  std::vector<Trie::Root> roots(200, nullptr);
+  for (uint64_t k = 0; k < 4096; k += 2) {
+    roots[0] = trie.Update(roots[0], k, 0, [](Value& x, bool) { x.v = 1; });
+  }
+  // A family of versions: each copies an earlier one and changes a few keys.
+  for (size_t i = 1; i < roots.size(); ++i) {
+    roots[i] = Trie::Share(roots[rng() % i]);
+    for (int j = 0; j < 3; ++j) {
+      roots[i] = trie.Update(roots[i], rng() % 4096, 0, [&](Value& x, bool) { x.v += rng() % 9; });
+    }
+  }
+  std::vector<uint64_t> weights(roots.size());
+  for (auto& w : weights) w = rng() % 1000;
+  std::map<uint64_t, uint64_t> distinct_sum, brute_sum;
+  size_t distinct = trie.VisitDistinct<uint64_t>(
+      roots, weights, [&](uint64_t k, const Value& x, uint64_t w) { distinct_sum[k] += x.v * w; });
+  size_t total_nodes = 0;
+  for (size_t i = 0; i < roots.size(); ++i) {
+    total_nodes += trie.CountNodes(roots[i]);
+    trie.ForEach(roots[i], [&](uint64_t k, const Value& x) { brute_sum[k] += x.v * weights[i]; });
+  }
+  EXPECT_EQ(distinct_sum, brute_sum);
+  EXPECT_EQ(static_cast<int64_t>(distinct), trie.live_nodes());
+  EXPECT_LT(distinct * 10, total_nodes);  // sharing makes the visit much cheaper
+  for (auto& r : roots) trie.Release(r, 0);
+  EXPECT_EQ(trie.live_nodes(), 0);
+}
+
+}  // namespace
+}  // namespace grove
