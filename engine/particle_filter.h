@@ -22,6 +22,7 @@
 #ifndef GROVE_ENGINE_PARTICLE_FILTER_H_
 #define GROVE_ENGINE_PARTICLE_FILTER_H_
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -102,14 +103,9 @@ class ParticleFilter {
   uint64_t resamplings() const { return resamplings_; }
   const PhaseTimes& phase_times() const { return times_; }
   const FilterOptions& options() const { return options_; }
-  // Index of the heaviest particle (lowest index on ties).
-  size_t Heaviest() const {
-    size_t best = 0;
-    for (size_t i = 1; i < log_w_.size(); ++i) {
-      if (log_w_[i] > log_w_[best]) best = i;
-    }
-    return best;
-  }
+  // The particle that was heaviest after the last update (lowest index on ties), followed
+  // through resampling to its first copy: resampling equalises weights but not evidence.
+  size_t heaviest() const { return heaviest_; }
 
  private:
   template <typename D>
@@ -121,6 +117,7 @@ class ParticleFilter {
     const size_t n = log_w_.size();
     struct Partial {
       double max = -std::numeric_limits<double>::infinity();
+      size_t argmax = 0;
       bool nan = false;
     };
     std::vector<Partial> maxes =
@@ -128,14 +125,20 @@ class ParticleFilter {
           Partial p;
           for (size_t i = begin; i < end; ++i) {
             if (std::isnan(log_w_[i])) p.nan = true;
-            if (log_w_[i] > p.max) p.max = log_w_[i];
+            if (log_w_[i] > p.max) {
+              p.max = log_w_[i];
+              p.argmax = i;
+            }
           }
           return p;
         });
     double max = -std::numeric_limits<double>::infinity();
     for (const Partial& p : maxes) {
       if (p.nan) return Degenerate("a particle weight is NaN");
-      if (p.max > max) max = p.max;
+      if (p.max > max) {
+        max = p.max;
+        heaviest_ = p.argmax;
+      }
     }
     if (!std::isfinite(max)) return Degenerate("every particle weight is zero or infinite");
     std::vector<double> sums = workers_->MapBlocks<double>(
@@ -179,6 +182,11 @@ class ParticleFilter {
     });
     grove::Resample(options_.resampling, weights_, options_.seed, step_, *workers_, parents_);
     model_->Gather(parents_, *workers_);
+    // Systematic and residual resampling always copy it (its weight is at least 1/N); the
+    // other schemes may not, and then its successor in index order stands in.
+    heaviest_ = static_cast<size_t>(
+        std::lower_bound(parents_.begin(), parents_.end(), static_cast<uint32_t>(heaviest_)) -
+        parents_.begin());
     auto t1 = Clock::now();
     model_->ReleaseDead(*workers_);
     auto t2 = Clock::now();
@@ -195,6 +203,7 @@ class ParticleFilter {
   std::vector<double> log_w_;
   std::vector<double> weights_;
   std::vector<uint32_t> parents_;
+  size_t heaviest_ = 0;
   uint64_t step_ = 0;
   uint64_t resamplings_ = 0;
   double ess_ = 0;

@@ -12,14 +12,9 @@
 #include <string_view>
 
 #include "concurrency/worker_pool.h"
+#include "grove/resampling.h"
 
 namespace grove {
-
-enum class ResamplingScheme { kSystematic, kStratified, kResidual, kMultinomial };
-
-const char* ResamplingSchemeName(ResamplingScheme scheme);
-// Parses "systematic", "stratified", "residual" or "multinomial"; false otherwise.
-bool ParseResamplingScheme(std::string_view name, ResamplingScheme* scheme);
 
 // Fills parents[k], k in [0, parents.size()), with the index of the particle that slot k of the
 // next generation copies; parents come out in nondecreasing order. Draws come from the stream

@@ -1,0 +1,151 @@
+// AlphabetHTreeMap: the H-tree map with the paper's alphabet (§V). A hexagon's six counters
+// are one 16-bit symbol while each is at most T, and a symbol's successor for each edge is a
+// table lookup. A hexagon whose counter passes T is marked escaped in the symbol tree and its
+// full counters move to a second H-tree of full counters; both trees are versions shared the
+// same way, so a bottom node of symbols is 2 bytes per hexagon instead of 24.
+#ifndef GROVE_ENGINE_FOOTSLAM_ALPHABET_HTREE_MAP_H_
+#define GROVE_ENGINE_FOOTSLAM_ALPHABET_HTREE_MAP_H_
+
+#include <span>
+#include <vector>
+
+#include "concurrency/worker_pool.h"
+#include "engine/footslam/alphabet.h"
+#include "engine/footslam/htc.h"
+#include "engine/persistent_trie.h"
+
+namespace grove::footslam {
+
+template <int kLog2Degree>
+class AlphabetHTreeMap {
+ public:
+  using SymbolTrie = PersistentTrie<uint16_t, kLog2Degree>;
+  using FullTrie = PersistentTrie<Htc, kLog2Degree>;
+  // Marks a hexagon whose counters live in the full tree. Never a symbol: S <= 6^6 < 0xFFFF.
+  static constexpr uint16_t kEscaped = 0xFFFF;
+
+  AlphabetHTreeMap(int height, int slots, size_t particles, const Alphabet* alphabet)
+      : alphabet_(alphabet),
+        symbols_(height, slots),
+        full_(height, slots),
+        symbol_roots_(particles),
+        full_roots_(particles) {}
+  ~AlphabetHTreeMap() {
+    for (auto* r : symbol_roots_) symbols_.Release(r, 0);
+    for (auto* r : full_roots_) full_.Release(r, 0);
+    for (auto* r : dead_symbol_roots_) symbols_.Release(r, 0);
+    for (auto* r : dead_full_roots_) full_.Release(r, 0);
+  }
+
+  EdgeCounts Cross(size_t i, uint64_t key, int edge, int slot) {
+    EdgeCounts before{0, 0};
+    bool escaped = false;
+    uint16_t last_symbol = 0;
+    bool escapes_now = false;
+    symbol_roots_[i] = symbols_.Update(symbol_roots_[i], key, slot, [&](uint16_t& s, bool) {
+      if (s == kEscaped) {
+        escaped = true;
+        return;
+      }
+      before = {alphabet_->Count(s, edge), alphabet_->Total(s)};
+      uint16_t next = alphabet_->Next(s, edge);
+      if (next == Alphabet::kOverflow) {
+        escapes_now = true;
+        last_symbol = s;
+        s = kEscaped;
+      } else {
+        s = next;
+      }
+    });
+    if (escaped) {
+      full_roots_[i] = full_.Update(full_roots_[i], key, slot, [&](Htc& h, bool) {
+        before = {h.c[edge], h.Total()};
+        ++h.c[edge];
+      });
+    } else if (escapes_now) {
+      full_roots_[i] = full_.Update(full_roots_[i], key, slot, [&](Htc& h, bool) {
+        alphabet_->Decode(last_symbol, h.c);
+        ++h.c[edge];
+      });
+    }
+    return before;
+  }
+
+  void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
+    std::vector<typename SymbolTrie::Root> next_symbols(parents.size());
+    std::vector<typename FullTrie::Root> next_full(parents.size());
+    workers.ParallelFor(parents.size(), 2048, [&](int, size_t b, size_t e) {
+      for (size_t k = b; k < e; ++k) {
+        next_symbols[k] = SymbolTrie::Share(symbol_roots_[parents[k]]);
+        next_full[k] = FullTrie::Share(full_roots_[parents[k]]);
+      }
+    });
+    dead_symbol_roots_.swap(symbol_roots_);
+    dead_full_roots_.swap(full_roots_);
+    symbol_roots_.swap(next_symbols);
+    full_roots_.swap(next_full);
+  }
+
+  void ReleaseDead(WorkerPool& workers) {
+    workers.ParallelFor(dead_symbol_roots_.size(), 1024, [&](int slot, size_t b, size_t e) {
+      for (size_t k = b; k < e; ++k) {
+        symbols_.Release(dead_symbol_roots_[k], slot);
+        full_.Release(dead_full_roots_[k], slot);
+      }
+    });
+    dead_symbol_roots_.clear();
+    dead_full_roots_.clear();
+  }
+
+  template <typename F>
+  void ForEachHex(size_t i, F&& f) const {
+    // Both trees in key order, merged: a hexagon is in exactly one of them.
+    std::vector<std::pair<uint64_t, Htc>> full;
+    full_.ForEach(full_roots_[i], [&](uint64_t key, const Htc& h) { full.push_back({key, h}); });
+    size_t j = 0;
+    symbols_.ForEach(symbol_roots_[i], [&](uint64_t key, const uint16_t& s) {
+      if (s == kEscaped) {
+        for (; j < full.size() && full[j].first <= key; ++j) f(full[j].first, full[j].second);
+        return;
+      }
+      Htc h;
+      alphabet_->Decode(s, h.c);
+      f(key, h);
+    });
+    for (; j < full.size(); ++j) f(full[j].first, full[j].second);
+  }
+
+  template <typename F>
+  void Cumulative(std::span<const uint64_t> weights, F&& f) const {
+    symbols_.template VisitDistinct<uint64_t>(
+        symbol_roots_, weights, [&](uint64_t key, const uint16_t& s, uint64_t w) {
+          if (s == kEscaped) return;
+          Htc h;
+          alphabet_->Decode(s, h.c);
+          f(key, h, w);
+        });
+    full_.template VisitDistinct<uint64_t>(full_roots_, weights, f);
+  }
+
+  MemoryUse memory() const {
+    MemoryUse m;
+    AddPoolStats(symbols_.inner_stats(), &m);
+    AddPoolStats(symbols_.bottom_stats(), &m);
+    AddPoolStats(full_.inner_stats(), &m);
+    AddPoolStats(full_.bottom_stats(), &m);
+    return m;
+  }
+
+ private:
+  const Alphabet* alphabet_;
+  SymbolTrie symbols_;
+  FullTrie full_;
+  std::vector<typename SymbolTrie::Root> symbol_roots_;
+  std::vector<typename FullTrie::Root> full_roots_;
+  std::vector<typename SymbolTrie::Root> dead_symbol_roots_;
+  std::vector<typename FullTrie::Root> dead_full_roots_;
+};
+
+}  // namespace grove::footslam
+
+#endif  // GROVE_ENGINE_FOOTSLAM_ALPHABET_HTREE_MAP_H_

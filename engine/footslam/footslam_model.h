@@ -1,0 +1,202 @@
+// FootSlamModel: the FootSLAM particle (paper §II-B) for ParticleFilter, generic over the map.
+//
+// Per particle (structure of arrays): position, heading, heading error (a random walk), step
+// scale error, the current hexagon, the path history and the map. One Advance() per step:
+//   1. propagate: rotate and scale the odometry step by the particle's error states and add
+//      white noise (paper steps 2a-2b);
+//   2. for each hexagon edge the step crosses, in order: weight by the counters before the
+//      crossing, then count it (steps 2c and 2e);
+//   3. append the pose to the particle's history.
+#ifndef GROVE_ENGINE_FOOTSLAM_FOOTSLAM_MODEL_H_
+#define GROVE_ENGINE_FOOTSLAM_FOOTSLAM_MODEL_H_
+
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "concurrency/random_stream.h"
+#include "concurrency/worker_pool.h"
+#include "engine/footslam/hex_grid.h"
+#include "engine/footslam/htc.h"
+#include "engine/footslam/htree_layout.h"
+#include "engine/footslam/pose_history.h"
+#include "grove/footslam.h"
+
+namespace grove::footslam {
+
+struct StepInput {
+  double dx_m;
+  double dy_m;
+};
+
+// Stream purposes: independent draws for the same (step, particle).
+inline constexpr uint32_t kMotionPurpose = 1;
+inline constexpr uint32_t kInitPurpose = 2;
+
+template <typename Map>
+class FootSlamModel {
+ public:
+  FootSlamModel(const FootSlamConfig& config, const HexGrid* grid, const HTreeLayout* layout,
+                Map* map, int slots)
+      : config_(config),
+        grid_(grid),
+        layout_(layout),
+        map_(map),
+        history_(slots),
+        n_(static_cast<size_t>(config.particles)) {
+    x_.assign(n_, config.start_x_m);
+    y_.assign(n_, config.start_y_m);
+    heading_.assign(n_, config.start_heading_rad);
+    heading_error_.resize(n_);
+    scale_.resize(n_);
+    Hex start = grid_->HexAt(config.start_x_m, config.start_y_m);
+    start_hex_ = start;
+    hex_.assign(n_, start);
+    for (size_t i = 0; i < n_; ++i) {
+      RandomStream rs(config.seed, 0, static_cast<uint32_t>(i), kInitPurpose);
+      heading_error_[i] = config.initial_heading_sigma_rad * rs.NextNormal();
+      scale_[i] = 1.0 + config.scale_sigma * rs.NextNormal();
+    }
+    PoseHistory::Node* root =
+        history_.Append(nullptr, 0, config.start_x_m, config.start_y_m, config.start_heading_rad, 0);
+    history_roots_.assign(n_, root);
+    for (size_t i = 1; i < n_; ++i) PoseHistory::Share(root);
+    if (config.weighting == FootSlamWeighting::kPriorRatio) log_edge_bias_ = std::log(6.0);
+  }
+  ~FootSlamModel() {
+    for (auto* h : history_roots_) history_.Release(h, 0);
+    for (auto* h : dead_history_) history_.Release(h, 0);
+  }
+
+  size_t size() const { return n_; }
+
+  void Advance(const StepInput& in, uint64_t step, size_t begin, size_t end, int slot,
+               double* log_w) {
+    const double odo_length = std::hypot(in.dx_m, in.dy_m);
+    const double odo_heading = std::atan2(in.dy_m, in.dx_m) + config_.start_heading_rad;
+    const double a = config_.prior_count;
+    for (size_t i = begin; i < end; ++i) {
+      RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), kMotionPurpose);
+      if (config_.heading_drift_sigma_rad > 0) {
+        heading_error_[i] += config_.heading_drift_sigma_rad * rs.NextNormal();
+      }
+      if (config_.scale_drift_sigma > 0) scale_[i] += config_.scale_drift_sigma * rs.NextNormal();
+      double length = odo_length * scale_[i];
+      if (config_.step_length_sigma_m > 0) length += config_.step_length_sigma_m * rs.NextNormal();
+      double heading = odo_heading + heading_error_[i];
+      if (config_.heading_sigma_rad > 0) heading += config_.heading_sigma_rad * rs.NextNormal();
+      double nx = x_[i] + length * std::cos(heading);
+      double ny = y_[i] + length * std::sin(heading);
+      if (config_.position_sigma_m > 0) {
+        nx += config_.position_sigma_m * rs.NextNormal();
+        ny += config_.position_sigma_m * rs.NextNormal();
+      }
+      double lw = 0;
+      bool outside = false;
+      Hex end_hex = grid_->Traverse(hex_[i], x_[i], y_[i], nx, ny, [&](const Crossing& c) {
+        uint64_t key;
+        if (outside || !KeyOf(c.from, &key)) {
+          outside = true;
+          return;
+        }
+        EdgeCounts before = map_->Cross(i, key, c.edge, slot);
+        lw += std::log((before.edge + a) / (before.total + 6 * a)) + log_edge_bias_;
+      });
+      uint64_t end_key;
+      if (outside || !KeyOf(end_hex, &end_key)) {
+        lw = -std::numeric_limits<double>::infinity();
+        int64_t expected = first_outside_.load(std::memory_order_relaxed);
+        // Relaxed: the value is read after the parallel loop has joined.
+        while (static_cast<int64_t>(i) < expected &&
+               !first_outside_.compare_exchange_weak(expected, static_cast<int64_t>(i),
+                                                     std::memory_order_relaxed)) {
+        }
+      }
+      log_w[i] += lw;
+      x_[i] = nx;
+      y_[i] = ny;
+      heading_[i] = heading;
+      hex_[i] = end_hex;
+      history_roots_[i] =
+          history_.Append(history_roots_[i], static_cast<uint32_t>(step + 1), nx, ny, heading, slot);
+    }
+  }
+
+  void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
+    GatherVector(parents, workers, &x_);
+    GatherVector(parents, workers, &y_);
+    GatherVector(parents, workers, &heading_);
+    GatherVector(parents, workers, &heading_error_);
+    GatherVector(parents, workers, &scale_);
+    GatherVector(parents, workers, &hex_);
+    std::vector<PoseHistory::Node*> next(parents.size());
+    workers.ParallelFor(parents.size(), 4096, [&](int, size_t b, size_t e) {
+      for (size_t k = b; k < e; ++k) next[k] = PoseHistory::Share(history_roots_[parents[k]]);
+    });
+    dead_history_.swap(history_roots_);
+    history_roots_.swap(next);
+    map_->Gather(parents, workers);
+  }
+
+  void ReleaseDead(WorkerPool& workers) {
+    workers.ParallelFor(dead_history_.size(), 1024, [&](int slot, size_t b, size_t e) {
+      for (size_t k = b; k < e; ++k) history_.Release(dead_history_[k], slot);
+    });
+    dead_history_.clear();
+    map_->ReleaseDead(workers);
+  }
+
+  // The H-tree grid is centred on the start hexagon.
+  bool KeyOf(Hex h, uint64_t* key) const {
+    return layout_->KeyOf(Hex{h.q - start_hex_.q, h.r - start_hex_.r}, key);
+  }
+  Hex HexOfKey(uint64_t key) const {
+    Hex h = layout_->HexOfKey(key);
+    return Hex{h.q + start_hex_.q, h.r + start_hex_.r};
+  }
+
+  // The lowest particle index that left the grid in the last step, or -1.
+  int64_t TakeFirstOutside() {
+    int64_t i = first_outside_.exchange(std::numeric_limits<int64_t>::max());
+    return i == std::numeric_limits<int64_t>::max() ? -1 : i;
+  }
+
+  double x(size_t i) const { return x_[i]; }
+  double y(size_t i) const { return y_[i]; }
+  double heading(size_t i) const { return heading_[i]; }
+  const PoseHistory::Node* history(size_t i) const { return history_roots_[i]; }
+  const PoseHistory& history() const { return history_; }
+  const Map& map() const { return *map_; }
+
+ private:
+  template <typename T>
+  static void GatherVector(std::span<const uint32_t> parents, WorkerPool& workers,
+                           std::vector<T>* v) {
+    std::vector<T> next(parents.size());
+    workers.ParallelFor(parents.size(), 4096, [&](int, size_t b, size_t e) {
+      for (size_t k = b; k < e; ++k) next[k] = (*v)[parents[k]];
+    });
+    v->swap(next);
+  }
+
+  const FootSlamConfig config_;
+  const HexGrid* grid_;
+  const HTreeLayout* layout_;
+  Map* map_;
+  PoseHistory history_;
+  size_t n_;
+  double log_edge_bias_ = 0;
+  std::vector<double> x_, y_, heading_, heading_error_, scale_;
+  Hex start_hex_;
+  std::vector<Hex> hex_;
+  std::vector<PoseHistory::Node*> history_roots_;
+  std::vector<PoseHistory::Node*> dead_history_;
+  std::atomic<int64_t> first_outside_{std::numeric_limits<int64_t>::max()};
+};
+
+}  // namespace grove::footslam
+
+#endif  // GROVE_ENGINE_FOOTSLAM_FOOTSLAM_MODEL_H_

@@ -1,0 +1,44 @@
+// Hexagon transition counters (the paper's HTC) and what every FootSLAM map provides.
+//
+// A map policy (HTreeMap, AlphabetHTreeMap, NaiveMap) holds the maps of all particles:
+//   EdgeCounts Cross(size_t i, uint64_t key, int edge, int slot);
+//       particle i leaves hexagon `key` across `edge`: returns the counters before the crossing
+//       and adds one
+//   void Gather(std::span<const uint32_t> parents, WorkerPool&);  // next generation
+//   void ReleaseDead(WorkerPool&);                                  // frees the previous one
+//   void ForEachHex(size_t i, F f) const;  // f(key, const Htc&) in key order
+//   void Cumulative(std::span<const uint64_t> weights, F f) const;
+//       f(key, const Htc&, uint64_t weight) once per (distinct node, hexagon); summing
+//       weight * counts per key gives sum_i w_i C_i
+//   MemoryUse memory() const;
+#ifndef GROVE_ENGINE_FOOTSLAM_HTC_H_
+#define GROVE_ENGINE_FOOTSLAM_HTC_H_
+
+#include <cstdint>
+
+#include "alloc/node_pool.h"
+#include "grove/footslam.h"
+
+namespace grove::footslam {
+
+struct Htc {
+  uint32_t c[6];
+  uint32_t Total() const { return c[0] + c[1] + c[2] + c[3] + c[4] + c[5]; }
+};
+
+struct EdgeCounts {
+  uint32_t edge;   // C_h^e before the crossing
+  uint32_t total;  // C_h before the crossing
+};
+
+inline void AddPoolStats(const PoolStats& s, MemoryUse* m) {
+  m->live_nodes += s.live_nodes;
+  m->live_bytes += s.live_bytes();
+  m->peak_live_nodes += s.peak_live_nodes;
+  m->peak_live_bytes += s.peak_live_bytes();
+  m->reserved_bytes += s.reserved_bytes;
+}
+
+}  // namespace grove::footslam
+
+#endif  // GROVE_ENGINE_FOOTSLAM_HTC_H_

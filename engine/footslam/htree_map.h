@@ -1,0 +1,79 @@
+// HTreeMap: every particle's transition counters in a dynamic H-tree (paper §IV-B), a version of
+// one PersistentTrie keyed by the hexagon's H-tree path. Resampling shares roots; a crossing
+// copies only the shared nodes of one path.
+#ifndef GROVE_ENGINE_FOOTSLAM_HTREE_MAP_H_
+#define GROVE_ENGINE_FOOTSLAM_HTREE_MAP_H_
+
+#include <span>
+#include <vector>
+
+#include "concurrency/worker_pool.h"
+#include "engine/footslam/alphabet.h"
+#include "engine/footslam/htc.h"
+#include "engine/persistent_trie.h"
+
+namespace grove::footslam {
+
+template <int kLog2Degree>
+class HTreeMap {
+ public:
+  using Trie = PersistentTrie<Htc, kLog2Degree>;
+
+  HTreeMap(int height, int slots, size_t particles, const Alphabet* /*unused*/)
+      : trie_(height, slots), roots_(particles) {}
+  ~HTreeMap() {
+    for (auto* r : roots_) trie_.Release(r, 0);
+    for (auto* r : dead_) trie_.Release(r, 0);
+  }
+
+  EdgeCounts Cross(size_t i, uint64_t key, int edge, int slot) {
+    EdgeCounts before;
+    roots_[i] = trie_.Update(roots_[i], key, slot, [&](Htc& h, bool) {
+      before = {h.c[edge], h.Total()};
+      ++h.c[edge];
+    });
+    return before;
+  }
+
+  void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
+    std::vector<typename Trie::Root> next(parents.size());
+    workers.ParallelFor(parents.size(), 2048, [&](int, size_t b, size_t e) {
+      for (size_t k = b; k < e; ++k) next[k] = Trie::Share(roots_[parents[k]]);
+    });
+    dead_.swap(roots_);
+    roots_.swap(next);
+  }
+
+  void ReleaseDead(WorkerPool& workers) {
+    workers.ParallelFor(dead_.size(), 1024, [&](int slot, size_t b, size_t e) {
+      for (size_t k = b; k < e; ++k) trie_.Release(dead_[k], slot);
+    });
+    dead_.clear();
+  }
+
+  template <typename F>
+  void ForEachHex(size_t i, F&& f) const {
+    trie_.ForEach(roots_[i], f);
+  }
+
+  template <typename F>
+  void Cumulative(std::span<const uint64_t> weights, F&& f) const {
+    trie_.template VisitDistinct<uint64_t>(roots_, weights, f);
+  }
+
+  MemoryUse memory() const {
+    MemoryUse m;
+    AddPoolStats(trie_.inner_stats(), &m);
+    AddPoolStats(trie_.bottom_stats(), &m);
+    return m;
+  }
+
+ private:
+  Trie trie_;
+  std::vector<typename Trie::Root> roots_;
+  std::vector<typename Trie::Root> dead_;
+};
+
+}  // namespace grove::footslam
+
+#endif  // GROVE_ENGINE_FOOTSLAM_HTREE_MAP_H_

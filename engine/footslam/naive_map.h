@@ -1,0 +1,135 @@
+// NaiveMap: the baseline of paper §III. Each particle owns a hash table of its visited
+// hexagons; resampling copies the table of the parent (the first offspring takes it over, every
+// further offspring copies it whole), so a step costs time linear in the mapped area.
+// Same keys, same counters and the same order of operations as the H-tree maps: the same seed
+// gives the same particles, weights and maps.
+#ifndef GROVE_ENGINE_FOOTSLAM_NAIVE_MAP_H_
+#define GROVE_ENGINE_FOOTSLAM_NAIVE_MAP_H_
+
+#include <algorithm>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "concurrency/worker_pool.h"
+#include "engine/footslam/alphabet.h"
+#include "engine/footslam/htc.h"
+
+namespace grove::footslam {
+
+// Open addressing with linear probing; power-of-two capacity, at most half full.
+class HexTable {
+ public:
+  Htc& FindOrInsert(uint64_t key) {
+    if ((size_ + 1) * 2 > slots_.size()) Grow();
+    size_t mask = slots_.size() - 1;
+    for (size_t i = Hash(key) & mask;; i = (i + 1) & mask) {
+      if (slots_[i].tag == 0) {
+        slots_[i].tag = key + 1;
+        slots_[i].h = Htc{};
+        ++size_;
+        return slots_[i].h;
+      }
+      if (slots_[i].tag == key + 1) return slots_[i].h;
+    }
+  }
+  template <typename F>
+  void ForEach(F&& f) const {
+    for (const Slot& s : slots_) {
+      if (s.tag != 0) f(s.tag - 1, s.h);
+    }
+  }
+  size_t size() const { return size_; }
+  size_t bytes() const { return slots_.size() * sizeof(Slot); }
+
+ private:
+  struct Slot {
+    uint64_t tag;  // key + 1; 0 marks an empty slot
+    Htc h;
+  };
+  static size_t Hash(uint64_t key) { return (key * 0x9E3779B97F4A7C15ull) >> 20; }
+  void Grow() {
+    std::vector<Slot> old;
+    old.swap(slots_);
+    slots_.assign(old.empty() ? 16 : old.size() * 2, Slot{0, Htc{}});
+    size_ = 0;
+    for (const Slot& s : old) {
+      if (s.tag != 0) FindOrInsert(s.tag - 1) = s.h;
+    }
+  }
+
+  std::vector<Slot> slots_;
+  size_t size_ = 0;
+};
+
+class NaiveMap {
+ public:
+  NaiveMap(int /*height*/, int /*slots*/, size_t particles, const Alphabet* /*unused*/)
+      : tables_(particles) {}
+
+  EdgeCounts Cross(size_t i, uint64_t key, int edge, int) {
+    Htc& h = tables_[i].FindOrInsert(key);
+    EdgeCounts before{h.c[edge], h.Total()};
+    ++h.c[edge];
+    return before;
+  }
+
+  void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
+    std::vector<HexTable> next(parents.size());
+    // parents is nondecreasing: the first slot of each parent takes its table over.
+    workers.ParallelFor(parents.size(), 256, [&](int, size_t b, size_t e) {
+      for (size_t k = b; k < e; ++k) {
+        bool first = k == 0 || parents[k - 1] != parents[k];
+        if (!first) next[k] = tables_[parents[k]];
+      }
+    });
+    for (size_t k = 0; k < parents.size(); ++k) {
+      if (k == 0 || parents[k - 1] != parents[k]) next[k] = std::move(tables_[parents[k]]);
+    }
+    dead_.swap(tables_);
+    tables_.swap(next);
+  }
+
+  void ReleaseDead(WorkerPool& workers) {
+    workers.ParallelFor(dead_.size(), 256, [&](int, size_t b, size_t e) {
+      for (size_t k = b; k < e; ++k) dead_[k] = HexTable();
+    });
+    dead_.clear();
+  }
+
+  template <typename F>
+  void ForEachHex(size_t i, F&& f) const {
+    std::vector<std::pair<uint64_t, Htc>> hexes;
+    tables_[i].ForEach([&](uint64_t key, const Htc& h) { hexes.push_back({key, h}); });
+    std::sort(hexes.begin(), hexes.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (const auto& [key, h] : hexes) f(key, h);
+  }
+
+  // Brute force over every particle: this is the cost the H-tree avoids.
+  template <typename F>
+  void Cumulative(std::span<const uint64_t> weights, F&& f) const {
+    for (size_t i = 0; i < tables_.size(); ++i) {
+      tables_[i].ForEach([&](uint64_t key, const Htc& h) { f(key, h, weights[i]); });
+    }
+  }
+
+  MemoryUse memory() const {
+    MemoryUse m;
+    for (const HexTable& t : tables_) {
+      m.live_nodes += static_cast<int64_t>(t.size());
+      m.live_bytes += static_cast<int64_t>(t.bytes());
+    }
+    m.peak_live_nodes = m.live_nodes;
+    m.peak_live_bytes = m.live_bytes;
+    return m;
+  }
+
+ private:
+  std::vector<HexTable> tables_;
+  std::vector<HexTable> dead_;
+};
+
+}  // namespace grove::footslam
+
+#endif  // GROVE_ENGINE_FOOTSLAM_NAIVE_MAP_H_

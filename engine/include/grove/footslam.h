@@ -1,0 +1,205 @@
+// FootSLAM: pedestrian simultaneous localisation and mapping from step odometry on a hexagon
+// grid (Angermann and Robertson 2012; Garcia Puyol, Robertson and Heirich, "Complexity-reduced
+// FootSLAM"). A Rao-Blackwellized particle filter: each particle carries a pose, odometry error
+// states and a map of hexagon transition counters that it shares with its relatives.
+//
+//   grove::FootSlamConfig config;
+//   config.particles = 30000;
+//   auto slam = grove::FootSlam::Create(config);          // validates; nothing built on error
+//   if (!slam.ok()) { ... slam.status().message() ... }
+//   for (const auto& s : steps) {
+//     grove::Status st = (*slam)->Step(s.t, s.dx, s.dy);  // on error the engine is unchanged
+//   }
+//   std::vector<grove::HexCounts> map = (*slam)->CumulativeMap();
+//
+// Thread safety: a FootSlam is driven by one thread at a time; it runs its own worker threads
+// inside Step(). Two engines in one process share nothing.
+#ifndef GROVE_FOOTSLAM_H_
+#define GROVE_FOOTSLAM_H_
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "grove/resampling.h"
+#include "grove/status.h"
+
+namespace grove {
+
+enum class FootSlamMapKind {
+  kHTree,  // per-particle persistent H-tree shared between relatives (paper §IV)
+  kNaive,  // per-particle hash table copied whole at resampling (paper §III), the baseline
+};
+
+// How a step's transitions weigh a particle.
+enum class FootSlamWeighting {
+  // The paper's rule: w *= (C_h^e + a) / (C_h + 6a) for each crossed edge. Every crossing
+  // multiplies by a number below one, so particles whose steps cross fewer edges gain weight:
+  // a free step scale drifts short.
+  kPaper,
+  // Each crossing's probability is divided by the probability an empty map gives it (1/6):
+  // w *= 6 (C_h^e + a) / (C_h + 6a). Unexplored space is neutral, so the number of crossings
+  // alone no longer rewards a particle; known transitions still do.
+  kPriorRatio,
+};
+
+struct FootSlamConfig {
+  // ---- Options that change results ----
+
+  // Number of particles. Range: >= 1. Default: 30000.
+  int64_t particles = 30000;
+  // Seed of every random stream. Same seed, same result at any thread count. Default: 1.
+  uint64_t seed = 1;
+  // Circumradius of the pointy-top hexagons, metres. Range: > 0. Default: 0.5.
+  double hex_radius_m = 0.5;
+  // Prior count a added to every edge counter (Dirichlet prior). Range: > 0. Default: 0.8.
+  double prior_count = 0.8;
+  // Weighting rule, see FootSlamWeighting. Default: kPriorRatio.
+  FootSlamWeighting weighting = FootSlamWeighting::kPriorRatio;
+
+  // Start pose in the map frame. Default: origin, heading 0.
+  double start_x_m = 0;
+  double start_y_m = 0;
+  double start_heading_rad = 0;
+
+  // Motion model. Each particle rotates and scales the odometry step by its own error states
+  // and adds white noise (the paper's P, U, E). All zero: every particle follows the odometry.
+  // Initial spread of the heading error, radians. Range: >= 0. Default: 0 (start heading known).
+  double initial_heading_sigma_rad = 0;
+  // Random-walk increment of the heading error per step, radians. Range: >= 0. Default: 0.01.
+  double heading_drift_sigma_rad = 0.01;
+  // White noise on each step's heading, radians. Range: >= 0. Default: 0.03.
+  double heading_sigma_rad = 0.03;
+  // Initial spread of the step-length scale error (scale = 1 + N(0, sigma)). Range: >= 0.
+  // Default: 0 (scale fixed: see the README on the short-step trap).
+  double scale_sigma = 0;
+  // Random-walk increment of the scale error per step. Range: >= 0. Default: 0.
+  double scale_drift_sigma = 0;
+  // White noise on each step's length, metres. Range: >= 0. Default: 0.04.
+  double step_length_sigma_m = 0.04;
+  // White noise on each step's end position, per axis, metres. Range: >= 0. Default: 0.
+  double position_sigma_m = 0;
+
+  // Resampling scheme. Default: systematic.
+  ResamplingScheme resampling = ResamplingScheme::kSystematic;
+  // Resample when ESS / N < threshold. Range: (0, 1]; 1 resamples every step. Default: 0.5.
+  double resample_threshold = 0.5;
+
+  // Map representation. Default: kHTree.
+  FootSlamMapKind map = FootSlamMapKind::kHTree;
+  // H-tree degree s = s_x * s_y. One of 4, 16, 64, 256. Default: 16.
+  int degree = 16;
+  // Hexagons per side of the square grid centred on the start; a power of sqrt(degree) and at
+  // least sqrt(degree). A walk that leaves the grid stops with an error. Default: 256.
+  int grid_size = 256;
+  // Alphabet bound T (paper §V): leaves hold one 16-bit symbol while every counter is <= T.
+  // Range: 0..5; 0 switches the alphabet off. Default: 5. H-tree maps only; results identical.
+  int alphabet = 5;
+
+  // ---- Options that change only speed ----
+
+  // Worker threads. 0 means one per hardware thread. Range: >= 0. Default: 0.
+  int threads = 0;
+  // Particles per parallel batch. Range: >= 1. Default: 512.
+  int64_t batch = 512;
+
+  // Checks every field; the message names the field, its value and the rule it breaks.
+  Status Validate() const;
+};
+
+const char* FootSlamMapKindName(FootSlamMapKind kind);          // "htree", "naive"
+bool ParseFootSlamMapKind(const std::string& name, FootSlamMapKind* kind);
+const char* FootSlamWeightingName(FootSlamWeighting weighting);  // "paper", "prior_ratio"
+bool ParseFootSlamWeighting(const std::string& name, FootSlamWeighting* weighting);
+
+struct Pose2 {
+  double x_m = 0;
+  double y_m = 0;
+  double heading_rad = 0;
+};
+
+struct StampedPose {
+  double t_s = 0;
+  Pose2 pose;
+};
+
+// One hexagon of a map: axial coordinates, centre and the six edge counters (weighted for a
+// cumulative map, whole numbers for one particle's map).
+struct HexCounts {
+  int32_t q = 0;
+  int32_t r = 0;
+  double x_m = 0;
+  double y_m = 0;
+  double counts[6] = {0, 0, 0, 0, 0, 0};
+};
+
+struct MemoryUse {
+  int64_t live_nodes = 0;       // map and trajectory nodes in use now
+  int64_t live_bytes = 0;
+  int64_t peak_live_nodes = 0;  // highest seen (per node pool, summed)
+  int64_t peak_live_bytes = 0;
+  int64_t reserved_bytes = 0;   // obtained from the system by the node pools
+};
+
+// What a run asked for, what it used and what it cost (Ceres' Summary).
+struct FootSlamSummary {
+  int64_t particles = 0;
+  int threads_requested = 0;
+  int threads_used = 0;
+  int64_t steps = 0;
+  int64_t resamplings = 0;
+  double mean_ess = 0;
+  double advance_s = 0;      // propagate, weight and update maps
+  double normalize_s = 0;    // log-sum-exp and effective sample size
+  double resample_s = 0;     // drawing parents and gathering the new generation
+  double release_s = 0;      // freeing the dead generation
+  double bookkeeping_s = 0;  // weighted-mean pose per step
+  MemoryUse map_memory;
+  MemoryUse trajectory_memory;
+  // One paragraph for a terminal.
+  std::string BriefReport() const;
+};
+
+class FootSlam {
+ public:
+  // Validates `config` and builds the engine; nothing is built when the config is invalid.
+  static StatusOr<std::unique_ptr<FootSlam>> Create(const FootSlamConfig& config);
+  virtual ~FootSlam();
+
+  // Processes one odometry step (dx, dy in the odometry frame, metres) at time t_s.
+  // Returns InvalidArgument (engine unchanged) for a non-finite value or a time not after the
+  // previous one; OutOfRange when a particle leaves the grid; FailedPrecondition when every
+  // weight became zero (the filter degenerated). After an OutOfRange or FailedPrecondition the
+  // engine must not be stepped again.
+  Status Step(double t_s, double dx_m, double dy_m);
+
+  // Sets the time stamp of the start pose (default 0). REQUIRES: before the first Step().
+  void SetStartTime(double t_s);
+
+  const FootSlamConfig& config() const;
+  int64_t steps() const;
+  // The current pose of the heaviest particle and the weighted mean pose.
+  Pose2 HeaviestPose() const;
+  Pose2 MeanPose() const;
+  // The heaviest particle's whole path: the start, then one pose per step.
+  std::vector<StampedPose> HeaviestTrajectory() const;
+  // The weighted mean pose after each step (the start first).
+  const std::vector<StampedPose>& MeanTrajectory() const;
+  // Eq. 5-6 of the paper: sum over particles of w_i * C_i, hexagons in key order. Visits each
+  // distinct map node once.
+  std::vector<HexCounts> CumulativeMap() const;
+  // The heaviest particle's own map.
+  std::vector<HexCounts> HeaviestMap() const;
+  FootSlamSummary Summary() const;
+
+  class Impl;
+
+ private:
+  explicit FootSlam(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace grove
+
+#endif  // GROVE_FOOTSLAM_H_

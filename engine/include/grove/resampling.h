@@ -1,0 +1,18 @@
+// Resampling schemes a filter can use.
+#ifndef GROVE_RESAMPLING_H_
+#define GROVE_RESAMPLING_H_
+
+#include <string_view>
+
+namespace grove {
+
+enum class ResamplingScheme { kSystematic, kStratified, kResidual, kMultinomial };
+
+// "systematic", "stratified", "residual" or "multinomial".
+const char* ResamplingSchemeName(ResamplingScheme scheme);
+// Parses one of the names above; returns false for anything else.
+bool ParseResamplingScheme(std::string_view name, ResamplingScheme* scheme);
+
+}  // namespace grove
+
+#endif  // GROVE_RESAMPLING_H_

@@ -1,0 +1,144 @@
+// grove: the command-line front end. Subcommands:
+//   grove footslam run|simulate|evaluate|render ...
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <string>
+
+#include "grove/footslam.h"
+#include "tools/footslam_config_json.h"
+#include "tools/footslam_run.h"
+
+namespace {
+
+using grove::FootSlamConfig;
+namespace gt = grove::tools;
+
+int Main(int argc, char** argv) {
+  CLI::App app{"grove: particle-filter SLAM with shared persistent maps"};
+  app.require_subcommand(1);
+  CLI::App* footslam = app.add_subcommand("footslam", "Pedestrian SLAM from step odometry");
+  footslam->require_subcommand(1);
+
+  // ---- run ----
+  CLI::App* run = footslam->add_subcommand("run", "Run FootSLAM on a step file");
+  gt::RunOptions run_options;
+  std::string config_path;
+  bool print_config = false;
+  bool no_progress = false;
+  FootSlamConfig flags;
+  std::string map_kind = "htree";
+  std::string weighting, resampling;
+  run->add_option("--steps", run_options.steps_path,
+                  "Step file: CSV 't,dx,dy' or 't,x,y' (default: the bundled building walk)");
+  run->add_option("--out", run_options.out_dir, "Output directory");
+  run->add_option("--config", config_path, "JSON file setting any FootSLAM parameter");
+  auto* o_particles = run->add_option("--particles", flags.particles, "Number of particles");
+  auto* o_map = run->add_option("--map", map_kind, "Map representation: htree or naive");
+  auto* o_degree = run->add_option("--degree", flags.degree, "H-tree degree: 4, 16, 64 or 256");
+  auto* o_alphabet = run->add_option("--alphabet", flags.alphabet, "Alphabet bound T, 0 = off");
+  auto* o_grid = run->add_option("--grid-size", flags.grid_size, "Hexagons per grid side");
+  auto* o_threads = run->add_option("--threads", flags.threads, "Worker threads, 0 = all cores");
+  auto* o_seed = run->add_option("--seed", flags.seed, "Seed of the random streams");
+  auto* o_weighting =
+      run->add_option("--weighting", weighting, "Weighting rule: paper or prior_ratio");
+  auto* o_resampling = run->add_option(
+      "--resampling", resampling, "systematic, stratified, residual or multinomial");
+  auto* o_threshold = run->add_option("--resample-threshold", flags.resample_threshold,
+                                      "Resample when ESS/N is below this, in (0, 1]");
+  run->add_option("--max-step", run_options.max_step_m,
+                  "Reject input steps longer than this many metres (default 5)");
+  run->add_flag("--print-config", print_config, "Print the effective configuration and exit");
+  run->add_flag("--no-progress", no_progress, "No progress output");
+
+  // ---- simulate ----
+  CLI::App* simulate = footslam->add_subcommand("simulate", "Simulate a pedestrian walk");
+  std::string sim_out, scenario = "building";
+  double minutes = 8;
+  uint64_t sim_seed = 1;
+  simulate->add_option("--out", sim_out, "Output directory (steps.csv, truth.csv)")->required();
+  simulate->add_option("--minutes", minutes, "Walk duration in minutes")->capture_default_str();
+  simulate->add_option("--seed", sim_seed, "Seed")->capture_default_str();
+  simulate->add_option("--scenario", scenario, "building or open")->capture_default_str();
+
+  // ---- evaluate ----
+  CLI::App* evaluate = footslam->add_subcommand("evaluate", "Position error against truth");
+  std::string truth_path, trajectory_path;
+  evaluate->add_option("--truth", truth_path, "Truth CSV (t,x,y)")->required();
+  evaluate->add_option("--trajectory", trajectory_path, "Trajectory CSV (t,x,y,...)")->required();
+
+  // ---- render ----
+  CLI::App* render = footslam->add_subcommand("render", "Redraw map.png and map.svg from CSVs");
+  std::string render_dir, odometry_path;
+  double render_radius = 0.5;
+  render->add_option("--dir", render_dir, "Directory holding map.csv and trajectory.csv")
+      ->required();
+  render->add_option("--hex-radius", render_radius, "Hexagon radius in metres")
+      ->capture_default_str();
+  render->add_option("--steps", odometry_path, "Step file to draw the raw odometry from");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? gt::kExitOk : gt::kExitUsage;
+  }
+
+  if (*run) {
+    FootSlamConfig config;
+    if (!config_path.empty()) {
+      grove::Status s = gt::LoadFootSlamConfigFile(config_path, &config);
+      if (!s.ok()) {
+        std::fprintf(stderr, "grove: error: %s\n", s.message().c_str());
+        return s.code() == grove::StatusCode::kNotFound ? gt::kExitInput : gt::kExitUsage;
+      }
+    }
+    // Flags given on the command line override the file.
+    if (*o_particles) config.particles = flags.particles;
+    if (*o_degree) config.degree = flags.degree;
+    if (*o_alphabet) config.alphabet = flags.alphabet;
+    if (*o_grid) config.grid_size = flags.grid_size;
+    if (*o_threads) config.threads = flags.threads;
+    if (*o_seed) config.seed = flags.seed;
+    if (*o_threshold) config.resample_threshold = flags.resample_threshold;
+    if (*o_map && !grove::ParseFootSlamMapKind(map_kind, &config.map)) {
+      std::fprintf(stderr, "grove: error: --map = %s: must be htree or naive\n", map_kind.c_str());
+      return gt::kExitUsage;
+    }
+    if (*o_weighting && !grove::ParseFootSlamWeighting(weighting, &config.weighting)) {
+      std::fprintf(stderr, "grove: error: --weighting = %s: must be paper or prior_ratio\n",
+                   weighting.c_str());
+      return gt::kExitUsage;
+    }
+    if (*o_resampling && !grove::ParseResamplingScheme(resampling, &config.resampling)) {
+      std::fprintf(stderr,
+                   "grove: error: --resampling = %s: must be systematic, stratified, residual "
+                   "or multinomial\n",
+                   resampling.c_str());
+      return gt::kExitUsage;
+    }
+    if (print_config) {
+      std::printf("%s\n", gt::FootSlamConfigToJson(config).dump(2).c_str());
+      return gt::kExitOk;
+    }
+    run_options.progress = !no_progress;
+    return gt::RunFootSlamCommand(config, run_options);
+  }
+  if (*simulate) return gt::SimulateCommand(sim_out, minutes, sim_seed, scenario);
+  if (*evaluate) return gt::EvaluateCommand(truth_path, trajectory_path);
+  if (*render) return gt::RenderCommand(render_dir, render_radius, odometry_path);
+  return gt::kExitUsage;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return Main(argc, argv);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "grove: error: out of memory\n");
+    return grove::tools::kExitRun;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "grove: internal error: %s\n", e.what());
+    return grove::tools::kExitInternal;
+  }
+}

@@ -1,0 +1,264 @@
+#include "tools/footslam_run.h"
+
+#include <fmt/format.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "tools/atomic_file.h"
+#include "tools/footslam_config_json.h"
+#include "tools/map_render.h"
+#include "tools/output_readers.h"
+#include "tools/progress_reporter.h"
+#include "tools/step_reader.h"
+#include "tools/trajectory_metrics.h"
+#include "tools/walk_simulator.h"
+
+namespace grove::tools {
+namespace {
+
+int Fail(int code, const std::string& message) {
+  std::fprintf(stderr, "grove: error: %s\n", message.c_str());
+  return code;
+}
+
+int ExitCodeOf(const Status& s) {
+  switch (s.code()) {
+    case StatusCode::kInvalidArgument:
+    case StatusCode::kNotFound:
+    case StatusCode::kDataLoss:
+      return kExitInput;
+    case StatusCode::kIoError:
+    case StatusCode::kResourceExhausted:
+      return kExitOutput;
+    case StatusCode::kOutOfRange:
+    case StatusCode::kFailedPrecondition:
+      return kExitRun;
+    default:
+      return kExitInternal;
+  }
+}
+
+std::string MapCsv(const std::vector<HexCounts>& hexes, bool integer_counts) {
+  std::string out = "q,r,x,y,c0,c1,c2,c3,c4,c5\n";
+  out.reserve(hexes.size() * 64 + out.size());
+  for (const HexCounts& h : hexes) {
+    fmt::format_to(std::back_inserter(out), "{},{},{:.4f},{:.4f}", h.q, h.r, h.x_m, h.y_m);
+    for (double c : h.counts) {
+      if (integer_counts) {
+        fmt::format_to(std::back_inserter(out), ",{}", static_cast<int64_t>(c));
+      } else {
+        fmt::format_to(std::back_inserter(out), ",{:.9g}", c);
+      }
+    }
+    out += '\n';
+  }
+  return out;
+}
+
+std::string TrajectoryCsv(const std::vector<StampedPose>& poses) {
+  std::string out = "t,x,y,heading\n";
+  for (const StampedPose& p : poses) {
+    fmt::format_to(std::back_inserter(out), "{:.6f},{:.6f},{:.6f},{:.6f}\n", p.t_s, p.pose.x_m,
+                   p.pose.y_m, p.pose.heading_rad);
+  }
+  return out;
+}
+
+int64_t PeakRssBytes() {
+  struct rusage usage;
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<int64_t>(usage.ru_maxrss) * 1024;  // Linux reports KiB
+}
+
+nlohmann::json MemoryJson(const MemoryUse& m) {
+  return {{"live_nodes", m.live_nodes},
+          {"live_bytes", m.live_bytes},
+          {"peak_live_nodes", m.peak_live_nodes},
+          {"peak_live_bytes", m.peak_live_bytes},
+          {"reserved_bytes", m.reserved_bytes}};
+}
+
+MapImage MakeImage(const FootSlamConfig& config, const std::vector<HexCounts>& map,
+                   const std::vector<StampedPose>& path, const std::vector<RenderPoint>& odometry,
+                   const std::string& title) {
+  MapImage image;
+  image.hex_radius_m = config.hex_radius_m;
+  for (const HexCounts& h : map) {
+    double use = 0;
+    for (double c : h.counts) use += c;
+    image.hexes.push_back({h.q, h.r, use});
+  }
+  for (const StampedPose& p : path) image.path.push_back({p.pose.x_m, p.pose.y_m});
+  image.odometry = odometry;
+  image.title = title;
+  return image;
+}
+
+}  // namespace
+
+int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) {
+  auto wall_start = std::chrono::steady_clock::now();
+  if (Status s = config.Validate(); !s.ok()) return Fail(kExitUsage, s.message());
+  if (options.out_dir.empty()) return Fail(kExitUsage, "--out: an output directory is required");
+
+  StepReaderOptions reader_options;
+  reader_options.max_step_m = options.max_step_m;
+  std::string steps_name = options.steps_path.empty() ? EmbeddedWalkName() : options.steps_path;
+  StatusOr<StepReader> reader =
+      options.steps_path.empty()
+          ? StepReader::OpenText(EmbeddedWalkName(), EmbeddedWalkSteps(), reader_options)
+          : StepReader::Open(options.steps_path, reader_options);
+  if (!reader.ok()) return Fail(ExitCodeOf(reader.status()), reader.status().message());
+
+  StatusOr<std::unique_ptr<FootSlam>> created = FootSlam::Create(config);
+  if (!created.ok()) return Fail(kExitUsage, created.status().message());
+  FootSlam& slam = **created;
+
+  // Count the steps first for the progress bar only when the file is small enough to matter
+  // little; a stream of unknown length gets a bar without a total.
+  ProgressReporter progress(0, config.particles, stderr, isatty(fileno(stderr)) != 0);
+  std::vector<RenderPoint> odometry{{config.start_x_m, config.start_y_m}};
+  bool start_set = false;
+  StepRecord step;
+  while (true) {
+    StatusOr<bool> more = reader->Next(&step);
+    if (!more.ok()) return Fail(kExitInput, more.status().message());
+    if (!*more) break;
+    if (!start_set) {
+      slam.SetStartTime(reader->start_time_s());
+      start_set = true;
+    }
+    Status s = slam.Step(step.t_s, step.dx_m, step.dy_m);
+    if (!s.ok()) {
+      return Fail(ExitCodeOf(s), fmt::format("{}:{}: {}", steps_name, step.line, s.message()));
+    }
+    // The raw odometry drawn in the map frame: rotated by the configured start heading.
+    double c = std::cos(config.start_heading_rad), sn = std::sin(config.start_heading_rad);
+    odometry.push_back({odometry.back().x_m + c * step.dx_m - sn * step.dy_m,
+                        odometry.back().y_m + sn * step.dx_m + c * step.dy_m});
+    if (options.progress) progress.Update(slam.steps());
+  }
+  if (slam.steps() == 0) return Fail(kExitInput, fmt::format("{}: no steps", steps_name));
+  if (options.progress) progress.Finish();
+
+  // Every output is built in memory and written under a temporary name, then renamed.
+  std::vector<HexCounts> cumulative = slam.CumulativeMap();
+  std::vector<HexCounts> best_map = slam.HeaviestMap();
+  std::vector<StampedPose> trajectory = slam.HeaviestTrajectory();
+  FootSlamSummary summary = slam.Summary();
+  double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  double filter_s = summary.advance_s + summary.normalize_s + summary.resample_s +
+                    summary.release_s + summary.bookkeeping_s;
+  nlohmann::json report = {
+      {"inputs", {{"steps", steps_name}, {"steps_read", slam.steps()}}},
+      {"config", FootSlamConfigToJson(config)},
+      {"particles", config.particles},
+      {"steps", slam.steps()},
+      {"threads_requested", summary.threads_requested},
+      {"threads_used", summary.threads_used},
+      {"wall_time_s", wall_s},
+      {"filter_time_s", filter_s},
+      {"particle_steps_per_s", filter_s > 0 ? config.particles * slam.steps() / filter_s : 0.0},
+      {"ns_per_particle_step",
+       slam.steps() > 0 ? filter_s * 1e9 / (config.particles * slam.steps()) : 0.0},
+      {"phases_s",
+       {{"advance", summary.advance_s},
+        {"normalize", summary.normalize_s},
+        {"resample", summary.resample_s},
+        {"release", summary.release_s},
+        {"bookkeeping", summary.bookkeeping_s}}},
+      {"peak_rss_bytes", PeakRssBytes()},
+      {"map_memory", MemoryJson(summary.map_memory)},
+      {"trajectory_memory", MemoryJson(summary.trajectory_memory)},
+      {"resamplings", summary.resamplings},
+      {"mean_ess", summary.mean_ess},
+      {"hexagons", {{"cumulative", cumulative.size()}, {"heaviest", best_map.size()}}},
+  };
+  const std::string& dir = options.out_dir;
+  Status s = EnsureDirectory(dir);
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  MapImage image = MakeImage(config, cumulative, trajectory, odometry,
+                             fmt::format("FootSLAM, {} particles, {} steps: cumulative map, "
+                                         "heaviest particle's path, raw odometry",
+                                         config.particles, slam.steps()));
+  for (auto [name, text] : {std::pair<const char*, std::string>{"map.csv", MapCsv(cumulative, false)},
+                            {"map_best.csv", MapCsv(best_map, true)},
+                            {"trajectory.csv", TrajectoryCsv(trajectory)},
+                            {"mean_trajectory.csv", TrajectoryCsv(slam.MeanTrajectory())}}) {
+    s = WriteFileAtomically(dir + "/" + name, text);
+    if (!s.ok()) return Fail(kExitOutput, s.message());
+  }
+  s = WriteMapImages(dir + "/map.png", dir + "/map.svg", image);
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  s = WriteFileAtomically(dir + "/summary.json", report.dump(2) + "\n");
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  std::fprintf(stderr, "%s\nwrote %s/{map.csv, map_best.csv, trajectory.csv, "
+               "mean_trajectory.csv, map.png, map.svg, summary.json}\n",
+               summary.BriefReport().c_str(), dir.c_str());
+  return kExitOk;
+}
+
+int SimulateCommand(const std::string& out_dir, double minutes, uint64_t seed,
+                    const std::string& scenario) {
+  SimulatorOptions options;
+  options.minutes = minutes;
+  options.seed = seed;
+  if (scenario == "building") {
+    options.scenario = Scenario::kBuilding;
+  } else if (scenario == "open") {
+    options.scenario = Scenario::kOpen;
+  } else {
+    return Fail(kExitUsage, fmt::format("--scenario = {}: must be building or open", scenario));
+  }
+  StatusOr<SimulatedWalk> walk = SimulateWalk(options);
+  if (!walk.ok()) return Fail(kExitUsage, walk.status().message());
+  Status s = EnsureDirectory(out_dir);
+  if (s.ok()) s = WriteFileAtomically(out_dir + "/steps.csv", StepsCsv(*walk));
+  if (s.ok()) s = WriteFileAtomically(out_dir + "/truth.csv", TruthCsv(*walk));
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  std::fprintf(stderr, "wrote %s/steps.csv and %s/truth.csv: %zu steps\n", out_dir.c_str(),
+               out_dir.c_str(), walk->steps.size());
+  return kExitOk;
+}
+
+int EvaluateCommand(const std::string& truth_path, const std::string& trajectory_path) {
+  auto truth = ReadTimedPoints(truth_path);
+  if (!truth.ok()) return Fail(ExitCodeOf(truth.status()), truth.status().message());
+  auto estimate = ReadTimedPoints(trajectory_path);
+  if (!estimate.ok()) return Fail(ExitCodeOf(estimate.status()), estimate.status().message());
+  auto error = CompareTrajectories(*truth, *estimate);
+  if (!error.ok()) return Fail(kExitInput, error.status().message());
+  std::printf("%s\n", TrajectoryErrorJson(*error).c_str());
+  return kExitOk;
+}
+
+int RenderCommand(const std::string& dir, double hex_radius_m, const std::string& odometry_path) {
+  auto hexes = ReadMapCsv(dir + "/map.csv");
+  if (!hexes.ok()) return Fail(ExitCodeOf(hexes.status()), hexes.status().message());
+  auto path = ReadPathCsv(dir + "/trajectory.csv");
+  if (!path.ok()) return Fail(ExitCodeOf(path.status()), path.status().message());
+  MapImage image;
+  image.hex_radius_m = hex_radius_m;
+  image.hexes = std::move(*hexes);
+  image.path = std::move(*path);
+  if (!odometry_path.empty()) {
+    auto steps = ReadAllSteps(odometry_path);
+    if (!steps.ok()) return Fail(kExitInput, steps.status().message());
+    image.odometry.push_back({0, 0});
+    for (const StepRecord& s : *steps) {
+      image.odometry.push_back({image.odometry.back().x_m + s.dx_m, image.odometry.back().y_m + s.dy_m});
+    }
+  }
+  image.title = "FootSLAM map (redrawn from " + dir + ")";
+  Status s = WriteMapImages(dir + "/map.png", dir + "/map.svg", image);
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  return kExitOk;
+}
+
+}  // namespace grove::tools

@@ -1,0 +1,27 @@
+// Readers for grove's own CSV outputs, used by `grove footslam render`.
+//
+// Errors: NotFound for a missing file, IoError when it cannot be read, InvalidArgument for a bad
+// record as one line "FILE:LINE:COLUMN: what (detail)" (1-based; COLUMN counts bytes).
+// Both readers accept "\r\n" line ends, blank lines, spaces around fields and extra columns after
+// the required ones; quoted fields are not supported (grove never writes them).
+#ifndef GROVE_TOOLS_OUTPUT_READERS_H_
+#define GROVE_TOOLS_OUTPUT_READERS_H_
+
+#include <string>
+#include <vector>
+
+#include "grove/status.h"
+#include "tools/map_render.h"
+
+namespace grove::tools {
+
+// map.csv: header q,r,x,y,c0,c1,c2,c3,c4,c5; use = c0 + ... + c5. q and r are int32, the others
+// finite numbers, the counts >= 0; each (q, r) appears once.
+StatusOr<std::vector<RenderHex>> ReadMapCsv(const std::string& path);
+
+// trajectory.csv (t,x,y,heading) or any CSV whose header starts t,x,y: the (x, y) points in order.
+StatusOr<std::vector<RenderPoint>> ReadPathCsv(const std::string& path);
+
+}  // namespace grove::tools
+
+#endif  // GROVE_TOOLS_OUTPUT_READERS_H_
