@@ -205,10 +205,12 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
 }
 
 int SimulateCommand(const std::string& out_dir, double minutes, uint64_t seed,
-                    const std::string& scenario) {
+                    const std::string& scenario, double heading_drift, double scale_error) {
   SimulatorOptions options;
   options.minutes = minutes;
   options.seed = seed;
+  if (heading_drift >= 0) options.heading_drift_rad_per_sqrt_step = heading_drift;
+  if (scale_error > -1) options.scale_error = scale_error;
   if (scenario == "building") {
     options.scenario = Scenario::kBuilding;
   } else if (scenario == "open") {

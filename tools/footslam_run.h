@@ -32,9 +32,9 @@ struct RunOptions {
 // stderr as one line.
 int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options);
 
-// `grove footslam simulate`.
+// `grove footslam simulate`: `heading_drift` and `scale_error` < 0 keep the simulator defaults.
 int SimulateCommand(const std::string& out_dir, double minutes, uint64_t seed,
-                    const std::string& scenario);
+                    const std::string& scenario, double heading_drift, double scale_error);
 // `grove footslam evaluate`: prints the JSON report to stdout.
 int EvaluateCommand(const std::string& truth_path, const std::string& trajectory_path);
 // `grove footslam render`: map.png and map.svg from the CSV outputs in `dir`.

@@ -60,6 +60,11 @@ int Main(int argc, char** argv) {
   simulate->add_option("--minutes", minutes, "Walk duration in minutes")->capture_default_str();
   simulate->add_option("--seed", sim_seed, "Seed")->capture_default_str();
   simulate->add_option("--scenario", scenario, "building or open")->capture_default_str();
+  double heading_drift = -1, scale_error = -2;
+  simulate->add_option("--heading-drift", heading_drift,
+                       "Heading random walk of the odometry, rad per sqrt(step) (default 0.006)");
+  simulate->add_option("--scale-error", scale_error,
+                       "Step-length scale error of the odometry (default 0.02)");
 
   // ---- evaluate ----
   CLI::App* evaluate = footslam->add_subcommand("evaluate", "Position error against truth");
@@ -123,7 +128,8 @@ int Main(int argc, char** argv) {
     run_options.progress = !no_progress;
     return gt::RunFootSlamCommand(config, run_options);
   }
-  if (*simulate) return gt::SimulateCommand(sim_out, minutes, sim_seed, scenario);
+  if (*simulate) return gt::SimulateCommand(sim_out, minutes, sim_seed, scenario, heading_drift,
+                                         scale_error);
   if (*evaluate) return gt::EvaluateCommand(truth_path, trajectory_path);
   if (*render) return gt::RenderCommand(render_dir, render_radius, odometry_path);
   return gt::kExitUsage;

@@ -1,0 +1,237 @@
+// The embedder's view: only the public headers.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "grove/footslam.h"
+
+namespace grove {
+namespace {
+
+struct Step {
+  double t, dx, dy;
+};
+
+// A wandering walk with revisits and drifting odometry.
+std::vector<Step> Walk(int n, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> turn(0, 0.35);
+  std::vector<Step> steps;
+  double x = 0, y = 0, heading = 0;
+  for (int k = 0; k < n; ++k) {
+    heading += turn(rng);
+    if (std::hypot(x, y) > 12 && std::cos(heading - std::atan2(-y, -x)) < 0) heading += M_PI;
+    double dx = 0.7 * std::cos(heading), dy = 0.7 * std::sin(heading);
+    x += dx;
+    y += dy;
+    steps.push_back({0.5 * (k + 1), dx * 1.01, dy * 1.01});
+  }
+  return steps;
+}
+
+struct Result {
+  std::vector<StampedPose> trajectory;
+  std::vector<StampedPose> mean;
+  std::vector<HexCounts> cumulative;
+  std::vector<HexCounts> best;
+  int64_t resamplings;
+};
+
+Result RunWith(FootSlamConfig config, const std::vector<Step>& steps) {
+  auto slam = FootSlam::Create(config);
+  EXPECT_TRUE(slam.ok()) << slam.status().ToString();
+  for (const Step& s : steps) {
+    Status st = (*slam)->Step(s.t, s.dx, s.dy);
+    EXPECT_TRUE(st.ok()) << st.ToString();
+  }
+  return {(*slam)->HeaviestTrajectory(), (*slam)->MeanTrajectory(), (*slam)->CumulativeMap(),
+          (*slam)->HeaviestMap(), (*slam)->Summary().resamplings};
+}
+
+FootSlamConfig Small() {
+  FootSlamConfig c;
+  c.particles = 2000;
+  c.threads = 2;
+  c.grid_size = 256;
+  return c;
+}
+
+void ExpectSame(const Result& a, const Result& b) {
+  ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
+  for (size_t k = 0; k < a.trajectory.size(); ++k) {
+    ASSERT_EQ(a.trajectory[k].pose.x_m, b.trajectory[k].pose.x_m) << "pose " << k;
+    ASSERT_EQ(a.trajectory[k].pose.y_m, b.trajectory[k].pose.y_m) << "pose " << k;
+    ASSERT_EQ(a.mean[k].pose.x_m, b.mean[k].pose.x_m) << "mean pose " << k;
+    ASSERT_EQ(a.mean[k].pose.heading_rad, b.mean[k].pose.heading_rad) << "mean pose " << k;
+  }
+  // Maps come in key order, which depends on the degree: compare them in (q, r) order.
+  auto same_map = [](std::vector<HexCounts> x, std::vector<HexCounts> y) {
+    auto by_hex = [](const HexCounts& a, const HexCounts& b) {
+      return std::pair(a.q, a.r) < std::pair(b.q, b.r);
+    };
+    std::sort(x.begin(), x.end(), by_hex);
+    std::sort(y.begin(), y.end(), by_hex);
+    ASSERT_EQ(x.size(), y.size());
+    for (size_t i = 0; i < x.size(); ++i) {
+      ASSERT_EQ(x[i].q, y[i].q);
+      ASSERT_EQ(x[i].r, y[i].r);
+      for (int e = 0; e < 6; ++e) ASSERT_EQ(x[i].counts[e], y[i].counts[e]) << "hex " << i;
+    }
+  };
+  same_map(a.cumulative, b.cumulative);
+  same_map(a.best, b.best);
+  EXPECT_EQ(a.resamplings, b.resamplings);
+}
+
+TEST(FootSlamApiTest, NaiveAndHTreeGiveTheSameParticlesAndMaps) {
+  auto steps = Walk(400, 1);
+  FootSlamConfig htree = Small();
+  FootSlamConfig naive = Small();
+  naive.map = FootSlamMapKind::kNaive;
+  Result a = RunWith(htree, steps);
+  EXPECT_GT(a.resamplings, 5);
+  ExpectSame(a, RunWith(naive, steps));
+}
+
+TEST(FootSlamApiTest, AlphabetOnAndOffGiveTheSameResult) {
+  auto steps = Walk(400, 2);
+  FootSlamConfig on = Small();
+  FootSlamConfig off = Small();
+  off.alphabet = 0;
+  for (int t : {1, 3, 5}) {
+    on.alphabet = t;
+    ExpectSame(RunWith(on, steps), RunWith(off, steps));
+  }
+}
+
+TEST(FootSlamApiTest, EveryDegreeGivesTheSameResult) {
+  auto steps = Walk(300, 3);
+  FootSlamConfig c = Small();
+  c.degree = 16;
+  Result reference = RunWith(c, steps);
+  for (auto [degree, grid] : {std::pair{4, 256}, std::pair{64, 512}, std::pair{256, 256}}) {
+    SCOPED_TRACE(degree);
+    c.degree = degree;
+    c.grid_size = grid;
+    ExpectSame(reference, RunWith(c, steps));
+  }
+}
+
+TEST(FootSlamApiTest, SameSeedIsBitIdenticalAtOneTwoAndFourThreads) {
+  auto steps = Walk(300, 4);
+  FootSlamConfig c = Small();
+  c.threads = 1;
+  c.batch = 64;
+  Result one = RunWith(c, steps);
+  for (int threads : {2, 4}) {
+    c.threads = threads;
+    ExpectSame(one, RunWith(c, steps));
+  }
+}
+
+TEST(FootSlamApiTest, DifferentSeedsGiveDifferentPaths) {
+  auto steps = Walk(200, 5);
+  FootSlamConfig c = Small();
+  Result a = RunWith(c, steps);
+  c.seed = 2;
+  Result b = RunWith(c, steps);
+  EXPECT_NE(a.trajectory.back().pose.x_m, b.trajectory.back().pose.x_m);
+}
+
+TEST(FootSlamApiTest, CumulativeMapSumsToTheWeightedCrossings) {
+  auto steps = Walk(200, 6);
+  FootSlamConfig c = Small();
+  c.heading_drift_sigma_rad = 0;
+  c.heading_sigma_rad = 0;
+  c.step_length_sigma_m = 0;
+  // Without noise every particle has the same map, so the weighted sum is that map.
+  Result r = RunWith(c, steps);
+  ASSERT_EQ(r.cumulative.size(), r.best.size());
+  for (size_t i = 0; i < r.best.size(); ++i) {
+    for (int e = 0; e < 6; ++e) EXPECT_NEAR(r.cumulative[i].counts[e], r.best[i].counts[e], 1e-9);
+  }
+}
+
+TEST(FootSlamApiTest, ConfigErrorsNameFieldValueAndRule) {
+  struct Case {
+    void (*set)(FootSlamConfig*);
+    const char* message;
+  };
+  const Case cases[] = {
+      {[](FootSlamConfig* c) { c->particles = 0; }, "particles = 0: must be in 1.."},
+      {[](FootSlamConfig* c) { c->heading_sigma_rad = -1; }, "heading_sigma_rad = -1: must be >= 0"},
+      {[](FootSlamConfig* c) { c->resample_threshold = 1.5; },
+       "resample_threshold = 1.5: must be in (0, 1]"},
+      {[](FootSlamConfig* c) { c->resample_threshold = 0; },
+       "resample_threshold = 0: must be in (0, 1]"},
+      {[](FootSlamConfig* c) { c->degree = 8; }, "degree = 8"},
+      {[](FootSlamConfig* c) { c->grid_size = 100; }, "grid_size = 100"},
+      {[](FootSlamConfig* c) { c->alphabet = 6; }, "alphabet = 6: must be in 0..5"},
+      {[](FootSlamConfig* c) { c->threads = -1; }, "threads = -1: must be >= 0"},
+      {[](FootSlamConfig* c) { c->hex_radius_m = 0; }, "hex_radius_m = 0: must be > 0"},
+      {[](FootSlamConfig* c) { c->prior_count = std::nan(""); }, "prior_count = nan: must be > 0"},
+  };
+  for (const Case& k : cases) {
+    FootSlamConfig c;
+    k.set(&c);
+    Status s = c.Validate();
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << k.message;
+    EXPECT_NE(s.message().find(k.message), std::string::npos) << s.message();
+    EXPECT_FALSE(FootSlam::Create(c).ok());
+  }
+  EXPECT_TRUE(FootSlamConfig().Validate().ok());
+}
+
+TEST(FootSlamApiTest, BadStepIsRejectedAndLeavesTheEngineUnchanged) {
+  FootSlamConfig c = Small();
+  auto slam = FootSlam::Create(c);
+  ASSERT_TRUE(slam.ok());
+  ASSERT_TRUE((*slam)->Step(1.0, 0.7, 0).ok());
+  Pose2 before = (*slam)->HeaviestPose();
+  Status s = (*slam)->Step(2.0, std::nan(""), 0);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  s = (*slam)->Step(1.0, 0.7, 0);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("strictly increasing"), std::string::npos) << s.message();
+  EXPECT_EQ((*slam)->steps(), 1);
+  EXPECT_EQ((*slam)->HeaviestPose().x_m, before.x_m);
+  EXPECT_TRUE((*slam)->Step(2.0, 0.7, 0).ok());
+}
+
+TEST(FootSlamApiTest, LeavingTheGridIsAnErrorNamingStepAndPosition) {
+  FootSlamConfig c = Small();
+  c.grid_size = 16;  // 16 hexagons of 0.87 m: about 14 m across
+  auto slam = FootSlam::Create(c);
+  ASSERT_TRUE(slam.ok());
+  Status s;
+  int k = 0;
+  while (s.ok() && k < 100) {
+    ++k;
+    s = (*slam)->Step(k, 0.7, 0);
+  }
+  EXPECT_EQ(s.code(), StatusCode::kOutOfRange);
+  EXPECT_NE(s.message().find("step " + std::to_string(k)), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("left the 16 x 16 hexagon grid"), std::string::npos) << s.message();
+  EXPECT_EQ((*slam)->Step(k + 1, 0.7, 0).code(), StatusCode::kFailedPrecondition);
+}
+
+TEST(FootSlamApiTest, TrajectoryHasTheStartAndOnePosePerStep) {
+  auto steps = Walk(50, 7);
+  FootSlamConfig c = Small();
+  auto slam = FootSlam::Create(c);
+  ASSERT_TRUE(slam.ok());
+  (*slam)->SetStartTime(0.0);
+  for (const Step& s : steps) ASSERT_TRUE((*slam)->Step(s.t, s.dx, s.dy).ok());
+  auto path = (*slam)->HeaviestTrajectory();
+  ASSERT_EQ(path.size(), steps.size() + 1);
+  EXPECT_EQ(path[0].t_s, 0.0);
+  EXPECT_EQ(path[0].pose.x_m, 0.0);
+  for (size_t k = 0; k < steps.size(); ++k) EXPECT_EQ(path[k + 1].t_s, steps[k].t);
+  EXPECT_EQ((*slam)->MeanTrajectory().size(), steps.size() + 1);
+}
+
+}  // namespace
+}  // namespace grove

@@ -1,0 +1,105 @@
+// White-box tests of the FootSLAM particle: weights by hand, maps against the odometry.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+#include <vector>
+
+#include "engine/footslam/footslam_model.h"
+#include "engine/footslam/hex_grid.h"
+#include "engine/footslam/htree_layout.h"
+#include "engine/footslam/htree_map.h"
+#include "grove/footslam.h"
+
+namespace grove::footslam {
+namespace {
+
+FootSlamConfig ZeroNoise() {
+  FootSlamConfig c;
+  c.particles = 1;
+  c.heading_drift_sigma_rad = 0;
+  c.heading_sigma_rad = 0;
+  c.step_length_sigma_m = 0;
+  c.threads = 1;
+  return c;
+}
+
+// Back and forth between the centres of hexagons (0,0) and (1,0): each step crosses one edge.
+TEST(FootSlamModelTest, WeightsMatchHandComputedValues) {
+  for (FootSlamWeighting weighting : {FootSlamWeighting::kPaper, FootSlamWeighting::kPriorRatio}) {
+    SCOPED_TRACE(FootSlamWeightingName(weighting));
+    FootSlamConfig config = ZeroNoise();
+    config.weighting = weighting;
+    config.prior_count = 0.5;
+    HexGrid grid(config.hex_radius_m);
+    HTreeLayout layout = *HTreeLayout::Create(64, 16);
+    HTreeMap<4> map(layout.height(), 1, 1, nullptr);
+    FootSlamModel<HTreeMap<4>> model(config, &grid, &layout, &map, 1);
+    const double a = 0.5;
+    const double bias = weighting == FootSlamWeighting::kPriorRatio ? std::log(6.0) : 0.0;
+    const double d = std::sqrt(3.0) * config.hex_radius_m;  // centre to centre
+    // Step: +x (0,0)->(1,0) across e0; -x back across e3 of (1,0); +x again across e0.
+    struct Expect {
+      double dx;
+      double factor;
+    };
+    const Expect steps[] = {
+        {d, a / (6 * a)},             // (0,0) empty
+        {-d, a / (6 * a)},            // (1,0) empty
+        {d, (1 + a) / (1 + 6 * a)},   // (0,0): c0 = 1, total 1
+        {-d, (1 + a) / (1 + 6 * a)},  // (1,0): c3 = 1, total 1
+        {d, (2 + a) / (2 + 6 * a)},
+        {0.2, 1.0},                   // stays inside (1,0): no crossing, no weight
+    };
+    for (size_t k = 0; k < std::size(steps); ++k) {
+      double lw = 0;
+      model.Advance(StepInput{steps[k].dx, 0}, k, 0, 1, 0, &lw);
+      double expected = steps[k].factor == 1.0 ? 0.0 : std::log(steps[k].factor) + bias;
+      EXPECT_NEAR(lw, expected, 1e-12) << "step " << k;
+    }
+  }
+}
+
+// One particle without noise follows the odometry, so its map must hold exactly the edge
+// crossings of the odometry polyline, computed here with the grid alone.
+TEST(FootSlamModelTest, ZeroNoiseMapEqualsOdometryTransitions) {
+  FootSlamConfig config = ZeroNoise();
+  config.grid_size = 256;
+  auto slam = FootSlam::Create(config);
+  ASSERT_TRUE(slam.ok()) << slam.status().ToString();
+  HexGrid grid(config.hex_radius_m);
+  std::mt19937_64 rng(17);
+  std::normal_distribution<double> turn(0, 0.4);
+  std::map<std::pair<int, int>, std::array<double, 6>> expected;
+  double x = 0, y = 0, heading = 0;
+  Hex hex = grid.HexAt(0, 0);
+  for (int k = 0; k < 2000; ++k) {
+    heading += turn(rng);
+    double len = 0.3 + 0.6 * std::uniform_real_distribution<double>()(rng);
+    double dx = len * std::cos(heading), dy = len * std::sin(heading);
+    if (std::hypot(x + dx, y + dy) > 30) {  // stay in a 30 m disc: many revisits
+      dx = -dx;
+      dy = -dy;
+      heading += M_PI;
+    }
+    ASSERT_TRUE((*slam)->Step(k + 1.0, dx, dy).ok());
+    hex = grid.Traverse(hex, x, y, x + dx, y + dy, [&](const Crossing& c) {
+      expected[{c.from.q, c.from.r}][c.edge] += 1;
+    });
+    x += dx;
+    y += dy;
+  }
+  std::map<std::pair<int, int>, std::array<double, 6>> got;
+  for (const HexCounts& h : (*slam)->HeaviestMap()) {
+    for (int e = 0; e < 6; ++e) got[{h.q, h.r}][e] = h.counts[e];
+  }
+  EXPECT_EQ(got, expected);
+  EXPECT_GT(expected.size(), 500u);
+  Pose2 pose = (*slam)->HeaviestPose();
+  EXPECT_NEAR(pose.x_m, x, 1e-9);
+  EXPECT_NEAR(pose.y_m, y, 1e-9);
+}
+
+}  // namespace
+}  // namespace grove::footslam

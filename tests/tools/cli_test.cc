@@ -1,0 +1,175 @@
+// The grove command end to end: exit codes, one-line errors with file:line:column, nothing left
+// in --out after a failure, and a full run's outputs.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Outcome {
+  int exit_code;
+  std::string out;
+  std::string err;
+};
+
+std::string Slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::path(::testing::TempDir()) /
+           ("grove_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  Outcome Grove(const std::string& args) {
+    std::string cmd = std::string(GROVE_BINARY) + " " + args + " >" + (dir_ / "stdout").string() +
+                      " 2>" + (dir_ / "stderr").string();
+    int status = std::system(cmd.c_str());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, Slurp(dir_ / "stdout"),
+            Slurp(dir_ / "stderr")};
+  }
+  std::string Write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name) << text;
+    return (dir_ / name).string();
+  }
+  // Runs on a bad step file and checks the error and that --out stays absent.
+  void ExpectInputError(const std::string& text, const std::string& where,
+                        const std::string& what) {
+    SCOPED_TRACE(text);
+    std::string steps = Write("steps.csv", text);
+    fs::path out = dir_ / "out";
+    Outcome o = Grove("footslam run --no-progress --particles 50 --steps " + steps + " --out " +
+                      out.string());
+    EXPECT_EQ(o.exit_code, 3) << o.err;
+    EXPECT_NE(o.err.find(steps + ":" + where), std::string::npos) << o.err;
+    EXPECT_NE(o.err.find(what), std::string::npos) << o.err;
+    EXPECT_FALSE(fs::exists(out)) << "a failed run left " << out;
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(CliTest, MalformedStepFilesStopWithFileLineColumn) {
+  ExpectInputError("t,dx,dy\n1,0.7,0\n2,abc,0\n", "3:3:", "is not a number");
+  ExpectInputError("t,dx,dy\n1,0.7,0\n2,nan,0\n", "3:3:", "must be finite");
+  ExpectInputError("t,dx,dy\n1,0.7,0\n0.5,0.7,0\n", "3:1:", "strictly increasing");
+  ExpectInputError("t,dx,dy\n1,0.7,0\n1,0.7,0\n", "3:1:", "strictly increasing");
+  ExpectInputError("t,dx,dy\n1,0.7,0\n2,0.7\n", "3:1:", "expected 3 fields");
+  ExpectInputError("t,dx,dz\n1,0.7,0\n", "1:1:", "unknown header");
+  ExpectInputError("t,dx,dy\n1,0.7,0\n2,40,0\n", "3:1:", "longer than max_step_m");
+  ExpectInputError("t,x,y\n0,0,0\n1,0.7,inf\n", "3:7:", "must be finite");
+}
+
+TEST_F(CliTest, EmptyOrHeaderOnlyFilesAreErrors) {
+  fs::path out = dir_ / "out";
+  std::string empty = Write("empty.csv", "");
+  Outcome o = Grove("footslam run --no-progress --steps " + empty + " --out " + out.string());
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find("empty file"), std::string::npos) << o.err;
+  std::string header = Write("header.csv", "t,dx,dy\n");
+  o = Grove("footslam run --no-progress --steps " + header + " --out " + out.string());
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find("no steps"), std::string::npos) << o.err;
+  o = Grove("footslam run --no-progress --steps " + (dir_ / "missing.csv").string() + " --out " +
+            out.string());
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find("missing.csv"), std::string::npos) << o.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(CliTest, ConfigErrorsNameTheKeyAndSuggest) {
+  std::string cfg = Write("c.json", "{\n  \"particels\": 10\n}\n");
+  Outcome o = Grove("footslam run --print-config --config " + cfg);
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find(cfg + ":2:3: unknown key \"particels\" (did you mean \"particles\"?)"),
+            std::string::npos)
+      << o.err;
+  cfg = Write("c.json", "{\"degree\": \"sixteen\"}");
+  o = Grove("footslam run --print-config --config " + cfg);
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find("degree = \"sixteen\": must be an integer"), std::string::npos) << o.err;
+  cfg = Write("c.json", "{\"degree\": 16,,}");
+  o = Grove("footslam run --print-config --config " + cfg);
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find(cfg + ":1:15: invalid JSON"), std::string::npos) << o.err;
+  cfg = Write("c.json", "{\"resample_threshold\": 0}");
+  o = Grove("footslam run --out " + (dir_ / "out").string() + " --config " + cfg);
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find("resample_threshold = 0: must be in (0, 1]"), std::string::npos) << o.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+TEST_F(CliTest, PrintConfigShowsFileAndFlagValues) {
+  std::string cfg = Write("c.json", "{\"particles\": 1234, \"degree\": 4}");
+  Outcome o = Grove("footslam run --print-config --config " + cfg + " --degree 64 --grid-size 64");
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.out.find("\"particles\": 1234"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("\"degree\": 64"), std::string::npos) << o.out;
+}
+
+TEST_F(CliTest, SimulateRunEvaluateAndRenderEndToEnd) {
+  fs::path sim = dir_ / "sim", out = dir_ / "out";
+  Outcome o = Grove("footslam simulate --minutes 1 --seed 3 --out " + sim.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  o = Grove("footslam run --no-progress --particles 300 --threads 2 --steps " +
+            (sim / "steps.csv").string() + " --out " + out.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  for (const char* name : {"map.csv", "map_best.csv", "trajectory.csv", "mean_trajectory.csv",
+                           "map.png", "map.svg", "summary.json"}) {
+    EXPECT_TRUE(fs::exists(out / name)) << name;
+  }
+  EXPECT_EQ(Slurp(out / "map.csv").rfind("q,r,x,y,c0,c1,c2,c3,c4,c5\n", 0), 0u);
+  EXPECT_NE(Slurp(out / "summary.json").find("\"particle_steps_per_s\""), std::string::npos);
+  for (const auto& entry : fs::directory_iterator(out)) {
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos)
+        << "temporary left behind: " << entry.path();
+  }
+  o = Grove("footslam evaluate --truth " + (sim / "truth.csv").string() + " --trajectory " +
+            (out / "trajectory.csv").string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.out.find("\"aligned_rmse_m\""), std::string::npos) << o.out;
+  fs::remove(out / "map.png");
+  o = Grove("footslam render --dir " + out.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_TRUE(fs::exists(out / "map.png"));
+}
+
+TEST_F(CliTest, FailedRunKeepsEarlierOutputs) {
+  fs::path out = dir_ / "out";
+  std::string good = Write("good.csv", "t,dx,dy\n1,0.7,0\n2,0.7,0\n");
+  ASSERT_EQ(Grove("footslam run --no-progress --particles 20 --steps " + good + " --out " +
+                  out.string()).exit_code, 0);
+  std::string before = Slurp(out / "map.csv");
+  std::string bad = Write("bad.csv", "t,dx,dy\n1,0.7,0\n2,x,0\n");
+  EXPECT_EQ(Grove("footslam run --no-progress --particles 20 --steps " + bad + " --out " +
+                  out.string()).exit_code, 3);
+  EXPECT_EQ(Slurp(out / "map.csv"), before);
+}
+
+TEST_F(CliTest, HelpOnEveryLevel) {
+  for (const char* args : {"--help", "footslam --help", "footslam run --help",
+                           "footslam simulate --help", "footslam evaluate --help",
+                           "footslam render --help"}) {
+    Outcome o = Grove(args);
+    EXPECT_EQ(o.exit_code, 0) << args;
+    EXPECT_NE(o.out.find("Usage"), std::string::npos) << args << ": " << o.out;
+  }
+  EXPECT_EQ(Grove("footslam bogus").exit_code, 2);
+}
+
+}  // namespace
