@@ -2,6 +2,7 @@
 
 #include <sys/mman.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <new>
 
@@ -33,12 +34,19 @@ void* MapSlab() {
 
 }  // namespace
 
+// A page's free nodes are a bitmap, not a list: allocation takes the lowest free node, so after
+// a generation dies in random order the next one is still laid out in address order (as
+// jemalloc's slab bitmaps do), and a free writes only the header, never the node.
+constexpr int kMaxWords = static_cast<int>(kPageBytes / kNodeAlign / 64);
+
 struct NodePool::Page {
   Heap* owner;
-  FreeNode* free;      // nodes freed back to this page (owner only)
-  uint32_t bump;       // index of the next never-used node
-  uint32_t in_avail;   // 1 while on the owner's list of pages with free nodes
   Page* next_avail;
+  uint32_t free_count;  // set bits in `free` (owner only)
+  uint32_t in_avail;    // 1 while on the owner's list of pages with free nodes
+  uint32_t first_word;  // no free node below word first_word
+  uint32_t padding;
+  uint64_t free[kMaxWords];
 };
 
 struct alignas(128) NodePool::Heap {
@@ -79,37 +87,27 @@ NodePool::~NodePool() {
 void* NodePool::Allocate(int slot) {
   Heap* heap = heaps_[slot].get();
   Page* page = heap->current;
-  void* result;
-  if (page != nullptr && page->free != nullptr) {
-    FreeNode* node = page->free;
-    page->free = node->next;
-    result = node;
-  } else if (page != nullptr && page->bump < nodes_per_page_) {
-    result = reinterpret_cast<char*>(page) + first_node_offset_ + size_t{page->bump++} * node_bytes_;
-  } else {
-    page = Refill(heap);
-    if (page->free != nullptr) {
-      FreeNode* node = page->free;
-      page->free = node->next;
-      result = node;
-    } else {
-      result =
-          reinterpret_cast<char*>(page) + first_node_offset_ + size_t{page->bump++} * node_bytes_;
-    }
-  }
+  if (page == nullptr || page->free_count == 0) page = Refill(heap);
+  uint32_t w = page->first_word;
+  while (page->free[w] == 0) ++w;
+  uint64_t bits = page->free[w];
+  uint32_t index = w * 64 + static_cast<uint32_t>(__builtin_ctzll(bits));
+  page->free[w] = bits & (bits - 1);
+  page->first_word = w;
+  --page->free_count;
   heap->live.store(heap->live.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
-  return result;
+  return reinterpret_cast<char*>(page) + first_node_offset_ + size_t{index} * node_bytes_;
 }
 
 void NodePool::Free(void* p, int slot) {
   Page* page = reinterpret_cast<Page*>(reinterpret_cast<uintptr_t>(p) & ~(kPageBytes - 1));
   Heap* owner = page->owner;
-  FreeNode* node = static_cast<FreeNode*>(p);
   if (slot >= 0 && heaps_[slot].get() == owner) {
-    LocalFree(owner, page, node);
+    LocalFree(owner, page, p);
     owner->live.store(owner->live.load(std::memory_order_relaxed) - 1, std::memory_order_relaxed);
     return;
   }
+  FreeNode* node = static_cast<FreeNode*>(p);
   FreeNode* head = owner->remote.load(std::memory_order_relaxed);
   do {
     node->next = head;
@@ -120,9 +118,14 @@ void NodePool::Free(void* p, int slot) {
   owner->remote_pending.fetch_add(1, std::memory_order_relaxed);
 }
 
-void NodePool::LocalFree(Heap* heap, Page* page, FreeNode* node) {
-  node->next = page->free;
-  page->free = node;
+void NodePool::LocalFree(Heap* heap, Page* page, void* node) {
+  uint32_t index = static_cast<uint32_t>(static_cast<char*>(node) - reinterpret_cast<char*>(page) -
+                                         first_node_offset_) /
+                   static_cast<uint32_t>(node_bytes_);
+  uint32_t w = index / 64;
+  page->free[w] |= uint64_t{1} << (index % 64);
+  if (w < page->first_word) page->first_word = w;
+  ++page->free_count;
   if (!page->in_avail && page != heap->current) {
     page->in_avail = 1;
     page->next_avail = heap->avail;
@@ -150,7 +153,7 @@ NodePool::Page* NodePool::Refill(Heap* heap) {
   DrainRemote(heap);
   NotePeak();
   // Draining may have refilled the current page itself (it is never on the avail list).
-  if (heap->current != nullptr && heap->current->free != nullptr) return heap->current;
+  if (heap->current != nullptr && heap->current->free_count > 0) return heap->current;
   if (heap->avail != nullptr) {
     Page* page = heap->avail;
     heap->avail = page->next_avail;
@@ -169,10 +172,15 @@ NodePool::Page* NodePool::Refill(Heap* heap) {
   Page* page = reinterpret_cast<Page*>(heap->slab_cursor);
   heap->slab_cursor += kPageBytes;
   page->owner = heap;
-  page->free = nullptr;
-  page->bump = 0;
-  page->in_avail = 0;
   page->next_avail = nullptr;
+  page->in_avail = 0;
+  page->first_word = 0;
+  page->free_count = nodes_per_page_;
+  for (uint32_t w = 0; w < static_cast<uint32_t>(kMaxWords); ++w) {
+    uint32_t first = w * 64;
+    uint32_t n = first >= nodes_per_page_ ? 0 : std::min<uint32_t>(64, nodes_per_page_ - first);
+    page->free[w] = n == 64 ? ~uint64_t{0} : (uint64_t{1} << n) - 1;
+  }
   heap->current = page;
   return page;
 }
@@ -192,7 +200,7 @@ void NodePool::Free(void* p, int slot) {
   heaps_[slot < 0 ? 0 : slot]->live.fetch_sub(1, std::memory_order_relaxed);
 }
 
-void NodePool::LocalFree(Heap*, Page*, FreeNode*) {}
+void NodePool::LocalFree(Heap*, Page*, void*) {}
 void NodePool::DrainRemote(Heap*) {}
 NodePool::Page* NodePool::Refill(Heap*) { return nullptr; }
 
