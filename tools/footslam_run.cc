@@ -178,6 +178,8 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
       {"trajectory_memory", MemoryJson(summary.trajectory_memory)},
       {"resamplings", summary.resamplings},
       {"mean_ess", summary.mean_ess},
+      {"mean_scale", summary.mean_scale},
+      {"mean_heading_error_rad", summary.mean_heading_error_rad},
       {"hexagons", {{"cumulative", cumulative.size()}, {"heaviest", best_map.size()}}},
   };
   const std::string& dir = options.out_dir;

@@ -49,6 +49,7 @@ struct Waypoint {
   double y_m;
   double jitter_m;  // each visit aims at a uniform point within this radius
   std::vector<int> next;
+  int door = -1;    // for a point inside a room: the room's door
 };
 
 struct WaypointGraph {
@@ -108,6 +109,7 @@ WaypointGraph BuildingGraph() {
     std::vector<int> inside = {door};
     for (const auto& [x, y] : points) {
       const int node = AddNode(&g, x, y, kRoomJitter);
+      g.nodes[node].door = door;
       for (int other : inside) Connect(&g, node, other);
       inside.push_back(node);
     }
@@ -188,6 +190,8 @@ Status Validate(const SimulatorOptions& o) {
   GROVE_RETURN_IF_ERROR(CheckRange("minutes", o.minutes, 0, true, 1440, false));
   GROVE_RETURN_IF_ERROR(CheckRange("step_length_m", o.step_length_m, 0.1, false, 2, false));
   GROVE_RETURN_IF_ERROR(CheckRange("step_period_s", o.step_period_s, 0.1, false, 5, false));
+  GROVE_RETURN_IF_ERROR(
+      CheckRange("straight_probability", o.straight_probability, 0, false, 1, false));
   GROVE_RETURN_IF_ERROR(CheckRange("heading_drift_rad_per_sqrt_step",
                                    o.heading_drift_rad_per_sqrt_step, 0, false, 0.5, false));
   GROVE_RETURN_IF_ERROR(CheckRange("scale_error", o.scale_error, -0.5, true, 0.5, true));
@@ -245,6 +249,27 @@ StatusOr<SimulatedWalk> SimulateWalk(const SimulatorOptions& options) {
       if (n != previous) candidates.push_back(n);
     }
     if (candidates.empty()) candidates = next;  // a dead end: turn back
+    // A visit to a room is short: from inside, head back to the door more often than not.
+    const int door = graph.nodes[current].door;
+    if (door >= 0 && door != previous && walk_random.Uniform() < 0.6) return door;
+    // People walk on rather than turn: most of the time take the way closest to straight
+    // ahead, so corridors are walked as loops in a consistent direction.
+    if (previous >= 0 && walk_random.Uniform() < options.straight_probability) {
+      const Waypoint& from = graph.nodes[previous];
+      const Waypoint& at = graph.nodes[current];
+      const double heading = std::atan2(at.y_m - from.y_m, at.x_m - from.x_m);
+      int best = candidates[0];
+      double best_cos = -2;
+      for (int n : candidates) {
+        const Waypoint& to = graph.nodes[n];
+        const double c = std::cos(std::atan2(to.y_m - at.y_m, to.x_m - at.x_m) - heading);
+        if (c > best_cos + 1e-9) {
+          best_cos = c;
+          best = n;
+        }
+      }
+      return best;
+    }
     if (graph.explore && walk_random.Uniform() < 0.75) {
       std::vector<int> fresh;
       for (int n : candidates) {

@@ -50,6 +50,10 @@ struct SimulatorOptions {
   double step_length_m = 0.7;
   // Time between steps (constant). Range: [0.1, 5]. Default: 0.55.
   double step_period_s = 0.55;
+  // Probability that at a waypoint the walker takes the way closest to straight ahead instead
+  // of a random one: loops around corridors in a consistent direction. Range: [0, 1].
+  // Default: 0.6.
+  double straight_probability = 0.6;
 
   // Odometry errors. All zero gives odometry steps equal to the true steps, bit for bit.
   // Standard deviation of the per-step increment of the heading error, which is a random walk:

@@ -268,6 +268,16 @@ class Engine final : public FootSlam::Impl {
     s.resample_s = t.resample_s;
     s.release_s = t.release_s;
     s.bookkeeping_s = bookkeeping_s_;
+    auto lw = filter_.log_weights();
+    double w_sum = 0, scale_sum = 0, heading_sum = 0;
+    for (size_t i = 0; i < model_.size(); ++i) {
+      double w = std::exp(lw[i]);
+      w_sum += w;
+      scale_sum += w * model_.scale(i);
+      heading_sum += w * model_.heading_error(i);
+    }
+    s.mean_scale = scale_sum / w_sum;
+    s.mean_heading_error_rad = heading_sum / w_sum;
     s.map_memory = map_.memory();
     footslam::AddPoolStats(model_.history().stats(), &s.trajectory_memory);
     return s;

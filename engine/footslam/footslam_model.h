@@ -167,6 +167,8 @@ class FootSlamModel {
   double x(size_t i) const { return x_[i]; }
   double y(size_t i) const { return y_[i]; }
   double heading(size_t i) const { return heading_[i]; }
+  double scale(size_t i) const { return scale_[i]; }
+  double heading_error(size_t i) const { return heading_error_[i]; }
   const PoseHistory::Node* history(size_t i) const { return history_roots_[i]; }
   const PoseHistory& history() const { return history_; }
   const Map& map() const { return *map_; }

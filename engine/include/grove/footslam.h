@@ -55,8 +55,8 @@ struct FootSlamConfig {
   double hex_radius_m = 0.5;
   // Prior count a added to every edge counter (Dirichlet prior). Range: > 0. Default: 0.8.
   double prior_count = 0.8;
-  // Weighting rule, see FootSlamWeighting. Default: kPriorRatio.
-  FootSlamWeighting weighting = FootSlamWeighting::kPriorRatio;
+  // Weighting rule, see FootSlamWeighting. Default: kPaper.
+  FootSlamWeighting weighting = FootSlamWeighting::kPaper;
 
   // Start pose in the map frame. Default: origin, heading 0.
   double start_x_m = 0;
@@ -155,6 +155,10 @@ struct FootSlamSummary {
   double resample_s = 0;     // drawing parents and gathering the new generation
   double release_s = 0;      // freeing the dead generation
   double bookkeeping_s = 0;  // weighted-mean pose per step
+  // Weighted means over the particles after the last step: the step-length scale error state
+  // (1 = the odometry's length) and the heading error state (radians).
+  double mean_scale = 1;
+  double mean_heading_error_rad = 0;
   MemoryUse map_memory;
   MemoryUse trajectory_memory;
   // One paragraph for a terminal.
