@@ -65,6 +65,10 @@ class FootSlamModel {
     history_roots_.assign(n_, root);
     for (size_t i = 1; i < n_; ++i) PoseHistory::Share(root);
     if (config.weighting == FootSlamWeighting::kPriorRatio) log_edge_bias_ = std::log(6.0);
+    for (uint32_t c = 0; c < kLogTable; ++c) {
+      log_edge_[c] = std::log(c + config.prior_count) + log_edge_bias_;
+      log_total_[c] = std::log(c + 6 * config.prior_count);
+    }
   }
   ~FootSlamModel() {
     for (auto* h : history_roots_) history_.Release(h, 0);
@@ -77,7 +81,6 @@ class FootSlamModel {
                double* log_w) {
     const double odo_length = std::hypot(in.dx_m, in.dy_m);
     const double odo_heading = std::atan2(in.dy_m, in.dx_m) + config_.start_heading_rad;
-    const double a = config_.prior_count;
     for (size_t i = begin; i < end; ++i) {
       RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), kMotionPurpose);
       if (config_.heading_drift_sigma_rad > 0) {
@@ -103,7 +106,7 @@ class FootSlamModel {
           return;
         }
         EdgeCounts before = map_->Cross(i, key, c.edge, slot);
-        lw += std::log((before.edge + a) / (before.total + 6 * a)) + log_edge_bias_;
+        lw += LogEdge(before.edge) - LogTotal(before.total);
       });
       uint64_t end_key;
       if (outside || !KeyOf(end_hex, &end_key)) {
@@ -149,6 +152,15 @@ class FootSlamModel {
     map_->ReleaseDead(workers);
   }
 
+  // log(C_h^e + a) (+ log 6 for the prior-ratio weighting) and log(C_h + 6a), from tables for
+  // small counts: a crossing costs two loads instead of a logarithm.
+  double LogEdge(uint32_t c) const {
+    return c < kLogTable ? log_edge_[c] : std::log(c + config_.prior_count) + log_edge_bias_;
+  }
+  double LogTotal(uint32_t c) const {
+    return c < kLogTable ? log_total_[c] : std::log(c + 6 * config_.prior_count);
+  }
+
   // The H-tree grid is centred on the start hexagon.
   bool KeyOf(Hex h, uint64_t* key) const {
     return layout_->KeyOf(Hex{h.q - start_hex_.q, h.r - start_hex_.r}, key);
@@ -190,7 +202,10 @@ class FootSlamModel {
   Map* map_;
   PoseHistory history_;
   size_t n_;
+  static constexpr uint32_t kLogTable = 256;
   double log_edge_bias_ = 0;
+  double log_edge_[kLogTable];
+  double log_total_[kLogTable];
   std::vector<double> x_, y_, heading_, heading_error_, scale_;
   Hex start_hex_;
   std::vector<Hex> hex_;

@@ -1,0 +1,12 @@
+// libFuzzer target: ReadMapCsv, ReadPathCsv (tools/output_readers.h) and ReadTimedPoints
+// (tools/trajectory_metrics.h) on the input written to a per-process file under /tmp.
+// The properties are in tests/fuzz/fuzz_checks.h.
+#include <cstddef>
+#include <cstdint>
+
+#include "tests/fuzz/fuzz_checks.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  grove::testing::TrapIfViolated(grove::testing::CheckCsvReaders(data, size));
+  return 0;
+}
