@@ -15,6 +15,7 @@
 #include <oneapi/tbb/partitioner.h>
 #include <oneapi/tbb/task_arena.h>
 
+#include <atomic>
 #include <cstddef>
 #include <memory>
 #include <vector>
@@ -33,19 +34,44 @@ class WorkerPool {
   int num_slots() const { return threads_; }
 
   // Calls body(slot, begin, end) over [0, n) in chunks of at most `grain` items.
+  // Chunks have a home slot: slot k owns the k-th contiguous share of [0, n) and runs it first,
+  // in order, then helps with the others' remaining chunks. So the same particles tend to meet
+  // the same worker from one loop to the next, and nodes are mostly freed by the slot whose
+  // pool they came from (a local free, not a cross-thread one).
   template <typename F>
   void ParallelFor(size_t n, size_t grain, F&& body) {
     if (n == 0) return;
     if (grain == 0) grain = 1;
-    if (threads_ == 1 || n <= grain) {
+    const size_t chunks = (n + grain - 1) / grain;
+    if (threads_ == 1 || chunks == 1) {
       for (size_t b = 0; b < n; b += grain) body(0, b, b + grain < n ? b + grain : n);
       return;
     }
+    const size_t slots = static_cast<size_t>(threads_);
+    // Home k holds chunks [k * chunks / slots, (k + 1) * chunks / slots).
+    struct alignas(128) Cursor {
+      std::atomic<size_t> next;
+    };
+    std::unique_ptr<Cursor[]> cursor(new Cursor[slots]);
+    for (size_t k = 0; k < slots; ++k) cursor[k].next.store(k * chunks / slots);
+    auto run_home = [&](size_t home, int slot) {
+      const size_t end = (home + 1) * chunks / slots;
+      for (;;) {
+        // Relaxed: the counter only hands out distinct chunk indices; the loop's join publishes
+        // the results.
+        size_t c = cursor[home].next.fetch_add(1, std::memory_order_relaxed);
+        if (c >= end) return;
+        size_t b = c * grain;
+        body(slot, b, b + grain < n ? b + grain : n);
+      }
+    };
     arena_->execute([&] {
       tbb::parallel_for(
-          tbb::blocked_range<size_t>(0, n, grain),
-          [&](const tbb::blocked_range<size_t>& r) {
-            body(tbb::this_task_arena::current_thread_index(), r.begin(), r.end());
+          size_t{0}, slots,
+          [&](size_t) {
+            const int slot = tbb::this_task_arena::current_thread_index();
+            run_home(static_cast<size_t>(slot), slot);
+            for (size_t k = 1; k < slots; ++k) run_home((slot + k) % slots, slot);
           },
           tbb::simple_partitioner());
     });

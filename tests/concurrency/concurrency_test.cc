@@ -125,5 +125,29 @@ TEST(RandomStreamTest, NormalsHaveUnitMomentsAndUniformsFillUnitInterval) {
   EXPECT_GT(umax, 1 - 1e-4);
 }
 
+// The ziggurat against the normal CDF: bin frequencies over [-4, 4] and both tails.
+TEST(RandomStreamTest, NormalsFollowTheNormalDistribution) {
+  RandomStream s(9, 1, 2);
+  const int n = 1000000;
+  const int bins = 32;
+  std::vector<int> count(bins + 2, 0);
+  for (int i = 0; i < n; ++i) {
+    double z = s.NextNormal();
+    int b = z < -4 ? 0 : z >= 4 ? bins + 1 : 1 + static_cast<int>((z + 4) / 8 * bins);
+    ++count[b];
+  }
+  auto cdf = [](double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); };
+  double chi2 = 0;
+  for (int b = 0; b < bins + 2; ++b) {
+    double lo = b == 0 ? -INFINITY : -4 + 8.0 * (b - 1) / bins;
+    double hi = b == bins + 1 ? INFINITY : -4 + 8.0 * b / bins;
+    double expected = n * (cdf(hi) - cdf(lo));
+    chi2 += (count[b] - expected) * (count[b] - expected) / expected;
+  }
+  // 33 degrees of freedom: the 99.9th percentile of chi-square is about 63.9.
+  EXPECT_LT(chi2, 63.9);
+  EXPECT_GT(count[0] + count[bins + 1], 0);  // the tails are reached
+}
+
 }  // namespace
 }  // namespace grove
