@@ -71,6 +71,9 @@ class AlphabetHTreeMap {
     return before;
   }
 
+  // Starts loading particle i's root node into the cache.
+  void Prefetch(size_t i) const { __builtin_prefetch(symbol_roots_[i]); }
+
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     std::vector<typename SymbolTrie::Root> next_symbols(parents.size());
     std::vector<typename FullTrie::Root> next_full(parents.size());

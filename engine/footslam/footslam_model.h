@@ -82,6 +82,11 @@ class FootSlamModel {
     const double odo_length = std::hypot(in.dx_m, in.dy_m);
     const double odo_heading = std::atan2(in.dy_m, in.dx_m) + config_.start_heading_rad;
     for (size_t i = begin; i < end; ++i) {
+      // Particles are independent: start the cache misses of a later one while this one runs.
+      if (i + kPrefetchAhead < end) {
+        map_->Prefetch(i + kPrefetchAhead);
+        __builtin_prefetch(history_roots_[i + kPrefetchAhead]);
+      }
       RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), kMotionPurpose);
       if (config_.heading_drift_sigma_rad > 0) {
         heading_error_[i] += config_.heading_drift_sigma_rad * rs.NextNormal();
@@ -202,6 +207,7 @@ class FootSlamModel {
   Map* map_;
   PoseHistory history_;
   size_t n_;
+  static constexpr size_t kPrefetchAhead = 4;
   static constexpr uint32_t kLogTable = 256;
   double log_edge_bias_ = 0;
   double log_edge_[kLogTable];

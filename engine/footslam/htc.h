@@ -4,6 +4,7 @@
 //   EdgeCounts Cross(size_t i, uint64_t key, int edge, int slot);
 //       particle i leaves hexagon `key` across `edge`: returns the counters before the crossing
 //       and adds one
+//   void Prefetch(size_t i) const;  // a hint: particle i's map will be used soon
 //   void Gather(std::span<const uint32_t> parents, WorkerPool&);  // next generation
 //   void ReleaseDead(WorkerPool&);                                  // frees the previous one
 //   void ForEachHex(size_t i, F f) const;  // f(key, const Htc&) in key order

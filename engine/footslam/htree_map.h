@@ -35,6 +35,9 @@ class HTreeMap {
     return before;
   }
 
+  // Starts loading particle i's root node into the cache.
+  void Prefetch(size_t i) const { __builtin_prefetch(roots_[i]); }
+
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     std::vector<typename Trie::Root> next(parents.size());
     workers.ParallelFor(parents.size(), 2048, [&](int, size_t b, size_t e) {

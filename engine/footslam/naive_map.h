@@ -74,6 +74,8 @@ class NaiveMap {
     return before;
   }
 
+  void Prefetch(size_t) const {}
+
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     std::vector<HexTable> next(parents.size());
     // parents is nondecreasing: the first slot of each parent takes its table over.
