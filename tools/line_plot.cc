@@ -178,9 +178,8 @@ struct AxisTicks {
 
 AxisTicks MakeTicks(cairo_t* cr, Range range, bool log_axis, int target) {
   AxisTicks ticks;
-  ticks.values = log_axis
-                     ? LogTicks(std::pow(10.0, range.lo), std::pow(10.0, range.hi), target)
-                     : NiceTicks(range.lo, range.hi, target);
+  ticks.values = log_axis ? LogTicks(std::pow(10.0, range.lo), std::pow(10.0, range.hi), target)
+                          : NiceTicks(range.lo, range.hi, target);
   for (size_t i = 0; i < ticks.values.size(); ++i) {
     ticks.labels.push_back(FormatTickLabel(ticks.values[i], TickStep(ticks.values, i)));
     ticks.max_label_px = std::max(ticks.max_label_px, TextWidth(cr, ticks.labels.back()));
@@ -284,9 +283,15 @@ void ApplySeriesStyle(cairo_t* cr, const PlotLayout& layout, size_t index, bool 
 
 double MarkerRadius(const PlotLayout& layout) { return layout.line_px * 1.5; }
 
+// A series with more drawable points than this gets no markers: on average they would be less
+// than three marker diameters apart across the plot's width.
+double MaxMarkedPoints(const PlotLayout& layout) {
+  return (layout.area_right_px - layout.area_left_px) / (6.0 * MarkerRadius(layout));
+}
+
 // Strokes the series as polylines broken at skipped points, skipping vertices within half a pixel
-// of the last one drawn, then fills a marker at every point not within a marker radius of the
-// last marker: a dense series costs no more than the pixels it covers.
+// of the last one drawn (a dense series costs no more than the pixels it covers), then fills a
+// marker at every point, unless there are so many points that markers would merge into a band.
 void DrawSeries(cairo_t* cr, const LinePlot& plot, const PlotLayout& layout, size_t index) {
   const PlotSeries& series = plot.series[index];
   const size_t n = std::min(series.x.size(), series.y.size());
@@ -326,22 +331,23 @@ void DrawSeries(cairo_t* cr, const LinePlot& plot, const PlotLayout& layout, siz
   cairo_stroke(cr);
 
   const double radius = MarkerRadius(layout);
-  bool any_marker = false;
-  double marker_x = 0, marker_y = 0;
+  size_t usable = 0;
+  for (size_t i = 0; i < n; ++i) {
+    double ax, ay;
+    if (AxisValue(series.x[i], plot.log_x, &ax) && AxisValue(series.y[i], plot.log_y, &ay)) {
+      ++usable;
+    }
+  }
+  if (static_cast<double>(usable) > MaxMarkedPoints(layout)) return;
   cairo_new_path(cr);
   for (size_t i = 0; i < n; ++i) {
     double ax, ay;
     if (!AxisValue(series.x[i], plot.log_x, &ax) || !AxisValue(series.y[i], plot.log_y, &ay)) {
       continue;
     }
-    double x = layout.XPx(series.x[i]);
-    double y = layout.YPx(series.y[i]);
-    if (any_marker && std::hypot(x - marker_x, y - marker_y) < radius) continue;
     cairo_new_sub_path(cr);
-    cairo_arc(cr, x, y, radius, 0.0, 2 * std::numbers::pi);
-    any_marker = true;
-    marker_x = x;
-    marker_y = y;
+    cairo_arc(cr, layout.XPx(series.x[i]), layout.YPx(series.y[i]), radius, 0.0,
+              2 * std::numbers::pi);
   }
   cairo_fill(cr);
 }
@@ -466,25 +472,40 @@ std::vector<double> NiceTicks(double lo, double hi, int target) {
   target = std::max(target, 1);
   // Divide first: hi - lo may overflow.
   const double raw = hi / target - lo / target;
+  static constexpr int kMultiples[] = {1, 2, 5};
   int k = FloorLog10(raw);
   const double norm = raw / Pow10(k);
-  // The 1-2-5 multiple nearest to `norm` on a log scale.
-  int multiple;
+  // The step is multiple x 10^k, the 1-2-5 multiple nearest to `norm` on a log scale.
+  int m;
   if (norm < std::sqrt(2.0)) {
-    multiple = 1;
+    m = 0;
   } else if (norm < std::sqrt(10.0)) {
-    multiple = 2;
+    m = 1;
   } else if (norm < std::sqrt(50.0)) {
-    multiple = 5;
+    m = 2;
   } else {
-    multiple = 1;
+    m = 0;
     ++k;
   }
-  const double step = multiple * Pow10(k);
-  const double first = std::ceil(lo / step - 1e-9);
-  const double last = std::floor(hi / step + 1e-9);
-  // Far more ticks than asked for means lo / step has lost its integer precision.
-  if (!(last - first < 100.0 * target)) return {lo, hi};
+  double first = 0.0, last = 0.0;
+  // A smaller step while fewer than two multiples fall inside; a few rounds suffice, as the
+  // chosen step is at most ~1.6 (hi - lo) / target.
+  for (int round = 0; round < 8; ++round) {
+    const double step = kMultiples[m] * Pow10(k);
+    first = std::ceil(lo / step - 1e-9);
+    last = std::floor(hi / step + 1e-9);
+    if (last > first) break;
+    if (m == 0) {
+      m = 2;
+      --k;
+    } else {
+      --m;
+    }
+  }
+  const int multiple = kMultiples[m];
+  // Far more ticks than asked for, or fewer than two, means lo / step has lost its integer
+  // precision: hi - lo is tiny next to |lo|.
+  if (!(last - first < 100.0 * target) || !(last > first)) return {lo, hi};
   std::vector<double> ticks;
   for (double i = first; i <= last; i += 1.0) {
     // i * multiple / 10^-k rounds once, so 0.6 comes out as 0.6, not 0.6000000000000001.
@@ -596,8 +617,8 @@ PlotLayout ComputePlotLayout(const LinePlot& plot, int width_px, int height_px) 
   const double min_area_px = 20.0;
   // Vertical bands first: the y ticks depend on the area's height only.
   const double top = std::round(plot.title.empty() ? font * 1.2 : font * 3.0);
-  const double bottom = std::round(tick_px + font * 1.6 + (plot.x_label.empty() ? 0 : font * 1.6) +
-                                   font * 0.6);
+  const double bottom =
+      std::round(tick_px + font * 1.6 + (plot.x_label.empty() ? 0 : font * 1.6) + font * 0.6);
   layout.area_top_px = top;
   layout.area_bottom_px = std::max(top + min_area_px, height_px - bottom);
   const double area_h = layout.area_bottom_px - layout.area_top_px;
@@ -636,8 +657,8 @@ PlotLayout ComputePlotLayout(const LinePlot& plot, int width_px, int height_px) 
     x_ticks = MakeTicks(cr.get(), x_range, plot.log_x, x_target);
     double min_gap_px = std::numeric_limits<double>::infinity();
     for (size_t i = 1; i < x_ticks.values.size(); ++i) {
-      min_gap_px = std::min(min_gap_px, layout.XPx(x_ticks.values[i]) -
-                                            layout.XPx(x_ticks.values[i - 1]));
+      min_gap_px =
+          std::min(min_gap_px, layout.XPx(x_ticks.values[i]) - layout.XPx(x_ticks.values[i - 1]));
     }
     if (x_target <= 2 || x_ticks.max_label_px + font <= min_gap_px) break;
     x_target = x_target * 2 / 3;

@@ -11,8 +11,10 @@
 
 namespace grove::tools {
 
-// One polyline. x and y have the same length; points with a NaN or infinite coordinate, or a
-// coordinate <= 0 on a log axis, are skipped and break the line there.
+// One polyline with a small marker at each point; a series too dense for markers (more points
+// than fit about three marker widths apart across the plot) is drawn as a bare line. x and y
+// have the same length; points with a NaN or infinite coordinate, or a coordinate <= 0 on a log
+// axis, are skipped and break the line there.
 struct PlotSeries {
   std::string label;
   std::vector<double> x, y;
@@ -21,7 +23,7 @@ struct PlotSeries {
 
 struct LinePlot {
   std::string title, x_label, y_label;
-  std::vector<PlotSeries> series;  // coloured by position, from a cycled 8-colour palette
+  std::vector<PlotSeries> series;     // coloured by position, from a cycled 8-colour palette
   bool log_x = false, log_y = false;  // log10 axes
 };
 
@@ -60,7 +62,7 @@ struct PlotLayout {
   double legend_height_px = 0.0;
   double legend_row_px = 0.0;
   double legend_pad_px = 0.0;
-  double legend_sample_px = 0.0;  // length of the line sample in front of each label
+  double legend_sample_px = 0.0;           // length of the line sample in front of each label
   std::vector<std::string> legend_labels;  // one per series, shortened with "…" to fit
 
   // Device position of a data value. REQUIRES: the value is > 0 on a log axis.
@@ -74,8 +76,8 @@ struct PlotLayout {
 };
 
 // "Nice" tick values covering [lo, hi]: the multiples of a step of 1, 2 or 5 x 10^k that lie in
-// [lo, hi], with the step chosen so that there are about `target` of them. Returns {lo} when
-// lo == hi and nothing when either bound is not finite.
+// [lo, hi], with the step chosen so that there are about `target` of them, and at least two.
+// Returns {lo} when lo == hi and nothing when either bound is not finite.
 std::vector<double> NiceTicks(double lo, double hi, int target);
 
 // Ticks for a log10 axis over the values [lo, hi] (both > 0): the decades 10^k inside, thinned to

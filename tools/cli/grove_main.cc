@@ -6,6 +6,7 @@
 #include <string>
 
 #include "grove/footslam.h"
+#include "tools/bench_commands.h"
 #include "tools/footslam_config_json.h"
 #include "tools/footslam_run.h"
 
@@ -82,6 +83,28 @@ int Main(int argc, char** argv) {
       ->capture_default_str();
   render->add_option("--steps", odometry_path, "Step file to draw the raw odometry from");
 
+  // ---- bench ----
+  CLI::App* bench = app.add_subcommand("bench", "Reproduce the paper's figures; measure scaling");
+  bench->require_subcommand(1);
+  CLI::App* paper = bench->add_subcommand(
+      "paper", "Run time and memory against walk time (paper Figs. 9, 10) for each map");
+  gt::PaperBenchOptions paper_options;
+  paper->add_option("--out", paper_options.out_dir, "Output directory")->required();
+  paper->add_option("--particles", paper_options.particles)->capture_default_str();
+  paper->add_option("--minutes", paper_options.minutes, "Walk length")->capture_default_str();
+  paper->add_option("--threads", paper_options.threads, "0 = all cores")->capture_default_str();
+  paper->add_option("--naive-limit", paper_options.naive_limit_s,
+                    "Stop the naive run after this many seconds")
+      ->capture_default_str();
+  paper->add_option("--only", paper_options.only, "Run one configuration, e.g. 'htree s=16 T=5'");
+  CLI::App* scaling =
+      bench->add_subcommand("scaling", "Throughput against threads and particle counts");
+  gt::ScalingBenchOptions scaling_options;
+  scaling->add_option("--out", scaling_options.out_dir, "Output directory")->required();
+  scaling->add_option("--steps", scaling_options.steps, "Steps of the paper walk per point")
+      ->capture_default_str();
+  scaling->add_option("--max-particles", scaling_options.max_particles)->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -128,6 +151,8 @@ int Main(int argc, char** argv) {
     run_options.progress = !no_progress;
     return gt::RunFootSlamCommand(config, run_options);
   }
+  if (*paper) return gt::PaperBenchCommand(paper_options);
+  if (*scaling) return gt::ScalingBenchCommand(scaling_options);
   if (*simulate) return gt::SimulateCommand(sim_out, minutes, sim_seed, scenario, heading_drift,
                                          scale_error);
   if (*evaluate) return gt::EvaluateCommand(truth_path, trajectory_path);

@@ -1,0 +1,358 @@
+#include "tools/bench_commands.h"
+
+#include <fmt/format.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <thread>
+#include <vector>
+
+#include "grove/footslam.h"
+#include "tools/atomic_file.h"
+#include "tools/footslam_run.h"
+#include "tools/line_plot.h"
+#include "tools/walk_simulator.h"
+
+namespace grove::tools {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+int Fail(int code, const std::string& message) {
+  std::fprintf(stderr, "grove: error: %s\n", message.c_str());
+  return code;
+}
+
+// Resident set size now, from /proc/self/statm (pages).
+int64_t CurrentRssBytes() {
+  std::ifstream statm("/proc/self/statm");
+  int64_t size = 0, resident = 0;
+  statm >> size >> resident;
+  return resident * sysconf(_SC_PAGESIZE);
+}
+
+int64_t PeakRssBytes() {
+  struct rusage usage;
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<int64_t>(usage.ru_maxrss) * 1024;
+}
+
+std::string MachineDescription() {
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  std::string line, model = "unknown CPU";
+  while (std::getline(cpuinfo, line)) {
+    if (line.rfind("model name", 0) == 0) {
+      model = line.substr(line.find(':') + 2);
+      break;
+    }
+  }
+  long pages = sysconf(_SC_PHYS_PAGES);
+  double gib = static_cast<double>(pages) * sysconf(_SC_PAGESIZE) / (1024.0 * 1024 * 1024);
+  return fmt::format("{}, {} hardware threads, {:.0f} GiB memory, compiler {}", model,
+                     std::thread::hardware_concurrency(), gib, __VERSION__);
+}
+
+StatusOr<std::vector<StepRecord>> PaperWalk(double minutes) {
+  SimulatorOptions sim;
+  sim.scenario = Scenario::kOpen;
+  sim.minutes = minutes;
+  sim.seed = 1;
+  StatusOr<SimulatedWalk> walk = SimulateWalk(sim);
+  if (!walk.ok()) return walk.status();
+  return walk->steps;
+}
+
+// Runs `body` in a child process so that its memory (peak RSS) is its own; the child writes its
+// result to `result_path`. Returns the child's exit status.
+template <typename F>
+int InChild(F&& body) {
+  std::fflush(nullptr);
+  pid_t pid = fork();
+  if (pid < 0) return -1;
+  if (pid == 0) _exit(body());
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string Slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+struct PaperConfig {
+  const char* name;
+  FootSlamMapKind map;
+  int degree;
+  int grid;
+  int alphabet;
+};
+
+const PaperConfig kPaperConfigs[] = {
+    {"naive", FootSlamMapKind::kNaive, 16, 256, 0},
+    {"htree s=4 T=5", FootSlamMapKind::kHTree, 4, 256, 5},
+    {"htree s=16 T=0", FootSlamMapKind::kHTree, 16, 256, 0},
+    {"htree s=16 T=5", FootSlamMapKind::kHTree, 16, 256, 5},
+    {"htree s=64 T=5", FootSlamMapKind::kHTree, 64, 512, 5},
+};
+
+struct Sample {
+  double walk_s, run_s, rss_mib, map_mib;
+};
+
+// Parses the child's series: one "walk_s run_s rss_mib map_mib" line per sample.
+std::vector<Sample> ParseSamples(const std::string& text) {
+  std::vector<Sample> out;
+  std::istringstream in(text);
+  Sample s;
+  while (in >> s.walk_s >> s.run_s >> s.rss_mib >> s.map_mib) out.push_back(s);
+  return out;
+}
+
+}  // namespace
+
+int PaperBenchCommand(const PaperBenchOptions& options) {
+  StatusOr<std::vector<StepRecord>> walk = PaperWalk(options.minutes);
+  if (!walk.ok()) return Fail(kExitUsage, walk.status().message());
+  Status s = EnsureDirectory(options.out_dir);
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  const double walk_start = 0;
+  struct Result {
+    const PaperConfig* config;
+    std::vector<Sample> samples;
+    int64_t steps = 0;
+    double run_s = 0;
+    double peak_rss_mib = 0;
+    bool stopped = false;
+  };
+  std::vector<Result> results;
+  for (const PaperConfig& pc : kPaperConfigs) {
+    if (!options.only.empty() && options.only != pc.name) continue;
+    std::string series_path = fmt::format("{}/.series-{}", options.out_dir, getpid());
+    int code = InChild([&]() -> int {
+      FootSlamConfig config;
+      config.particles = options.particles;
+      config.threads = options.threads;
+      config.map = pc.map;
+      config.degree = pc.degree;
+      config.grid_size = pc.grid;
+      config.alphabet = pc.alphabet;
+      auto slam = FootSlam::Create(config);
+      if (!slam.ok()) return 10;
+      std::string out;
+      auto start = Clock::now();
+      double next_sample = 0;
+      int64_t done = 0;
+      for (const StepRecord& step : *walk) {
+        if (!(*slam)->Step(step.t_s, step.dx_m, step.dy_m).ok()) return 11;
+        ++done;
+        double run_s = std::chrono::duration<double>(Clock::now() - start).count();
+        if (step.t_s >= next_sample || done == static_cast<int64_t>(walk->size())) {
+          next_sample = step.t_s + 5;
+          out += fmt::format("{} {} {} {}\n", step.t_s - walk_start, run_s,
+                             CurrentRssBytes() / 1048576.0,
+                             (*slam)->Summary().map_memory.live_bytes / 1048576.0);
+        }
+        if (pc.map == FootSlamMapKind::kNaive && run_s > options.naive_limit_s) break;
+      }
+      out += fmt::format("# steps {} peak_rss_mib {}\n", done, PeakRssBytes() / 1048576.0);
+      return WriteFileAtomically(series_path, out).ok() ? 0 : 12;
+    });
+    if (code != 0) return Fail(kExitRun, fmt::format("{}: the run failed (code {})", pc.name, code));
+    std::string text = Slurp(series_path);
+    std::remove(series_path.c_str());
+    Result r;
+    r.config = &pc;
+    r.samples = ParseSamples(text.substr(0, text.find('#')));
+    size_t tail = text.find("# steps");
+    if (tail != std::string::npos) {
+      std::sscanf(text.c_str() + tail, "# steps %ld peak_rss_mib %lf", &r.steps, &r.peak_rss_mib);
+    }
+    r.run_s = r.samples.empty() ? 0 : r.samples.back().run_s;
+    r.stopped = r.steps < static_cast<int64_t>(walk->size());
+    std::fprintf(stderr, "%-16s %5ld steps in %7.2f s, peak RSS %7.1f MiB%s\n", pc.name, r.steps,
+                 r.run_s, r.peak_rss_mib, r.stopped ? " (stopped: time limit)" : "");
+    results.push_back(std::move(r));
+  }
+
+  // CSV, plots and a markdown table.
+  std::vector<std::vector<std::string>> rows;
+  LinePlot runtime{"Run time against walk time (Fig. 9)", "walk time (s)", "cumulative run time (s)",
+                   {}, false, false};
+  LinePlot memory{"Memory against walk time (Fig. 10)", "walk time (s)", "MiB", {}, false, false};
+  double walk_end = walk->back().t_s;
+  runtime.series.push_back({"real time", {0, walk_end}, {0, walk_end}, true});
+  std::vector<std::vector<std::string>> table;
+  for (const Result& r : results) {
+    PlotSeries time_series{r.config->name, {}, {}, false};
+    PlotSeries rss_series{std::string(r.config->name) + " RSS", {}, {}, false};
+    PlotSeries map_series{std::string(r.config->name) + " live map", {}, {}, true};
+    for (const Sample& s : r.samples) {
+      rows.push_back({r.config->name, fmt::format("{:.2f}", s.walk_s), fmt::format("{:.3f}", s.run_s),
+                      fmt::format("{:.1f}", s.rss_mib), fmt::format("{:.2f}", s.map_mib)});
+      time_series.x.push_back(s.walk_s);
+      time_series.y.push_back(s.run_s);
+      rss_series.x.push_back(s.walk_s);
+      rss_series.y.push_back(s.rss_mib);
+      map_series.x.push_back(s.walk_s);
+      map_series.y.push_back(s.map_mib);
+    }
+    runtime.series.push_back(time_series);
+    memory.series.push_back(rss_series);
+    memory.series.push_back(map_series);
+    // Time per step in the first and the last minute of what was run: flat means linear time.
+    double first_minute = 0, last_minute = 0;
+    int64_t first_n = 0, last_n = 0;
+    for (size_t k = 1; k < r.samples.size(); ++k) {
+      double dt = r.samples[k].run_s - r.samples[k - 1].run_s;
+      double dw = r.samples[k].walk_s - r.samples[k - 1].walk_s;
+      if (r.samples[k].walk_s <= 60) {
+        first_minute += dt;
+        first_n += static_cast<int64_t>(dw);
+      }
+      if (r.samples[k].walk_s > r.samples.back().walk_s - 60) {
+        last_minute += dt;
+        last_n += static_cast<int64_t>(dw);
+      }
+    }
+    double ratio = first_n > 0 && last_n > 0 && first_minute > 0
+                       ? (last_minute / last_n) / (first_minute / first_n)
+                       : 0;
+    double ns = r.steps > 0 ? r.run_s * 1e9 / (static_cast<double>(r.steps) * options.particles) : 0;
+    double walked = r.samples.empty() ? 0 : r.samples.back().walk_s;
+    double peak_map = 0;
+    for (const Sample& s : r.samples) peak_map = std::max(peak_map, s.map_mib);
+    table.push_back({r.config->name, fmt::format("{}{}", r.steps, r.stopped ? " (stopped)" : ""),
+                     fmt::format("{:.0f}", walked), fmt::format("{:.2f}", r.run_s),
+                     fmt::format("{:.3f}", walked > 0 ? r.run_s / walked : 0),
+                     fmt::format("{:.0f}", ns), fmt::format("{:.2f}", ratio),
+                     fmt::format("{:.0f}", r.peak_rss_mib), fmt::format("{:.1f}", peak_map)});
+  }
+  std::string md = fmt::format(
+      "# grove bench paper\n\nMachine: {}\n\nWalk: simulated open area, {} minutes ({} steps), "
+      "{} particles, {} threads.\n\n",
+      MachineDescription(), options.minutes, walk->size(), options.particles,
+      options.threads == 0 ? std::thread::hardware_concurrency() : options.threads);
+  md += MarkdownTable({"configuration", "steps run", "walk s", "run s", "run / walk time",
+                       "ns per particle-step", "last/first minute time per step",
+                       "peak RSS MiB", "peak live map MiB"},
+                      table);
+  const std::string& dir = options.out_dir;
+  s = WriteFileAtomically(dir + "/paper.csv",
+                          CsvTable({"configuration", "walk_s", "run_s", "rss_mib", "live_map_mib"},
+                                   rows));
+  if (s.ok()) s = WriteLinePlotPng(dir + "/paper_runtime.png", runtime);
+  if (s.ok()) s = WriteLinePlotPng(dir + "/paper_memory.png", memory);
+  if (s.ok()) s = WriteFileAtomically(dir + "/paper.md", md);
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  std::printf("%s", md.c_str());
+  return kExitOk;
+}
+
+int ScalingBenchCommand(const ScalingBenchOptions& options) {
+  StatusOr<std::vector<StepRecord>> walk = PaperWalk(13);
+  if (!walk.ok()) return Fail(kExitUsage, walk.status().message());
+  Status s = EnsureDirectory(options.out_dir);
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  const int64_t steps = std::min<int64_t>(options.steps, static_cast<int64_t>(walk->size()));
+  struct Point {
+    int64_t particles;
+    int threads;
+    FootSlamSummary summary;
+  };
+  auto run = [&](int64_t particles, int threads) -> StatusOr<FootSlamSummary> {
+    FootSlamConfig config;
+    config.particles = particles;
+    config.threads = threads;
+    auto slam = FootSlam::Create(config);
+    if (!slam.ok()) return slam.status();
+    for (int64_t k = 0; k < steps; ++k) {
+      const StepRecord& st = (*walk)[k];
+      GROVE_RETURN_IF_ERROR((*slam)->Step(st.t_s, st.dx_m, st.dy_m));
+    }
+    return (*slam)->Summary();
+  };
+  std::vector<Point> points;
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  for (int t = 1; t <= cores; ++t) {
+    auto r = run(options.thread_sweep_particles, t);
+    if (!r.ok()) return Fail(kExitRun, r.status().message());
+    points.push_back({options.thread_sweep_particles, t, *r});
+  }
+  for (int64_t n : {1000, 3000, 10000, 30000, 100000, 300000, 1000000}) {
+    if (n > options.max_particles) break;
+    auto r = run(n, cores);
+    if (!r.ok()) return Fail(kExitRun, r.status().message());
+    points.push_back({n, cores, *r});
+  }
+  std::vector<std::vector<std::string>> rows;
+  LinePlot threads_plot{"Throughput against threads", "threads", "M particle-steps / s", {}, false,
+                        false};
+  LinePlot particles_plot{"Cost against particles", "particles", "ns per particle-step", {}, true,
+                          false};
+  PlotSeries tp{fmt::format("{} particles", options.thread_sweep_particles), {}, {}, false};
+  PlotSeries pp{fmt::format("{} threads", cores), {}, {}, false};
+  std::vector<PlotSeries> phase_series = {{"advance", {}, {}, true},
+                                          {"resample", {}, {}, true},
+                                          {"release", {}, {}, true},
+                                          {"normalise", {}, {}, true}};
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Point& p = points[i];
+    const FootSlamSummary& m = p.summary;
+    double total = m.advance_s + m.normalize_s + m.resample_s + m.release_s + m.bookkeeping_s;
+    double ps = static_cast<double>(p.particles) * steps;
+    double ns = total * 1e9 / ps;
+    bool thread_sweep = i < static_cast<size_t>(cores);
+    rows.push_back({thread_sweep ? "threads" : "particles", std::to_string(p.particles),
+                    std::to_string(p.threads), std::to_string(steps), fmt::format("{:.3f}", total),
+                    fmt::format("{:.3f}", ps / total / 1e6), fmt::format("{:.1f}", ns),
+                    fmt::format("{:.1f}", m.advance_s * 1e9 / ps),
+                    fmt::format("{:.1f}", m.normalize_s * 1e9 / ps),
+                    fmt::format("{:.1f}", m.resample_s * 1e9 / ps),
+                    fmt::format("{:.1f}", m.release_s * 1e9 / ps),
+                    fmt::format("{:.1f}", m.bookkeeping_s * 1e9 / ps),
+                    fmt::format("{:.1f}", m.map_memory.peak_live_bytes / 1048576.0)});
+    if (thread_sweep) {
+      tp.x.push_back(p.threads);
+      tp.y.push_back(ps / total / 1e6);
+    } else {
+      pp.x.push_back(static_cast<double>(p.particles));
+      pp.y.push_back(ns);
+      double parts[] = {m.advance_s, m.resample_s, m.release_s, m.normalize_s};
+      for (int j = 0; j < 4; ++j) {
+        phase_series[j].x.push_back(static_cast<double>(p.particles));
+        phase_series[j].y.push_back(parts[j] * 1e9 / ps);
+      }
+    }
+  }
+  threads_plot.series.push_back(tp);
+  particles_plot.series.push_back(pp);
+  for (auto& ps : phase_series) particles_plot.series.push_back(ps);
+  std::vector<std::string> header = {"sweep", "particles", "threads", "steps", "run s",
+                                     "M particle-steps/s", "ns per particle-step",
+                                     "advance ns", "normalise ns", "resample ns", "release ns",
+                                     "bookkeeping ns", "peak live map MiB"};
+  std::string md = fmt::format(
+      "# grove bench scaling\n\nMachine: {}\n\nThe first {} steps of the paper walk (simulated "
+      "open area), H-tree s = 16, T = 5; per-phase costs in ns per particle-step.\n\n",
+      MachineDescription(), steps);
+  md += MarkdownTable(header, rows);
+  const std::string& dir = options.out_dir;
+  s = WriteFileAtomically(dir + "/scaling.csv", CsvTable(header, rows));
+  if (s.ok()) s = WriteLinePlotPng(dir + "/scaling_threads.png", threads_plot);
+  if (s.ok()) s = WriteLinePlotPng(dir + "/scaling_particles.png", particles_plot);
+  if (s.ok()) s = WriteFileAtomically(dir + "/scaling.md", md);
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  std::printf("%s", md.c_str());
+  return kExitOk;
+}
+
+}  // namespace grove::tools
