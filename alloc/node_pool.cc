@@ -16,6 +16,7 @@ constexpr size_t kSlabBytes = size_t{4} << 20;
 constexpr size_t kHugePageBytes = size_t{2} << 20;
 constexpr size_t kNodeAlign = 16;
 
+#ifdef GROVE_NODE_POOL
 // Maps a slab aligned to the huge-page size, so the kernel can back it with huge pages.
 void* MapSlab() {
   size_t span = kSlabBytes + kHugePageBytes;
@@ -31,6 +32,7 @@ void* MapSlab() {
 #endif
   return reinterpret_cast<void*>(aligned);
 }
+#endif  // GROVE_NODE_POOL
 
 }  // namespace
 

@@ -38,6 +38,10 @@ Field Number(const char* name, T FootSlamConfig::*member) {
                   c->*member = static_cast<T>(v.get<int64_t>());
                 }
               } else {
+                if (v.is_number_unsigned() &&
+                    v.get<uint64_t>() > static_cast<uint64_t>(std::numeric_limits<int64_t>::max())) {
+                  return "an integer in range";
+                }
                 int64_t x = v.is_number_unsigned() ? static_cast<int64_t>(v.get<uint64_t>())
                                                    : v.get<int64_t>();
                 if (x < static_cast<int64_t>(std::numeric_limits<T>::min()) ||
@@ -117,9 +121,15 @@ std::pair<int64_t, int64_t> LineColumn(const std::string& text, size_t pos) {
   return {line, column};
 }
 
-// Where "key": starts in the text, for messages about a key's value (first occurrence).
+// The key as JSON writes it: quoted, control characters escaped; safe in a one-line message.
+std::string QuotedKey(const std::string& key) {
+  return json(key).dump(-1, ' ', false, json::error_handler_t::replace);
+}
+
+// Where the key starts in the text, for messages about it (first occurrence; 1:1 when the file
+// spells it with escapes that differ from JSON's own).
 std::pair<int64_t, int64_t> KeyPosition(const std::string& text, const std::string& key) {
-  size_t pos = text.find("\"" + key + "\"");
+  size_t pos = text.find(QuotedKey(key));
   return pos == std::string::npos ? std::pair<int64_t, int64_t>{1, 1} : LineColumn(text, pos);
 }
 
@@ -165,6 +175,9 @@ Status ApplyFootSlamConfigJson(const std::string& name, const std::string& text,
     size_t cut = what.find("syntax error");
     return InvalidArgumentError(fmt::format("{}:{}:{}: invalid JSON: {}", name, line, column,
                                             cut == std::string::npos ? what : what.substr(cut)));
+  } catch (const json::exception& e) {
+    // Anything else the parser rejects, e.g. a number too large for a double (no position).
+    return InvalidArgumentError(fmt::format("{}: invalid JSON: {}", name, e.what()));
   }
   if (!doc.is_object()) {
     return InvalidArgumentError(fmt::format("{}:1:1: the configuration must be a JSON object, "
@@ -174,21 +187,23 @@ Status ApplyFootSlamConfigJson(const std::string& name, const std::string& text,
   std::vector<std::string> known;
   for (const Field& f : Fields()) known.push_back(f.name);
   FootSlamConfig result = *config;
-  for (const auto& [key, value] : doc.items()) {
+  for (auto item = doc.begin(); item != doc.end(); ++item) {
+    const std::string& key = item.key();
+    const json& value = item.value();
     auto it = std::find_if(Fields().begin(), Fields().end(),
                            [&](const Field& f) { return key == f.name; });
     auto [line, column] = KeyPosition(text, key);
     if (it == Fields().end()) {
       std::string nearest = NearestKey(key, known);
       return InvalidArgumentError(fmt::format(
-          "{}:{}:{}: unknown key \"{}\"{}", name, line, column, key,
+          "{}:{}:{}: unknown key {}{}", name, line, column, QuotedKey(key),
           nearest.empty() ? "" : fmt::format(" (did you mean \"{}\"?)", nearest)));
     }
     std::string expected = it->set(value, &result);
     if (!expected.empty()) {
-      return InvalidArgumentError(fmt::format("{}:{}:{}: {} = {}: must be {}, found {}", name, line,
-                                              column, key, value.dump(), expected,
-                                              TypeName(value)));
+      return InvalidArgumentError(fmt::format(
+          "{}:{}:{}: {} = {}: must be {}, found {}", name, line, column, key,
+          value.dump(-1, ' ', false, json::error_handler_t::replace), expected, TypeName(value)));
     }
   }
   *config = result;

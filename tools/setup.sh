@@ -5,7 +5,8 @@
 #   tools/setup.sh test   every test (ctest)
 #   tools/setup.sh build  just build
 # Environment: BUILD_DIR (default build), BUILD_TYPE (Release, Debug, RelWithDebInfo; default
-# Release), SANITIZE=1 for the ASan + UBSan configuration (pooling off).
+# Release), SANITIZE=1 for the ASan + UBSan configuration (pooling off), EXTRA_CMAKE_ARGS for
+# anything else (e.g. -DGROVE_BUILD_BENCHMARKS=OFF).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -31,7 +32,11 @@ build_dir="${BUILD_DIR:-build}"
 cmake_args=(-DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}")
 if [ "${SANITIZE:-0}" = 1 ]; then
   cmake_args+=(-DGROVE_SANITIZE=ON)
+  export LSAN_OPTIONS="suppressions=$PWD/tools/lsan.supp:print_suppressions=0"
+  export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 fi
+# shellcheck disable=SC2206  # word splitting intended
+cmake_args+=(${EXTRA_CMAKE_ARGS:-})
 cmake -S . -B "$build_dir" "${cmake_args[@]}" >/dev/null
 cmake --build "$build_dir" -j "$(nproc)" -- --no-print-directory >/dev/null
 

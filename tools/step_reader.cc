@@ -169,6 +169,7 @@ Status ParseFiniteNumber(std::string_view path, int64_t line, const CsvField& fi
 
 namespace {
 
+constexpr double kMaxAbsTime = 1e12;
 constexpr std::string_view kExpectedHeader = "expected a header \"t,dx,dy\" or \"t,x,y\"";
 
 }  // namespace
@@ -263,6 +264,13 @@ StatusOr<bool> StepReader::ReadRow(Row* row) {
   }
   Row parsed{0, 0, 0, number};
   GROVE_RETURN_IF_ERROR(internal::ParseFiniteNumber(path, number, fields_[0], "t", &parsed.t_s));
+  // Bounded so that time differences and the start time before the first step stay exact enough
+  // to be strictly ordered (a second is still resolved at 1e12 s, about 31,700 years).
+  if (std::fabs(parsed.t_s) > kMaxAbsTime) {
+    return internal::LineError(path, number, fields_[0].column,
+                               fmt::format("t = {}: must be within +-{:g} s", parsed.t_s,
+                                           kMaxAbsTime));
+  }
   GROVE_RETURN_IF_ERROR(internal::ParseFiniteNumber(path, number, fields_[1],
                                                     positions_form_ ? "x" : "dx", &parsed.a_m));
   GROVE_RETURN_IF_ERROR(internal::ParseFiniteNumber(path, number, fields_[2],

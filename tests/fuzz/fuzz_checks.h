@@ -67,14 +67,15 @@ inline std::string Printable(std::string_view text, size_t max_bytes = 300) {
   return out;
 }
 
-// The byte length of each '\n'-separated line of `text`, a last line without '\n' included.
+// The byte length of each line of `text`: the lines end in '\n', but the last one may not; an
+// empty text counts as one empty line (a reader reports "line 1" for it).
 inline std::vector<size_t> LineLengths(std::string_view text) {
   std::vector<size_t> lengths;
   size_t start = 0;
   for (;;) {
     const size_t stop = text.find('\n', start);
     if (stop == std::string_view::npos) {
-      lengths.push_back(text.size() - start);
+      if (start < text.size() || lengths.empty()) lengths.push_back(text.size() - start);
       return lengths;
     }
     lengths.push_back(stop - start);
@@ -121,8 +122,8 @@ inline std::string CheckError(const Status& status, std::string_view name, std::
   }
   const std::vector<size_t> lengths = LineLengths(text);
   if (line < 1 || line > static_cast<int64_t>(lengths.size())) {
-    return fmt::format("error names line {} of an input with {} line(s): {}", line,
-                       lengths.size(), shown);
+    return fmt::format("error names line {} of an input with {} line(s): {}", line, lengths.size(),
+                       shown);
   }
   const size_t length = lengths[static_cast<size_t>(line - 1)];
   if (column < 1 || column > static_cast<int64_t>(length) + 1) {
@@ -150,8 +151,8 @@ inline std::string CheckStepReaderUnguarded(const uint8_t* data, size_t size) {
     options.max_step_m = mode == 6 ? kInvalidSteps[data[2] % 4] : (data[2] + 1) / 16.0;
     text.remove_prefix(3);
   }
-  const bool options_valid = options.max_line_bytes >= 16 && options.max_step_m > 0 &&
-                             std::isfinite(options.max_step_m);
+  const bool options_valid =
+      options.max_line_bytes >= 16 && options.max_step_m > 0 && std::isfinite(options.max_step_m);
 
   StatusOr<tools::StepReader> opened =
       tools::StepReader::OpenText(kName, std::string(text), options);
@@ -196,8 +197,8 @@ inline std::string CheckStepReaderUnguarded(const uint8_t* data, size_t size) {
     if (!*more) break;
     ++steps;
     if (!Finite(step.t_s, step.dx_m, step.dy_m)) {
-      return fmt::format("step {} not finite: t = {}, dx = {}, dy = {}", steps, step.t_s,
-                         step.dx_m, step.dy_m);
+      return fmt::format("step {} not finite: t = {}, dx = {}, dy = {}", steps, step.t_s, step.dx_m,
+                         step.dy_m);
     }
     if (!(step.t_s > previous_t)) {
       return fmt::format("step {}: t = {} is not after {} ({})", steps, step.t_s, previous_t,
@@ -224,6 +225,13 @@ inline std::string CheckStepReaderUnguarded(const uint8_t* data, size_t size) {
   return "";
 }
 
+// json's == compares a signed and an unsigned integer after casting the unsigned one to signed
+// (so -1 == 18446744073709551615); integers are compared by their exact decimal text instead.
+inline bool SameValue(const nlohmann::json& a, const nlohmann::json& b) {
+  if (a.is_number_integer() && b.is_number_integer()) return a.dump() == b.dump();
+  return a == b;
+}
+
 inline std::string CheckConfigJsonUnguarded(const uint8_t* data, size_t size) {
   constexpr char kName[] = "fuzz_config.json";
   const std::string text(reinterpret_cast<const char*>(data), size);
@@ -242,7 +250,7 @@ inline std::string CheckConfigJsonUnguarded(const uint8_t* data, size_t size) {
   if (!doc.is_object()) return "applied a document that is not an object";
   for (const auto& [key, value] : doc.items()) {
     if (!after.contains(key)) return "applied an unknown key \"" + Printable(key) + "\"";
-    if (after[key] != value) {
+    if (!SameValue(after[key], value)) {
       return fmt::format("key \"{}\" = {} in the text became {}", Printable(key),
                          Printable(value.dump()), Printable(after[key].dump()));
     }
@@ -341,12 +349,14 @@ std::string Guarded(const Check& check) {
 
 // StepReader::OpenText on the input, then Next() to the end or the first error.
 inline std::string CheckStepReader(const uint8_t* data, size_t size) {
-  return fuzz_internal::Guarded([&] { return fuzz_internal::CheckStepReaderUnguarded(data, size); });
+  return fuzz_internal::Guarded(
+      [&] { return fuzz_internal::CheckStepReaderUnguarded(data, size); });
 }
 
 // ApplyFootSlamConfigJson on the input over the default configuration, then Validate().
 inline std::string CheckConfigJson(const uint8_t* data, size_t size) {
-  return fuzz_internal::Guarded([&] { return fuzz_internal::CheckConfigJsonUnguarded(data, size); });
+  return fuzz_internal::Guarded(
+      [&] { return fuzz_internal::CheckConfigJsonUnguarded(data, size); });
 }
 
 // Writes the input to CsvInputPath() and reads it with ReadMapCsv, ReadPathCsv and
