@@ -135,7 +135,7 @@ WaypointGraph BuildingGraph() {
 }
 
 // Paths between junctions on a 5 x 5 grid of 25 m, interior junctions moved up to 4 m, four grid
-// paths missing and three diagonals added. Junctions lie in [0, 100] x [0, 100].
+// paths missing and three diagonals added. Junctions lie in [-50, 50] x [-50, 50]; the walk starts at the centre one.
 WaypointGraph OpenGraph() {
   constexpr int kSide = 5;
   constexpr double kSpacing = 25;
@@ -146,9 +146,11 @@ WaypointGraph OpenGraph() {
     for (int i = 0; i < kSide; ++i) {
       const bool inner_i = i > 0 && i < kSide - 1;
       const bool inner_j = j > 0 && j < kSide - 1;
-      const double dx = inner_i ? 4 * std::sin(1.7 * i + 2.9 * j) : 0;
-      const double dy = inner_j ? 4 * std::cos(2.3 * i + 1.1 * j) : 0;
-      AddNode(&g, kSpacing * i + dx, kSpacing * j + dy, kJitter);
+      // The centre junction stays at the origin, where the walk starts.
+      const bool centre = i == kSide / 2 && j == kSide / 2;
+      const double dx = inner_i && !centre ? 4 * std::sin(1.7 * i + 2.9 * j) : 0;
+      const double dy = inner_j && !centre ? 4 * std::cos(2.3 * i + 1.1 * j) : 0;
+      AddNode(&g, kSpacing * (i - kSide / 2) + dx, kSpacing * (j - kSide / 2) + dy, kJitter);
     }
   }
   const auto missing = [&](int a, int b) {
@@ -167,8 +169,8 @@ WaypointGraph OpenGraph() {
   Connect(&g, id(1, 1), id(2, 2));
   Connect(&g, id(3, 3), id(4, 4));
   Connect(&g, id(2, 0), id(3, 1));
-  g.start = id(0, 0);
-  g.first_target = id(1, 0);
+  g.start = id(2, 2);
+  g.first_target = id(3, 2);
   g.explore = true;
   return g;
 }
@@ -207,7 +209,7 @@ Status Validate(const SimulatorOptions& o) {
 
 Area ScenarioArea(Scenario scenario) {
   // The waypoints' extent plus the largest aim jitter and the sway of a step.
-  if (scenario == Scenario::kOpen) return Area{-3, -3, 103, 103};
+  if (scenario == Scenario::kOpen) return Area{-53, -53, 53, 53};
   return Area{-1, -5, 37, 22};
 }
 

@@ -19,10 +19,11 @@ namespace grove::tools {
 
 enum class Scenario {
   // One floor of about 38 m x 27 m: a corridor loop split by a middle corridor, with 18 rooms off
-  // it through doors. The walker picks random next waypoints, so corridors are revisited often.
+  // it through doors. The walker mostly walks on straight ahead (loops around the corridors in
+  // a consistent direction), sometimes turns at random, and keeps room visits short.
   kBuilding,
-  // About 100 m x 100 m of outdoor paths (a distorted grid with a few diagonals). The walker
-  // prefers paths it has not walked yet: mostly exploration, some revisits.
+  // About 100 m x 100 m of outdoor paths (a distorted grid with a few diagonals) centred on the
+  // start. The walker prefers paths it has not walked yet: mostly exploration, some revisits.
   kOpen,
 };
 
