@@ -130,7 +130,8 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
     if (!more.ok()) return Fail(kExitInput, more.status().message());
     if (!*more) break;
     if (!start_set) {
-      slam.SetStartTime(reader->start_time_s());
+      Status st = slam.SetStartTime(reader->start_time_s());
+      if (!st.ok()) return Fail(kExitInput, fmt::format("{}: {}", steps_name, st.message()));
       start_set = true;
     }
     Status s = slam.Step(step.t_s, step.dx_m, step.dy_m);

@@ -122,7 +122,7 @@ class FootSlam::Impl {
  public:
   virtual ~Impl() = default;
   virtual Status Step(double t_s, double dx_m, double dy_m) = 0;
-  virtual void SetStartTime(double t_s) = 0;
+  virtual Status SetStartTime(double t_s) = 0;
   virtual const FootSlamConfig& config() const = 0;
   virtual int64_t steps() const = 0;
   virtual Pose2 HeaviestPose() const = 0;
@@ -196,10 +196,17 @@ class Engine final : public FootSlam::Impl {
     return Status::Ok();
   }
 
-  void SetStartTime(double t_s) override {
+  Status SetStartTime(double t_s) override {
+    if (!std::isfinite(t_s)) {
+      return InvalidArgumentError(fmt::format("start time = {}: must be finite", t_s));
+    }
+    if (filter_.steps() > 0) {
+      return FailedPreconditionError("the start time must be set before the first step");
+    }
     start_time_unset_ = false;
     times_.front() = t_s;
     mean_.front().t_s = t_s;
+    return Status::Ok();
   }
   const FootSlamConfig& config() const override { return config_; }
   int64_t steps() const override { return static_cast<int64_t>(filter_.steps()); }
@@ -386,7 +393,7 @@ StatusOr<std::unique_ptr<FootSlam>> FootSlam::Create(const FootSlamConfig& confi
 }
 
 Status FootSlam::Step(double t_s, double dx_m, double dy_m) { return impl_->Step(t_s, dx_m, dy_m); }
-void FootSlam::SetStartTime(double t_s) { impl_->SetStartTime(t_s); }
+Status FootSlam::SetStartTime(double t_s) { return impl_->SetStartTime(t_s); }
 const FootSlamConfig& FootSlam::config() const { return impl_->config(); }
 int64_t FootSlam::steps() const { return impl_->steps(); }
 Pose2 FootSlam::HeaviestPose() const { return impl_->HeaviestPose(); }

@@ -223,8 +223,10 @@ TEST(FootSlamApiTest, TrajectoryHasTheStartAndOnePosePerStep) {
   FootSlamConfig c = Small();
   auto slam = FootSlam::Create(c);
   ASSERT_TRUE(slam.ok());
-  (*slam)->SetStartTime(0.0);
+  ASSERT_TRUE((*slam)->SetStartTime(0.0).ok());
+  EXPECT_EQ((*slam)->SetStartTime(std::nan("")).code(), StatusCode::kInvalidArgument);
   for (const Step& s : steps) ASSERT_TRUE((*slam)->Step(s.t, s.dx, s.dy).ok());
+  EXPECT_EQ((*slam)->SetStartTime(0.0).code(), StatusCode::kFailedPrecondition);
   auto path = (*slam)->HeaviestTrajectory();
   ASSERT_EQ(path.size(), steps.size() + 1);
   EXPECT_EQ(path[0].t_s, 0.0);

@@ -30,7 +30,7 @@ Errors RunBuildingWalk(uint64_t seed) {
   config.threads = 2;
   auto slam = FootSlam::Create(config);
   EXPECT_TRUE(slam.ok());
-  (*slam)->SetStartTime(0);
+  EXPECT_TRUE((*slam)->SetStartTime(0).ok());
   for (const StepRecord& s : walk->steps) {
     EXPECT_TRUE((*slam)->Step(s.t_s, s.dx_m, s.dy_m).ok());
     odometry.push_back({s.t_s, odometry.back().x_m + s.dx_m, odometry.back().y_m + s.dy_m});

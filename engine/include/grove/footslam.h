@@ -178,8 +178,10 @@ class FootSlam {
   // engine must not be stepped again.
   Status Step(double t_s, double dx_m, double dy_m);
 
-  // Sets the time stamp of the start pose (default 0). REQUIRES: before the first Step().
-  void SetStartTime(double t_s);
+  // Sets the time stamp of the start pose; the first step must come after it. Without it the
+  // start pose takes the first step's time. InvalidArgument for a non-finite time,
+  // FailedPrecondition after the first Step().
+  Status SetStartTime(double t_s);
 
   const FootSlamConfig& config() const;
   int64_t steps() const;
