@@ -12,6 +12,7 @@
 #include "concurrency/worker_pool.h"
 #include "engine/footslam/alphabet.h"
 #include "engine/footslam/htc.h"
+#include "engine/generation.h"
 #include "engine/persistent_trie.h"
 
 namespace grove::footslam {
@@ -75,14 +76,10 @@ class AlphabetHTreeMap {
   void Prefetch(size_t i) const { __builtin_prefetch(symbol_roots_[i]); }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
-    std::vector<typename SymbolTrie::Root> next_symbols(parents.size());
-    std::vector<typename FullTrie::Root> next_full(parents.size());
-    workers.ParallelFor(parents.size(), 2048, [&](int, size_t b, size_t e) {
-      for (size_t k = b; k < e; ++k) {
-        next_symbols[k] = SymbolTrie::Share(symbol_roots_[parents[k]]);
-        next_full[k] = FullTrie::Share(full_roots_[parents[k]]);
-      }
-    });
+    std::vector<typename SymbolTrie::Root> next_symbols =
+        GatherShared(parents, &symbol_roots_, workers, &SymbolTrie::Share);
+    std::vector<typename FullTrie::Root> next_full =
+        GatherShared(parents, &full_roots_, workers, &FullTrie::Share);
     dead_symbol_roots_.swap(symbol_roots_);
     dead_full_roots_.swap(full_roots_);
     symbol_roots_.swap(next_symbols);

@@ -23,6 +23,7 @@
 #include "engine/footslam/htc.h"
 #include "engine/footslam/htree_layout.h"
 #include "engine/footslam/pose_history.h"
+#include "engine/generation.h"
 #include "grove/footslam.h"
 
 namespace grove::footslam {
@@ -140,10 +141,8 @@ class FootSlamModel {
     GatherVector(parents, workers, &heading_error_);
     GatherVector(parents, workers, &scale_);
     GatherVector(parents, workers, &hex_);
-    std::vector<PoseHistory::Node*> next(parents.size());
-    workers.ParallelFor(parents.size(), 4096, [&](int, size_t b, size_t e) {
-      for (size_t k = b; k < e; ++k) next[k] = PoseHistory::Share(history_roots_[parents[k]]);
-    });
+    std::vector<PoseHistory::Node*> next =
+        GatherShared(parents, &history_roots_, workers, &PoseHistory::Share);
     dead_history_.swap(history_roots_);
     history_roots_.swap(next);
     map_->Gather(parents, workers);

@@ -10,6 +10,7 @@
 #include "concurrency/worker_pool.h"
 #include "engine/footslam/alphabet.h"
 #include "engine/footslam/htc.h"
+#include "engine/generation.h"
 #include "engine/persistent_trie.h"
 
 namespace grove::footslam {
@@ -39,10 +40,7 @@ class HTreeMap {
   void Prefetch(size_t i) const { __builtin_prefetch(roots_[i]); }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
-    std::vector<typename Trie::Root> next(parents.size());
-    workers.ParallelFor(parents.size(), 2048, [&](int, size_t b, size_t e) {
-      for (size_t k = b; k < e; ++k) next[k] = Trie::Share(roots_[parents[k]]);
-    });
+    std::vector<typename Trie::Root> next = GatherShared(parents, &roots_, workers, &Trie::Share);
     dead_.swap(roots_);
     roots_.swap(next);
   }

@@ -1,0 +1,41 @@
+// GatherShared: the next generation of reference-counted handles (map roots, path histories)
+// after resampling.
+#ifndef GROVE_ENGINE_GENERATION_H_
+#define GROVE_ENGINE_GENERATION_H_
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "concurrency/worker_pool.h"
+
+namespace grove {
+
+// Returns next[k] = a reference to (*current)[parents[k]]. The first copy of each parent takes
+// the parent's own reference over and the others call share(), so a parent with c copies costs
+// c - 1 increments; the taken-over entries of *current become nullptr, so what is left in
+// *current is exactly the references of the dead generation, to be released.
+// REQUIRES: parents nondecreasing (as every resampling scheme here produces them).
+template <typename Handle, typename Share>
+std::vector<Handle> GatherShared(std::span<const uint32_t> parents, std::vector<Handle>* current,
+                                 WorkerPool& workers, Share share) {
+  std::vector<Handle> next(parents.size());
+  auto first = [&](size_t k) { return k == 0 || parents[k - 1] != parents[k]; };
+  workers.ParallelFor(parents.size(), 2048, [&](int, size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k) {
+      Handle h = (*current)[parents[k]];
+      next[k] = first(k) ? h : share(h);
+    }
+  });
+  // A second pass: a parent's entry must stay readable until all of its copies are made.
+  workers.ParallelFor(parents.size(), 2048, [&](int, size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k) {
+      if (first(k)) (*current)[parents[k]] = nullptr;
+    }
+  });
+  return next;
+}
+
+}  // namespace grove
+
+#endif  // GROVE_ENGINE_GENERATION_H_
