@@ -14,6 +14,7 @@
 #include <string_view>
 
 #include "tools/atomic_file.h"
+#include "tools/cairo_output.h"
 
 namespace grove::tools {
 namespace {
@@ -315,23 +316,6 @@ void Draw(cairo_t* cr, const MapImage& image, const MapLayout& layout) {
   DrawColourBar(cr, layout, max_use);
 }
 
-// Appends cairo's output to a std::string; no exception may cross the C callback.
-cairo_status_t AppendToString(void* closure, const unsigned char* data, unsigned int length) {
-  try {
-    static_cast<std::string*>(closure)->append(reinterpret_cast<const char*>(data), length);
-  } catch (const std::bad_alloc&) {
-    return CAIRO_STATUS_NO_MEMORY;
-  }
-  return CAIRO_STATUS_SUCCESS;
-}
-
-Status CairoError(cairo_status_t status, std::string_view what) {
-  std::string message = fmt::format("{}: cairo: {}", what, cairo_status_to_string(status));
-  if (status == CAIRO_STATUS_NO_MEMORY || status == CAIRO_STATUS_INVALID_SIZE) {
-    return ResourceExhaustedError(std::move(message));
-  }
-  return InternalError(std::move(message));
-}
 
 struct SurfaceDeleter {
   void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
