@@ -4,9 +4,13 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <string_view>
+#include <vector>
 #include <nlohmann/json.hpp>
 
 #include "tools/atomic_file.h"
@@ -69,6 +73,21 @@ std::string TrajectoryCsv(const std::vector<StampedPose>& poses) {
   return out;
 }
 
+int64_t CountLines(std::string_view text) {
+  return static_cast<int64_t>(std::count(text.begin(), text.end(), '\n'));
+}
+
+int64_t CountFileLines(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::vector<char> buffer(1 << 20);
+  int64_t lines = 0;
+  while (in) {
+    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    lines += CountLines(std::string_view(buffer.data(), static_cast<size_t>(in.gcount())));
+  }
+  return lines;
+}
+
 int64_t PeakRssBytes() {
   struct rusage usage;
   getrusage(RUSAGE_SELF, &usage);
@@ -119,9 +138,16 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
   if (!created.ok()) return Fail(kExitUsage, created.status().message());
   FootSlam& slam = **created;
 
-  // Count the steps first for the progress bar only when the file is small enough to matter
-  // little; a stream of unknown length gets a bar without a total.
-  ProgressReporter progress(0, config.particles, stderr, isatty(fileno(stderr)) != 0);
+  // The progress total: lines after the header (comments and blank lines make it an estimate),
+  // counted by one streaming pass over the file.
+  const bool terminal = isatty(fileno(stderr)) != 0;
+  int64_t total_steps = 0;
+  if (options.progress) {
+    total_steps = options.steps_path.empty() ? CountLines(EmbeddedWalkSteps()) - 1
+                                             : CountFileLines(options.steps_path) - 1;
+    if (reader->positions_form()) --total_steps;
+  }
+  ProgressReporter progress(std::max<int64_t>(total_steps, 0), config.particles, stderr, terminal);
   std::vector<RenderPoint> odometry{{config.start_x_m, config.start_y_m}};
   bool start_set = false;
   StepRecord step;
