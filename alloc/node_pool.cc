@@ -13,10 +13,11 @@ namespace {
 
 constexpr size_t kPageBytes = size_t{64} << 10;
 constexpr size_t kSlabBytes = size_t{4} << 20;
-constexpr size_t kHugePageBytes = size_t{2} << 20;
 constexpr size_t kNodeAlign = 16;
 
 #ifdef GROVE_NODE_POOL
+constexpr size_t kHugePageBytes = size_t{2} << 20;
+
 // Maps a slab aligned to the huge-page size, so the kernel can back it with huge pages.
 void* MapSlab() {
   size_t span = kSlabBytes + kHugePageBytes;
