@@ -169,8 +169,11 @@ Status ApplyFootSlamConfigJson(const std::string& name, const std::string& text,
   try {
     doc = json::parse(text);
   } catch (const json::parse_error& e) {
-    // e.byte is the 1-based offset of the byte where parsing failed.
-    auto [line, column] = LineColumn(text, e.byte == 0 ? 0 : e.byte - 1);
+    // e.byte is the 1-based offset of the byte where parsing failed; one past the end means
+    // "unexpected end of input", reported at the last byte.
+    size_t offset = e.byte == 0 ? 0 : e.byte - 1;
+    if (!text.empty() && offset >= text.size()) offset = text.size() - 1;
+    auto [line, column] = LineColumn(text, offset);
     std::string what = e.what();
     size_t cut = what.find("syntax error");
     return InvalidArgumentError(fmt::format("{}:{}:{}: invalid JSON: {}", name, line, column,

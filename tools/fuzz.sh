@@ -9,7 +9,8 @@
 #
 # Environment: BUILD_DIR (default build-fuzz), JOBS (build jobs, default 2), WORK_DIR (scratch
 # directory, default a new one under /tmp; kept so the corpora and reproducers can be inspected).
-# CLANG_VERSION (default 19). Installs clang-N, libclang-rt-N-dev (libFuzzer) and llvm-N
+# CLANG_VERSION (default 19). FUZZ_RUNS=N runs N inputs per fuzzer with a fixed seed instead of
+# a time limit: the same inputs on every run, so CI is repeatable. Installs clang-N, libclang-rt-N-dev (libFuzzer) and llvm-N
 # (llvm-symbolizer) from Debian when missing; the project's own dependencies come from
 # tools/setup.sh.
 # Exit status: 0 when no fuzzer failed, 1 when one did (its reproducer's path is printed), 2 for a
@@ -75,7 +76,12 @@ for t in "${targets[@]}"; do
   cp -R "tests/fuzz/corpus/$t/." "$dir/corpus/"
   echo "fuzz: $t for ${seconds} s (scratch $dir)"
   status=0
-  "$build_dir/tests/fuzz/${t}_fuzzer" -max_total_time="$seconds" -max_len=4096 -timeout=10 \
+  if [ -n "${FUZZ_RUNS:-}" ]; then
+    budget=(-runs="$FUZZ_RUNS" -seed=1)
+  else
+    budget=(-max_total_time="$seconds")
+  fi
+  "$build_dir/tests/fuzz/${t}_fuzzer" "${budget[@]}" -max_len=4096 -timeout=10 \
     -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$dir/artifacts/" \
     "$dir/corpus" >"$dir/log" 2>&1 || status=$?
   done_line="$(grep -aE '^#[0-9]+[[:space:]]+DONE' "$dir/log" | tail -n 1 || true)"
