@@ -8,6 +8,8 @@
 #include <thread>
 #include <unordered_map>
 
+#include <oneapi/tbb/info.h>
+
 #include "concurrency/worker_pool.h"
 #include "engine/footslam/alphabet.h"
 #include "engine/footslam/alphabet_htree_map.h"
@@ -265,7 +267,8 @@ class Engine final : public FootSlam::Impl {
     FootSlamSummary s;
     s.particles = config_.particles;
     s.threads_requested = config_.threads;
-    s.threads_used = threads_;
+    // oneTBB never runs more threads than the process may use, whatever the arena asks for.
+    s.threads_used = std::min(threads_, tbb::info::default_concurrency());
     s.steps = steps();
     s.resamplings = static_cast<int64_t>(filter_.resamplings());
     s.mean_ess = filter_.mean_ess();
