@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -120,6 +121,42 @@ MapImage MakeImage(const FootSlamConfig& config, const std::vector<HexCounts>& m
 
 }  // namespace
 
+StatusOr<int64_t> ParseMemorySize(const std::string& text) {
+  double value = 0;
+  const char* begin = text.data();
+  const char* end = begin + text.size();
+  auto [ptr, ec] = std::from_chars(begin, end, value);
+  double scale = 1;
+  if (ec == std::errc() && ptr + 1 == end) {
+    switch (*ptr) {
+      case 'K': case 'k': scale = 1024.0; break;
+      case 'M': case 'm': scale = 1024.0 * 1024; break;
+      case 'G': case 'g': scale = 1024.0 * 1024 * 1024; break;
+      case 'T': case 't': scale = 1024.0 * 1024 * 1024 * 1024; break;
+      default: ec = std::errc::invalid_argument;
+    }
+  } else if (ptr != end) {
+    ec = std::errc::invalid_argument;
+  }
+  double bytes = value * scale;
+  if (ec != std::errc() || !std::isfinite(bytes) || bytes < 1 || bytes > 9.0e18) {
+    return InvalidArgumentError(fmt::format(
+        "--memory-budget = \"{}\": must be a size such as 512M, 8G or 1073741824", text));
+  }
+  return static_cast<int64_t>(bytes);
+}
+
+int64_t AvailableMemoryBytes() {
+  std::ifstream meminfo("/proc/meminfo");
+  std::string key;
+  int64_t kib = 0;
+  std::string unit;
+  while (meminfo >> key >> kib >> unit) {
+    if (key == "MemAvailable:") return kib * 1024;
+  }
+  return 0;
+}
+
 int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) {
   auto wall_start = std::chrono::steady_clock::now();
   if (Status s = config.Validate(); !s.ok()) return Fail(kExitUsage, s.message());
@@ -134,19 +171,32 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
           : StepReader::Open(options.steps_path, reader_options);
   if (!reader.ok()) return Fail(ExitCodeOf(reader.status()), reader.status().message());
 
+  // Refuse a run that would not fit before building anything.
+  const int64_t lines = options.steps_path.empty() ? CountLines(EmbeddedWalkSteps())
+                                                   : CountFileLines(options.steps_path);
+  const int64_t budget =
+      options.memory_budget_bytes > 0 ? options.memory_budget_bytes : AvailableMemoryBytes();
+  const int64_t predicted = FootSlam::EstimatePeakBytes(config, std::max<int64_t>(lines - 1, 0));
+  if (budget > 0 && predicted > budget) {
+    return Fail(kExitMemory,
+                fmt::format("the run is predicted to need {:.1f} MiB ({} particles, {} map, {} "
+                            "steps), more than the {} of {:.1f} MiB; use fewer particles or raise "
+                            "--memory-budget",
+                            predicted / 1048576.0, config.particles,
+                            FootSlamMapKindName(config.map), std::max<int64_t>(lines - 1, 0),
+                            options.memory_budget_bytes > 0 ? "--memory-budget"
+                                                            : "memory available",
+                            budget / 1048576.0));
+  }
+
   StatusOr<std::unique_ptr<FootSlam>> created = FootSlam::Create(config);
   if (!created.ok()) return Fail(kExitUsage, created.status().message());
   FootSlam& slam = **created;
 
-  // The progress total: lines after the header (comments and blank lines make it an estimate),
-  // counted by one streaming pass over the file.
+  // The progress total: lines after the header (comments and blank lines make it an estimate).
   const bool terminal = isatty(fileno(stderr)) != 0;
-  int64_t total_steps = 0;
-  if (options.progress) {
-    total_steps = options.steps_path.empty() ? CountLines(EmbeddedWalkSteps()) - 1
-                                             : CountFileLines(options.steps_path) - 1;
-    if (reader->positions_form()) --total_steps;
-  }
+  int64_t total_steps = lines - 1;
+  if (reader->positions_form()) --total_steps;
   ProgressReporter progress(std::max<int64_t>(total_steps, 0), config.particles, stderr, terminal);
   std::vector<RenderPoint> odometry{{config.start_x_m, config.start_y_m}};
   bool start_set = false;
@@ -201,6 +251,7 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
         {"release", summary.release_s},
         {"bookkeeping", summary.bookkeeping_s}}},
       {"peak_rss_bytes", PeakRssBytes()},
+      {"predicted_peak_bytes", predicted},
       {"map_memory", MemoryJson(summary.map_memory)},
       {"trajectory_memory", MemoryJson(summary.trajectory_memory)},
       {"resamplings", summary.resamplings},

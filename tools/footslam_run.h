@@ -7,6 +7,7 @@
 #include <string>
 
 #include "grove/footslam.h"
+#include "grove/status.h"
 
 namespace grove::tools {
 
@@ -18,7 +19,14 @@ enum ExitCode : int {
   kExitInput = 3,       // bad input file (steps, truth, CSV)
   kExitRun = 4,         // the run itself failed: left the grid, filter degenerated
   kExitOutput = 5,      // outputs could not be written (earlier outputs are left intact)
+  kExitMemory = 6,      // the predicted memory exceeds --memory-budget; nothing was run
 };
+
+// Parses a memory size: a number of bytes with an optional binary suffix K, M, G or T
+// ("512M", "1.5G", "1073741824"). InvalidArgument naming the text otherwise.
+StatusOr<int64_t> ParseMemorySize(const std::string& text);
+// MemAvailable from /proc/meminfo, or 0 when it cannot be read.
+int64_t AvailableMemoryBytes();
 
 // Options of `grove footslam run` that are not part of FootSlamConfig.
 struct RunOptions {
@@ -26,6 +34,7 @@ struct RunOptions {
   std::string out_dir;
   bool progress = true;     // progress on stderr
   double max_step_m = 5.0;  // longer steps in the input are rejected
+  int64_t memory_budget_bytes = 0;  // refuse runs predicted to need more; 0: the memory available
 };
 
 // Runs FootSLAM and writes every output; returns an exit code after printing any error to

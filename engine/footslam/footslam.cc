@@ -19,6 +19,7 @@
 #include "engine/footslam/htree_map.h"
 #include "engine/footslam/naive_map.h"
 #include "engine/particle_filter.h"
+#include "engine/persistent_trie.h"
 
 namespace grove {
 
@@ -370,7 +371,52 @@ std::unique_ptr<FootSlam::Impl> MakeHTreeEngine(const FootSlamConfig& config, in
                                                          nullptr);
 }
 
+// Bytes one particle's own copy of a path costs: the inner nodes above the bottom one plus the
+// bottom node, for a trie of this degree and leaf.
+template <int kLog2Degree, typename Leaf>
+int64_t PathBytes(int height) {
+  using Trie = PersistentTrie<Leaf, kLog2Degree>;
+  return (height - 1) * static_cast<int64_t>(Trie::kInnerNodeBytes) +
+         static_cast<int64_t>(Trie::kBottomNodeBytes);
+}
+
+template <int kLog2Degree>
+int64_t PathBytesFor(const FootSlamConfig& config, int height) {
+  return config.alphabet > 0 ? PathBytes<kLog2Degree, uint16_t>(height)
+                             : PathBytes<kLog2Degree, Htc>(height);
+}
+
 }  // namespace
+
+int64_t FootSlam::EstimatePeakBytes(const FootSlamConfig& config, int64_t steps) {
+  const int64_t n = config.particles;
+  const int64_t fixed = int64_t{64} << 20;
+  // Pose, errors, hexagon, weights, parents and the gather's temporaries.
+  const int64_t state = 160;
+  // Live poses stay near steps + C N log N (tests/stress/footslam_long_run_test.cc): with the
+  // 32-byte nodes of two generations, about 3 nodes per particle at 30,000 to 1,000,000.
+  const int64_t history = 3 * 32;
+  int64_t map;
+  if (config.map == FootSlamMapKind::kNaive) {
+    const int64_t grid = int64_t{config.grid_size} * config.grid_size;
+    const int64_t hexes = std::min(grid, steps + steps / 5 + 16);
+    // 32-byte slots at most half full, two generations alive while resampling.
+    map = hexes * 32 * 2 * 2;
+  } else {
+    StatusOr<HTreeLayout> layout = HTreeLayout::Create(config.grid_size, config.degree);
+    const int height = layout.ok() ? layout->height() : 1;
+    int64_t path = 0;
+    switch (config.degree) {
+      case 4: path = PathBytesFor<2>(config, height); break;
+      case 16: path = PathBytesFor<4>(config, height); break;
+      case 64: path = PathBytesFor<6>(config, height); break;
+      default: path = PathBytesFor<8>(config, height); break;
+    }
+    // Every particle owns the path it updated last, in two generations while resampling.
+    map = 2 * path;
+  }
+  return fixed + n * (state + history + map);
+}
 
 FootSlam::FootSlam(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 FootSlam::~FootSlam() = default;

@@ -235,5 +235,20 @@ TEST(FootSlamApiTest, TrajectoryHasTheStartAndOnePosePerStep) {
   EXPECT_EQ((*slam)->MeanTrajectory().size(), steps.size() + 1);
 }
 
+TEST(FootSlamEstimateTest, PredictionGrowsWithParticlesAndTheNaiveMapWithSteps) {
+  FootSlamConfig c;
+  int64_t base = FootSlam::EstimatePeakBytes(c, 1000);
+  c.particles *= 10;
+  EXPECT_GT(FootSlam::EstimatePeakBytes(c, 1000), 5 * base);
+  // The H-tree's prediction does not depend on the walk's length; the naive map's does.
+  EXPECT_EQ(FootSlam::EstimatePeakBytes(c, 1000), FootSlam::EstimatePeakBytes(c, 100000));
+  c.map = FootSlamMapKind::kNaive;
+  EXPECT_GT(FootSlam::EstimatePeakBytes(c, 100000), 50 * FootSlam::EstimatePeakBytes(c, 1000));
+  // The alphabet's 2-byte leaves make a smaller prediction than 24-byte counters.
+  FootSlamConfig alphabet, full;
+  full.alphabet = 0;
+  EXPECT_LT(FootSlam::EstimatePeakBytes(alphabet, 1000), FootSlam::EstimatePeakBytes(full, 1000));
+}
+
 }  // namespace
 }  // namespace grove

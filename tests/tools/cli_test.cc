@@ -161,6 +161,22 @@ TEST_F(CliTest, FailedRunKeepsEarlierOutputs) {
   EXPECT_EQ(Slurp(out / "map.csv"), before);
 }
 
+TEST_F(CliTest, RunOverTheMemoryBudgetIsRefusedBeforeItStarts) {
+  fs::path out = dir_ / "out";
+  Outcome o = Grove("footslam run --no-progress --memory-budget 20M --out " + out.string());
+  EXPECT_EQ(o.exit_code, 6) << o.err;
+  EXPECT_NE(o.err.find("the run is predicted to need"), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("more than the --memory-budget of 20.0 MiB"), std::string::npos) << o.err;
+  EXPECT_FALSE(fs::exists(out));
+  o = Grove("footslam run --no-progress --memory-budget 12X --out " + out.string());
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_NE(o.err.find("--memory-budget = \"12X\""), std::string::npos) << o.err;
+  o = Grove("footslam run --no-progress --particles 100 --memory-budget 1.5G --out " +
+            out.string());
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(Slurp(out / "summary.json").find("\"predicted_peak_bytes\""), std::string::npos);
+}
+
 TEST_F(CliTest, HelpOnEveryLevel) {
   for (const char* args : {"--help", "footslam --help", "footslam run --help",
                            "footslam simulate --help", "footslam evaluate --help",

@@ -49,6 +49,10 @@ int Main(int argc, char** argv) {
                                       "Resample when ESS/N is below this, in (0, 1]");
   run->add_option("--max-step", run_options.max_step_m,
                   "Reject input steps longer than this many metres (default 5)");
+  std::string memory_budget;
+  run->add_option("--memory-budget", memory_budget,
+                  "Refuse runs predicted to need more memory, e.g. 512M or 8G (default: the "
+                  "memory available)");
   run->add_flag("--print-config", print_config, "Print the effective configuration and exit");
   run->add_flag("--no-progress", no_progress, "No progress output");
 
@@ -149,6 +153,14 @@ int Main(int argc, char** argv) {
       return gt::kExitOk;
     }
     run_options.progress = !no_progress;
+    if (!memory_budget.empty()) {
+      grove::StatusOr<int64_t> bytes = gt::ParseMemorySize(memory_budget);
+      if (!bytes.ok()) {
+        std::fprintf(stderr, "grove: error: %s\n", bytes.status().message().c_str());
+        return gt::kExitUsage;
+      }
+      run_options.memory_budget_bytes = *bytes;
+    }
     return gt::RunFootSlamCommand(config, run_options);
   }
   if (*paper) return gt::PaperBenchCommand(paper_options);

@@ -169,6 +169,12 @@ class FootSlam {
  public:
   // Validates `config` and builds the engine; nothing is built when the config is invalid.
   static StatusOr<std::unique_ptr<FootSlam>> Create(const FootSlamConfig& config);
+
+  // A prediction of the peak memory, in bytes, of a run of `steps` steps: particle state, two
+  // generations of maps and path histories, and a fixed overhead. Calibrated on the runs in
+  // bench/results (within about 20 % there); the naive map assumes about 1.2 new hexagons per
+  // step. REQUIRES: config.Validate() is ok.
+  static int64_t EstimatePeakBytes(const FootSlamConfig& config, int64_t steps);
   virtual ~FootSlam();
 
   // Processes one odometry step (dx, dy in the odometry frame, metres) at time t_s.
