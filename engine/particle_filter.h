@@ -150,12 +150,15 @@ class ParticleFilter {
     double total = 0;
     for (double s : sums) total += s;
     const double log_total = max + std::log(total);
+    // The normalised weights are kept: resampling draws from them.
+    weights_.resize(n);
     std::vector<double> squares = workers_->MapBlocks<double>(
         n, kSumBlock, [&](size_t, size_t begin, size_t end) {
           double s = 0;
           for (size_t i = begin; i < end; ++i) {
             log_w_[i] -= log_total;
             double w = std::exp(log_w_[i]);
+            weights_[i] = w;
             s += w * w;
           }
           return s;
@@ -176,10 +179,6 @@ class ParticleFilter {
     using Clock = std::chrono::steady_clock;
     auto t0 = Clock::now();
     const size_t n = log_w_.size();
-    weights_.resize(n);
-    workers_->ParallelFor(n, kSumBlock, [&](int, size_t begin, size_t end) {
-      for (size_t i = begin; i < end; ++i) weights_[i] = std::exp(log_w_[i]);
-    });
     grove::Resample(options_.resampling, weights_, options_.seed, step_, *workers_, parents_);
     model_->Gather(parents_, *workers_);
     // Systematic and residual resampling always copy it (its weight is at least 1/N); the
@@ -201,7 +200,7 @@ class ParticleFilter {
   WorkerPool* workers_;
   FilterOptions options_;
   std::vector<double> log_w_;
-  std::vector<double> weights_;
+  std::vector<double> weights_;  // exp(log_w_) after the last normalisation
   std::vector<uint32_t> parents_;
   size_t heaviest_ = 0;
   uint64_t step_ = 0;
