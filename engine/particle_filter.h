@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "concurrency/worker_pool.h"
+#include "engine/checkpoint_io.h"
 #include "engine/resampler.h"
 #include "grove/status.h"
 
@@ -91,6 +92,56 @@ class ParticleFilter {
       Resample(input);
     }
     ++step_;
+    return Status::Ok();
+  }
+
+  // The filter's state between steps: step and resampling counts, ESS statistics, phase
+  // times, the heaviest particle and the normalised log weights. The random streams are keyed
+  // by (seed, step, particle), so the step is their whole position.
+  void Save(ByteWriter* w) const {
+    w->Put<uint64_t>(step_);
+    w->Put<uint64_t>(resamplings_);
+    w->Put<uint64_t>(heaviest_);
+    w->Put<double>(ess_);
+    w->Put<double>(ess_sum_);
+    w->Put(times_);
+    w->Put<uint64_t>(log_w_.size());
+    w->PutBytes(log_w_.data(), log_w_.size() * sizeof(double));
+  }
+
+  Status Load(ByteReader* r) {
+    const size_t n = log_w_.size();
+    uint64_t step = 0, resamplings = 0, heaviest = 0, count = 0;
+    double ess = 0, ess_sum = 0;
+    PhaseTimes times;
+    GROVE_RETURN_IF_ERROR(r->Get("step", &step));
+    GROVE_RETURN_IF_ERROR(r->Get("resamplings", &resamplings));
+    GROVE_RETURN_IF_ERROR(r->Get("heaviest particle", &heaviest));
+    GROVE_RETURN_IF_ERROR(r->Get("ESS", &ess));
+    GROVE_RETURN_IF_ERROR(r->Get("ESS sum", &ess_sum));
+    GROVE_RETURN_IF_ERROR(r->Get("phase times", &times));
+    GROVE_RETURN_IF_ERROR(r->Get("weight count", &count));
+    if (resamplings > step) return r->Error("resamplings", "more than the steps");
+    if (heaviest >= n) return r->Error("heaviest particle", "not a particle");
+    if (!(ess >= 0 && ess <= static_cast<double>(n) * (1 + 1e-9)) || !std::isfinite(ess_sum)) {
+      return r->Error("ESS", "outside [0, particles]");
+    }
+    if (count != n) return r->Error("weight count", "does not match the particle count");
+    std::vector<double> log_w(n);
+    GROVE_RETURN_IF_ERROR(r->GetBytes("log weights", log_w.data(), n * sizeof(double)));
+    bool any_finite = false;
+    for (double v : log_w) {
+      if (std::isnan(v) || v > 1e-9) return r->Error("log weights", "a weight is NaN or above 1");
+      any_finite = any_finite || std::isfinite(v);
+    }
+    if (!any_finite) return r->Error("log weights", "every weight is zero");
+    step_ = step;
+    resamplings_ = resamplings;
+    heaviest_ = heaviest;
+    ess_ = ess;
+    ess_sum_ = ess_sum;
+    times_ = times;
+    log_w_.swap(log_w);
     return Status::Ok();
   }
 

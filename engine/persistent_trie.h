@@ -34,6 +34,7 @@
 #include "alloc/check.h"
 #include "alloc/node_pool.h"
 #include "concurrency/ref_count.h"
+#include "engine/checkpoint_io.h"
 
 namespace grove {
 
@@ -274,6 +275,171 @@ class PersistentTrie {
     return count;
   }
 
+  // Writes the distinct nodes reachable from `roots`, each once and children before parents,
+  // then the roots as node indices: Load() rebuilds the same sharing, so the size follows the
+  // distinct nodes, not roots x map size. Record of a node: u8 level, the presence words, then
+  // a u32 child index (inner) or the leaf bytes (bottom) for each present digit.
+  void Save(std::span<Node* const> roots, ByteWriter* w) const {
+    std::unordered_map<const Node*, uint32_t> index;
+    w->Put<uint32_t>(static_cast<uint32_t>(height_));
+    const size_t count_at = w->Reserve<uint64_t>();
+    struct Frame {
+      const Node* node;
+      int level;
+      int next;  // the next child digit to visit
+    };
+    std::vector<Frame> stack;
+    for (const Node* root : roots) {
+      if (root == nullptr || index.count(root) != 0) continue;
+      stack.push_back({root, 0, 0});
+      while (!stack.empty()) {
+        Frame& f = stack.back();
+        if (f.level < height_ - 1) {
+          const Inner* n = static_cast<const Inner*>(f.node);
+          while (f.next < kDegree &&
+                 (n->child[f.next] == nullptr || index.count(n->child[f.next]) != 0)) {
+            ++f.next;
+          }
+          if (f.next < kDegree) {
+            stack.push_back({n->child[f.next], f.level + 1, 0});  // invalidates f
+            continue;
+          }
+        }
+        Frame done = f;
+        stack.pop_back();
+        index.emplace(done.node, static_cast<uint32_t>(index.size()));
+        w->Put<uint8_t>(static_cast<uint8_t>(done.level));
+        if (done.level < height_ - 1) {
+          const Inner* n = static_cast<const Inner*>(done.node);
+          uint64_t present[kWords] = {};
+          for (int d = 0; d < kDegree; ++d) {
+            if (n->child[d] != nullptr) present[d >> 6] |= uint64_t{1} << (d & 63);
+          }
+          w->PutBytes(present, sizeof(present));
+          for (int d = 0; d < kDegree; ++d) {
+            if (n->child[d] != nullptr) w->Put<uint32_t>(index.at(n->child[d]));
+          }
+        } else {
+          const Bottom* b = static_cast<const Bottom*>(done.node);
+          w->PutBytes(b->present, sizeof(b->present));
+          for (int d = 0; d < kDegree; ++d) {
+            if (b->Has(d)) w->Put(b->leaf[d]);
+          }
+        }
+      }
+    }
+    w->Patch<uint64_t>(count_at, index.size());
+    w->Put<uint64_t>(roots.size());
+    for (const Node* root : roots) w->Put<uint32_t>(root == nullptr ? 0 : index.at(root) + 1);
+  }
+
+  // Rebuilds versions written by Save(): appends `root_count` roots to `roots`, each owning
+  // one reference. valid_leaf(const Leaf&) rejects leaves the caller's model cannot hold.
+  // Every structural rule is checked (levels, child indices before parents, every node
+  // referenced, presence bits within the degree); on error nothing stays allocated and
+  // `roots` is unchanged. Nodes come from `slot`'s pools.
+  template <typename V>
+  Status Load(ByteReader* r, size_t root_count, int slot, V&& valid_leaf,
+              std::vector<Node*>* roots) {
+    uint32_t height = 0;
+    GROVE_RETURN_IF_ERROR(r->Get("trie height", &height));
+    if (height != static_cast<uint32_t>(height_)) {
+      return r->Error("trie height", std::to_string(height) + " does not match the " +
+                                         std::to_string(height_) + " of this configuration");
+    }
+    uint64_t count = 0;
+    GROVE_RETURN_IF_ERROR(r->GetCount("trie node count", 1 + sizeof(uint64_t) * kWords, &count));
+    if (count >= UINT32_MAX) return r->Error("trie node count", "too large");
+    std::vector<Node*> nodes;
+    std::vector<uint8_t> levels;
+    std::vector<uint32_t> refs;
+    nodes.reserve(count);
+    levels.reserve(count);
+    refs.reserve(count);
+    auto fail = [&](Status s) {
+      for (size_t k = 0; k < nodes.size(); ++k) {
+        FreeNode(nodes[k], levels[k] == height_ - 1, slot);
+      }
+      return s;
+    };
+    for (uint64_t k = 0; k < count; ++k) {
+      uint8_t level = 0;
+      uint64_t present[kWords];
+      Status s = r->Get("trie node level", &level);
+      if (s.ok() && level >= height_) {
+        s = r->Error("trie node level", std::to_string(level) + " is not below the height " +
+                                            std::to_string(height_));
+      }
+      if (s.ok()) s = r->GetBytes("trie node presence", present, sizeof(present));
+      if (s.ok() && kDegree % 64 != 0 && (present[kWords - 1] >> (kDegree % 64)) != 0) {
+        s = r->Error("trie node presence", "a digit beyond the degree is marked present");
+      }
+      if (!s.ok()) return fail(s);
+      auto has = [&](int d) { return (present[d >> 6] >> (d & 63)) & 1; };
+      if (level < height_ - 1) {
+        Inner* n = NewInner(slot);
+        nodes.push_back(n);
+        levels.push_back(level);
+        refs.push_back(0);
+        for (int d = 0; d < kDegree; ++d) {
+          if (!has(d)) continue;
+          uint32_t c = 0;
+          s = r->Get("trie child index", &c);
+          if (s.ok() && (c >= k || levels[c] != level + 1)) {
+            s = r->Error("trie child index",
+                         std::to_string(c) + " is not an earlier node one level down");
+          }
+          if (!s.ok()) return fail(s);
+          n->child[d] = nodes[c];
+          ++refs[c];
+        }
+      } else {
+        Bottom* b = NewBottom(slot);
+        nodes.push_back(b);
+        levels.push_back(level);
+        refs.push_back(0);
+        std::memcpy(b->present, present, sizeof(present));
+        for (int d = 0; d < kDegree; ++d) {
+          if (!has(d)) continue;
+          s = r->GetBytes("trie leaf", &b->leaf[d], sizeof(Leaf));
+          if (s.ok() && !valid_leaf(b->leaf[d])) s = r->Error("trie leaf", "impossible value");
+          if (!s.ok()) return fail(s);
+        }
+      }
+    }
+    uint64_t saved_roots = 0;
+    Status s = r->Get("trie root count", &saved_roots);
+    if (s.ok() && saved_roots != root_count) {
+      s = r->Error("trie root count", std::to_string(saved_roots) + " roots, expected " +
+                                          std::to_string(root_count));
+    }
+    if (!s.ok()) return fail(s);
+    std::vector<Node*> loaded(root_count, nullptr);
+    for (size_t i = 0; i < root_count; ++i) {
+      uint32_t id = 0;
+      s = r->Get("trie root", &id);
+      if (s.ok() && id != 0 && (id > count || levels[id - 1] != 0)) {
+        s = r->Error("trie root", std::to_string(id) + " is not a top-level node");
+      }
+      if (!s.ok()) return fail(s);
+      if (id != 0) {
+        loaded[i] = nodes[id - 1];
+        ++refs[id - 1];
+      }
+    }
+    for (size_t k = 0; k < nodes.size(); ++k) {
+      if (refs[k] == 0) {
+        return fail(r->Error("trie nodes", "node " + std::to_string(k) + " is referenced by nothing"));
+      }
+    }
+    // Each node starts with one reference; add the others (invariant 1).
+    for (size_t k = 0; k < nodes.size(); ++k) {
+      for (uint32_t j = 1; j < refs[k]; ++j) nodes[k]->rc.Acquire();
+    }
+    roots->insert(roots->end(), loaded.begin(), loaded.end());
+    return Status::Ok();
+  }
+
   PoolStats inner_stats() const { return inner_pool_.Stats(); }
   PoolStats bottom_stats() const { return bottom_pool_.Stats(); }
   int64_t live_nodes() const { return inner_stats().live_nodes + bottom_stats().live_nodes; }
@@ -286,8 +452,9 @@ class PersistentTrie {
   struct Inner : Node {
     Node* child[kDegree];
   };
+  static constexpr int kWords = (kDegree + 63) / 64;  // presence words of a node
   struct Bottom : Node {
-    uint64_t present[(kDegree + 63) / 64];
+    uint64_t present[kWords];
     Leaf leaf[kDegree];
     bool Has(int d) const { return (present[d >> 6] >> (d & 63)) & 1; }
   };

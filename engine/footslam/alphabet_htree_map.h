@@ -127,6 +127,29 @@ class AlphabetHTreeMap {
     full_.template VisitDistinct<uint64_t>(full_roots_, weights, f);
   }
 
+  void Save(ByteWriter* w) const {
+    symbols_.Save(symbol_roots_, w);
+    full_.Save(full_roots_, w);
+  }
+
+  Status Load(ByteReader* r, uint64_t /*key_limit: every trie key is a grid hexagon*/) {
+    const int symbol_count = alphabet_->symbol_count();
+    std::vector<typename SymbolTrie::Root> symbols;
+    std::vector<typename FullTrie::Root> full;
+    GROVE_RETURN_IF_ERROR(symbols_.Load(
+        r, symbol_roots_.size(), 0,
+        [&](uint16_t s) { return s == kEscaped || s < symbol_count; }, &symbols));
+    if (Status s = full_.Load(r, full_roots_.size(), 0, &PlausibleHtc, &full); !s.ok()) {
+      for (auto* root : symbols) symbols_.Release(root, 0);
+      return s;
+    }
+    for (auto* root : symbol_roots_) symbols_.Release(root, 0);
+    for (auto* root : full_roots_) full_.Release(root, 0);
+    symbol_roots_.swap(symbols);
+    full_roots_.swap(full);
+    return Status::Ok();
+  }
+
   MemoryUse memory() const {
     MemoryUse m;
     AddPoolStats(symbols_.inner_stats(), &m);

@@ -4,13 +4,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <thread>
 #include <unordered_map>
 
+#include <zlib.h>
+
 #include <oneapi/tbb/info.h>
 
 #include "concurrency/worker_pool.h"
+#include "engine/checkpoint_io.h"
 #include "engine/footslam/alphabet.h"
 #include "engine/footslam/alphabet_htree_map.h"
 #include "engine/footslam/footslam_model.h"
@@ -48,6 +52,73 @@ Status CheckSigma(const char* field, double v) {
 // Weights in fixed point (2^-52 units) make the cumulative map an exact integer sum, the same
 // whichever nodes happen to be shared, so it is bit-identical at any thread count.
 constexpr double kWeightScale = 4503599627370496.0;  // 2^52
+
+// The configuration fields that change results or the checkpoint's layout, in a fixed order:
+// a checkpoint stores them and resumes only under equal values. Threads and batch change
+// neither and may differ.
+struct ConfigField {
+  const char* name;
+  bool integer;
+  uint64_t bits;  // the int64 value, or the double's bits
+};
+
+std::vector<ConfigField> CheckpointFields(const FootSlamConfig& c) {
+  auto i = [](const char* name, int64_t v) { return ConfigField{name, true, static_cast<uint64_t>(v)}; };
+  auto d = [](const char* name, double v) {
+    uint64_t bits;
+    std::memcpy(&bits, &v, sizeof(bits));
+    return ConfigField{name, false, bits};
+  };
+  return {i("particles", c.particles),
+          i("seed", static_cast<int64_t>(c.seed)),
+          d("hex_radius_m", c.hex_radius_m),
+          d("prior_count", c.prior_count),
+          i("weighting", static_cast<int64_t>(c.weighting)),
+          d("start_x_m", c.start_x_m),
+          d("start_y_m", c.start_y_m),
+          d("start_heading_rad", c.start_heading_rad),
+          d("initial_heading_sigma_rad", c.initial_heading_sigma_rad),
+          d("heading_drift_sigma_rad", c.heading_drift_sigma_rad),
+          d("heading_sigma_rad", c.heading_sigma_rad),
+          d("scale_sigma", c.scale_sigma),
+          d("scale_drift_sigma", c.scale_drift_sigma),
+          d("step_length_sigma_m", c.step_length_sigma_m),
+          d("position_sigma_m", c.position_sigma_m),
+          i("resampling", static_cast<int64_t>(c.resampling)),
+          d("resample_threshold", c.resample_threshold),
+          i("map", static_cast<int64_t>(c.map)),
+          i("degree", c.degree),
+          i("grid_size", c.grid_size),
+          i("alphabet", c.alphabet)};
+}
+
+std::string FieldValue(bool integer, uint64_t bits) {
+  if (integer) return std::to_string(static_cast<int64_t>(bits));
+  double v;
+  std::memcpy(&v, &bits, sizeof(v));
+  return fmt::format("{}", v);
+}
+
+// The block of fields as written, and its CRC-32: the configuration hash.
+std::string FieldBlock(const std::vector<ConfigField>& fields) {
+  ByteWriter w;
+  w.Put<uint64_t>(fields.size());
+  for (const ConfigField& f : fields) {
+    w.PutString(f.name);
+    w.Put<uint8_t>(f.integer ? 1 : 0);
+    w.Put<uint64_t>(f.bits);
+  }
+  return w.Take();
+}
+
+uint32_t ConfigHash(const std::string& block) {
+  return static_cast<uint32_t>(
+      crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(block.data()),
+            static_cast<uInt>(block.size())));
+}
+
+constexpr char kCheckpointKind[] = "grove footslam";
+constexpr uint32_t kEndMarker = 0x21444E45;  // "END!"
 
 }  // namespace
 
@@ -135,6 +206,9 @@ class FootSlam::Impl {
   virtual std::vector<HexCounts> CumulativeMap() const = 0;
   virtual std::vector<HexCounts> HeaviestMap() const = 0;
   virtual FootSlamSummary Summary() const = 0;
+  virtual StatusOr<std::string> Save(std::string_view user_data) const = 0;
+  // Replaces the state of a freshly created engine with the checkpoint body read by `r`.
+  virtual Status Load(ByteReader* r, std::string* user_data) = 0;
 };
 
 namespace {
@@ -294,6 +368,85 @@ class Engine final : public FootSlam::Impl {
     return s;
   }
 
+  StatusOr<std::string> Save(std::string_view user_data) const override {
+    if (failed_) {
+      return FailedPreconditionError("the engine stopped at an error: there is no state to save");
+    }
+    ByteWriter w;
+    w.PutString(kCheckpointKind);
+    std::string fields = FieldBlock(CheckpointFields(config_));
+    w.Put<uint32_t>(ConfigHash(fields));
+    w.PutBytes(fields.data(), fields.size());
+    w.PutString(user_data);
+    w.Put<uint64_t>(times_.size());
+    w.PutBytes(times_.data(), times_.size() * sizeof(double));
+    w.Put<uint64_t>(mean_.size());
+    for (const StampedPose& p : mean_) {
+      w.Put(p.t_s);
+      w.Put(p.pose.x_m);
+      w.Put(p.pose.y_m);
+      w.Put(p.pose.heading_rad);
+    }
+    w.Put<double>(bookkeeping_s_);
+    w.Put<uint8_t>(start_time_unset_ ? 1 : 0);
+    filter_.Save(&w);
+    model_.Save(&w);
+    map_.Save(&w);
+    w.Put<uint32_t>(kEndMarker);
+    return w.Take();
+  }
+
+  Status Load(ByteReader* r, std::string* user_data) override {
+    std::string kind;
+    GROVE_RETURN_IF_ERROR(r->GetString("kind", &kind));
+    if (kind != kCheckpointKind) {
+      return r->Error("kind", "\"" + kind.substr(0, 40) + "\" is not a FootSLAM checkpoint");
+    }
+    GROVE_RETURN_IF_ERROR(LoadConfig(r));
+    std::string user;
+    GROVE_RETURN_IF_ERROR(r->GetString("user data", &user));
+    uint64_t count = 0;
+    GROVE_RETURN_IF_ERROR(r->GetCount("time count", sizeof(double), &count));
+    std::vector<double> times(count);
+    GROVE_RETURN_IF_ERROR(r->GetBytes("times", times.data(), count * sizeof(double)));
+    GROVE_RETURN_IF_ERROR(r->GetCount("mean pose count", 4 * sizeof(double), &count));
+    std::vector<StampedPose> mean(count);
+    for (StampedPose& p : mean) {
+      double v[4];
+      GROVE_RETURN_IF_ERROR(r->GetBytes("mean pose", v, sizeof(v)));
+      p = {v[0], Pose2{v[1], v[2], v[3]}};
+    }
+    double bookkeeping_s = 0;
+    uint8_t unset = 0;
+    GROVE_RETURN_IF_ERROR(r->Get("bookkeeping time", &bookkeeping_s));
+    GROVE_RETURN_IF_ERROR(r->Get("start time unset", &unset));
+    GROVE_RETURN_IF_ERROR(filter_.Load(r));
+    const uint64_t steps = filter_.steps();
+    if (times.size() != steps + 1 || mean.size() != steps + 1) {
+      return r->Error("times", "not one per pose (" + std::to_string(steps + 1) + ")");
+    }
+    for (size_t k = 0; k < times.size(); ++k) {
+      bool ordered = k == 0 || (k == 1 ? times[1] >= times[0] : times[k] > times[k - 1]);
+      if (!std::isfinite(times[k]) || !ordered || mean[k].t_s != times[k]) {
+        return r->Error("times", "not finite and increasing");
+      }
+    }
+    if (unset > 1 || (unset == 1 && steps > 0)) return r->Error("start time unset", "invalid");
+    GROVE_RETURN_IF_ERROR(model_.Load(r, steps));
+    GROVE_RETURN_IF_ERROR(map_.Load(r, layout_.key_count()));
+    uint32_t end = 0;
+    GROVE_RETURN_IF_ERROR(r->Get("end marker", &end));
+    if (end != kEndMarker || !r->at_end()) {
+      return r->Error("end marker", "missing, or bytes follow it");
+    }
+    times_.swap(times);
+    mean_.swap(mean);
+    bookkeeping_s_ = bookkeeping_s;
+    start_time_unset_ = unset == 1;
+    if (user_data != nullptr) user_data->swap(user);
+    return Status::Ok();
+  }
+
  private:
   static FilterOptions FilterOptionsOf(const FootSlamConfig& c) {
     FilterOptions o;
@@ -302,6 +455,41 @@ class Engine final : public FootSlam::Impl {
     o.batch = static_cast<size_t>(c.batch);
     o.seed = c.seed;
     return o;
+  }
+
+  // Reads the stored configuration fields and compares them with this engine's.
+  Status LoadConfig(ByteReader* r) {
+    uint32_t hash = 0;
+    uint64_t count = 0;
+    GROVE_RETURN_IF_ERROR(r->Get("configuration hash", &hash));
+    GROVE_RETURN_IF_ERROR(r->GetCount("configuration field count", 17, &count));
+    std::vector<ConfigField> mine = CheckpointFields(config_);
+    if (count != mine.size()) {
+      return r->Error("configuration field count",
+                      std::to_string(count) + ", expected " + std::to_string(mine.size()));
+    }
+    for (const ConfigField& f : mine) {
+      std::string name;
+      uint8_t integer = 0;
+      uint64_t bits = 0;
+      GROVE_RETURN_IF_ERROR(r->GetString("configuration field name", &name));
+      GROVE_RETURN_IF_ERROR(r->Get("configuration field type", &integer));
+      GROVE_RETURN_IF_ERROR(r->Get("configuration field value", &bits));
+      if (name != f.name || integer != (f.integer ? 1 : 0)) {
+        return r->Error("configuration field name", "\"" + name.substr(0, 40) + "\", expected \"" +
+                                                        f.name + "\"");
+      }
+      if (bits != f.bits) {
+        return FailedPreconditionError(fmt::format(
+            "the checkpoint was made with {} = {}, this configuration has {} = {}: resume with "
+            "the configuration of the interrupted run (only threads and batch may change)",
+            f.name, FieldValue(f.integer, bits), f.name, FieldValue(f.integer, f.bits)));
+      }
+    }
+    if (hash != ConfigHash(FieldBlock(mine))) {
+      return r->Error("configuration hash", "does not match the fields");
+    }
+    return Status::Ok();
   }
 
   HexCounts HexOf(uint64_t key) const {
@@ -456,5 +644,31 @@ const std::vector<StampedPose>& FootSlam::MeanTrajectory() const {
 std::vector<HexCounts> FootSlam::CumulativeMap() const { return impl_->CumulativeMap(); }
 std::vector<HexCounts> FootSlam::HeaviestMap() const { return impl_->HeaviestMap(); }
 FootSlamSummary FootSlam::Summary() const { return impl_->Summary(); }
+
+StatusOr<std::string> FootSlam::Checkpoint(std::string_view user_data) const {
+  StatusOr<std::string> body = impl_->Save(user_data);
+  if (!body.ok()) return body.status();
+  return SealCheckpoint(*body);
+}
+
+StatusOr<std::unique_ptr<FootSlam>> FootSlam::Resume(const FootSlamConfig& config,
+                                                     std::string_view checkpoint,
+                                                     const std::string& name,
+                                                     std::string* user_data) {
+  GROVE_RETURN_IF_ERROR(config.Validate());
+  StatusOr<std::string_view> body = UnsealCheckpoint(checkpoint, name);
+  if (!body.ok()) return body.status();
+  StatusOr<std::unique_ptr<FootSlam>> slam = Create(config);
+  if (!slam.ok()) return slam.status();
+  ByteReader reader(*body, name);
+  Status s = (*slam)->impl_->Load(&reader, user_data);
+  if (!s.ok()) {
+    if (s.code() == StatusCode::kFailedPrecondition) {
+      return FailedPreconditionError(name + ": " + s.message());
+    }
+    return s;
+  }
+  return slam;
+}
 
 }  // namespace grove

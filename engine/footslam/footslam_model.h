@@ -10,6 +10,7 @@
 #ifndef GROVE_ENGINE_FOOTSLAM_FOOTSLAM_MODEL_H_
 #define GROVE_ENGINE_FOOTSLAM_FOOTSLAM_MODEL_H_
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -19,6 +20,7 @@
 
 #include "concurrency/random_stream.h"
 #include "concurrency/worker_pool.h"
+#include "engine/checkpoint_io.h"
 #include "engine/footslam/hex_grid.h"
 #include "engine/footslam/htc.h"
 #include "engine/footslam/htree_layout.h"
@@ -178,6 +180,59 @@ class FootSlamModel {
   int64_t TakeFirstOutside() {
     int64_t i = first_outside_.exchange(std::numeric_limits<int64_t>::max());
     return i == std::numeric_limits<int64_t>::max() ? -1 : i;
+  }
+
+  // The particles' state after a step: pose, error states, hexagon and path history.
+  void Save(ByteWriter* w) const {
+    w->Put<uint64_t>(n_);
+    for (const std::vector<double>* v : {&x_, &y_, &heading_, &heading_error_, &scale_}) {
+      w->PutBytes(v->data(), n_ * sizeof(double));
+    }
+    w->PutBytes(hex_.data(), n_ * sizeof(Hex));
+    PoseHistory::Save(history_roots_, w);
+  }
+
+  // Replaces the state of a new model with a saved one taken after step `steps`.
+  Status Load(ByteReader* r, uint64_t steps) {
+    uint64_t n = 0;
+    GROVE_RETURN_IF_ERROR(r->Get("particle count", &n));
+    if (n != n_) {
+      return r->Error("particle count", std::to_string(n) + " does not match the configuration's " +
+                                            std::to_string(n_));
+    }
+    const char* names[] = {"x", "y", "heading", "heading error", "scale"};
+    std::vector<double>* vectors[] = {&x_, &y_, &heading_, &heading_error_, &scale_};
+    for (int k = 0; k < 5; ++k) {
+      GROVE_RETURN_IF_ERROR(r->GetBytes(names[k], vectors[k]->data(), n_ * sizeof(double)));
+      for (double v : *vectors[k]) {
+        if (!std::isfinite(v)) return r->Error(names[k], "a value is not finite");
+      }
+    }
+    GROVE_RETURN_IF_ERROR(r->GetBytes("hexagon", hex_.data(), n_ * sizeof(Hex)));
+    for (size_t i = 0; i < n_; ++i) {
+      // The hexagon is where the particle stands (or a neighbour, for a point on an edge), on
+      // the grid.
+      Hex at = grid_->HexAt(x_[i], y_[i]);
+      int64_t dq = int64_t{hex_[i].q} - at.q, dr = int64_t{hex_[i].r} - at.r;
+      uint64_t key;
+      if (std::max({std::abs(dq), std::abs(dr), std::abs(dq + dr)}) > 1 || !KeyOf(hex_[i], &key)) {
+        return r->Error("hexagon", "particle " + std::to_string(i) +
+                                       " is not on the grid or not in the hexagon of its position");
+      }
+    }
+    if (steps >= UINT32_MAX) return r->Error("step", "too many steps");
+    std::vector<PoseHistory::Node*> heads;
+    GROVE_RETURN_IF_ERROR(history_.Load(r, n_, static_cast<uint32_t>(steps), 0, &heads));
+    for (size_t i = 0; i < n_; ++i) {
+      if (heads[i] == nullptr || heads[i]->step != steps) {
+        for (auto* h : heads) history_.Release(h, 0);
+        return r->Error("path head", "particle " + std::to_string(i) +
+                                         "'s path does not end at the checkpoint's step");
+      }
+    }
+    for (auto* h : history_roots_) history_.Release(h, 0);
+    history_roots_.swap(heads);
+    return Status::Ok();
   }
 
   double x(size_t i) const { return x_[i]; }

@@ -12,6 +12,8 @@
 //       f(key, const Htc&, uint64_t weight) once per (distinct node, hexagon); summing
 //       weight * counts per key gives sum_i w_i C_i
 //   MemoryUse memory() const;
+//   void Save(ByteWriter*) const;                      // every particle's map, sharing kept
+//   Status Load(ByteReader*, uint64_t key_limit);      // replaces the maps of a new engine
 #ifndef GROVE_ENGINE_FOOTSLAM_HTC_H_
 #define GROVE_ENGINE_FOOTSLAM_HTC_H_
 
@@ -26,6 +28,13 @@ struct Htc {
   uint32_t c[6];
   uint32_t Total() const { return c[0] + c[1] + c[2] + c[3] + c[4] + c[5]; }
 };
+
+// A checkpoint's counters must be ones a run can reach: their total fits in 31 bits.
+inline bool PlausibleHtc(const Htc& h) {
+  uint64_t total = 0;
+  for (uint32_t c : h.c) total += c;
+  return total <= 0x7FFFFFFF;
+}
 
 struct EdgeCounts {
   uint32_t edge;   // C_h^e before the crossing

@@ -35,6 +35,8 @@ class HTreeLayout {
   int log2_degree() const { return 2 * side_bits_; }
   // Levels from the root to the leaves: log_{s_x} N.
   int height() const { return height_; }
+  // Number of keys, N * N: every key below it is a hexagon of the grid.
+  uint64_t key_count() const { return uint64_t{static_cast<uint32_t>(grid_size_)} * grid_size_; }
 
   // The cell of h; false if h is outside the grid.
   bool CellOf(Hex h, uint32_t* col, uint32_t* row) const {

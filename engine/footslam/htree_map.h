@@ -62,6 +62,16 @@ class HTreeMap {
     trie_.template VisitDistinct<uint64_t>(roots_, weights, f);
   }
 
+  void Save(ByteWriter* w) const { trie_.Save(roots_, w); }
+
+  Status Load(ByteReader* r, uint64_t /*key_limit: every trie key is a grid hexagon*/) {
+    std::vector<typename Trie::Root> loaded;
+    GROVE_RETURN_IF_ERROR(trie_.Load(r, roots_.size(), 0, &PlausibleHtc, &loaded));
+    for (auto* root : roots_) trie_.Release(root, 0);
+    roots_.swap(loaded);
+    return Status::Ok();
+  }
+
   MemoryUse memory() const {
     MemoryUse m;
     AddPoolStats(trie_.inner_stats(), &m);

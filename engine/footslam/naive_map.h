@@ -13,6 +13,7 @@
 
 #include "concurrency/worker_pool.h"
 #include "engine/footslam/alphabet.h"
+#include "engine/checkpoint_io.h"
 #include "engine/footslam/htc.h"
 
 namespace grove::footslam {
@@ -32,6 +33,14 @@ class HexTable {
       }
       if (slots_[i].tag == key + 1) return slots_[i].h;
     }
+  }
+  // Adds a hexagon that is not there yet; false when `key` is present already.
+  bool Insert(uint64_t key, const Htc& h) {
+    size_t before = size_;
+    Htc& slot = FindOrInsert(key);
+    if (size_ == before) return false;
+    slot = h;
+    return true;
   }
   template <typename F>
   void ForEach(F&& f) const {
@@ -114,6 +123,38 @@ class NaiveMap {
     for (size_t i = 0; i < tables_.size(); ++i) {
       tables_[i].ForEach([&](uint64_t key, const Htc& h) { f(key, h, weights[i]); });
     }
+  }
+
+  // Each particle's table whole: u64 hexagon count, then (u64 key, counters) per hexagon.
+  void Save(ByteWriter* w) const {
+    for (const HexTable& t : tables_) {
+      w->Put<uint64_t>(t.size());
+      t.ForEach([&](uint64_t key, const Htc& h) {
+        w->Put(key);
+        w->Put(h);
+      });
+    }
+  }
+
+  Status Load(ByteReader* r, uint64_t key_limit) {
+    std::vector<HexTable> loaded(tables_.size());
+    for (HexTable& t : loaded) {
+      uint64_t count = 0;
+      GROVE_RETURN_IF_ERROR(r->GetCount("hexagon count", sizeof(uint64_t) + sizeof(Htc), &count));
+      for (uint64_t k = 0; k < count; ++k) {
+        uint64_t key = 0;
+        Htc h;
+        GROVE_RETURN_IF_ERROR(r->Get("hexagon key", &key));
+        if (key_limit != 0 && key >= key_limit) {
+          return r->Error("hexagon key", std::to_string(key) + " is outside the grid");
+        }
+        GROVE_RETURN_IF_ERROR(r->Get("hexagon counters", &h));
+        if (!PlausibleHtc(h)) return r->Error("hexagon counters", "impossible value");
+        if (!t.Insert(key, h)) return r->Error("hexagon key", std::to_string(key) + " repeated");
+      }
+    }
+    tables_.swap(loaded);
+    return Status::Ok();
   }
 
   MemoryUse memory() const {

@@ -9,12 +9,17 @@
 #ifndef GROVE_ENGINE_FOOTSLAM_POSE_HISTORY_H_
 #define GROVE_ENGINE_FOOTSLAM_POSE_HISTORY_H_
 
+#include <cmath>
 #include <cstdint>
 #include <new>
+#include <span>
+#include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "alloc/node_pool.h"
 #include "concurrency/ref_count.h"
+#include "engine/checkpoint_io.h"
 
 namespace grove::footslam {
 
@@ -60,6 +65,111 @@ class PoseHistory {
     std::vector<const Node*> path;
     for (; n != nullptr; n = n->parent) path.push_back(n);
     return std::vector<const Node*>(path.rbegin(), path.rend());
+  }
+
+  // Writes the distinct poses reachable from `heads`, each once and older poses first, then the
+  // heads as pose indices: the shared ancestry keeps its sharing. A pose record: u32 parent
+  // index + 1 (0: none), u32 step, f32 x, y, heading.
+  static void Save(std::span<Node* const> heads, ByteWriter* w) {
+    std::unordered_map<const Node*, uint32_t> index;
+    const size_t count_at = w->Reserve<uint64_t>();
+    std::vector<const Node*> chain;
+    for (const Node* head : heads) {
+      chain.clear();
+      for (const Node* n = head; n != nullptr && index.count(n) == 0; n = n->parent) {
+        chain.push_back(n);
+      }
+      for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
+        const Node* n = *it;
+        index.emplace(n, static_cast<uint32_t>(index.size()));
+        w->Put<uint32_t>(n->parent == nullptr ? 0 : index.at(n->parent) + 1);
+        w->Put<uint32_t>(n->step);
+        w->Put<float>(n->x_m);
+        w->Put<float>(n->y_m);
+        w->Put<float>(n->heading_rad);
+      }
+    }
+    w->Patch<uint64_t>(count_at, index.size());
+    w->Put<uint64_t>(heads.size());
+    for (const Node* head : heads) w->Put<uint32_t>(head == nullptr ? 0 : index.at(head) + 1);
+  }
+
+  // Rebuilds histories written by Save(): appends `head_count` heads to `heads`, each owning one
+  // reference. Checks that parents come first, steps increase along every path and stay at
+  // most `max_step`, coordinates are finite and every pose is reached. On error nothing stays
+  // allocated and `heads` is unchanged.
+  Status Load(ByteReader* r, size_t head_count, uint32_t max_step, int slot,
+              std::vector<Node*>* heads) {
+    constexpr size_t kRecordBytes = 20;
+    uint64_t count = 0;
+    GROVE_RETURN_IF_ERROR(r->GetCount("pose count", kRecordBytes, &count));
+    if (count >= UINT32_MAX) return r->Error("pose count", "too large");
+    std::vector<Node*> nodes;
+    std::vector<uint32_t> refs;
+    nodes.reserve(count);
+    refs.reserve(count);
+    auto fail = [&](Status s) {
+      for (Node* n : nodes) {
+        n->~Node();
+        pool_.Free(n, slot);
+      }
+      return s;
+    };
+    for (uint64_t k = 0; k < count; ++k) {
+      uint32_t parent = 0, step = 0;
+      float xyh[3];
+      Status s = r->Get("pose parent", &parent);
+      if (s.ok() && parent > k) {
+        s = r->Error("pose parent", std::to_string(parent) + " is not an earlier pose");
+      }
+      if (s.ok()) s = r->Get("pose step", &step);
+      if (s.ok() && (step > max_step || (parent != 0 && step <= nodes[parent - 1]->step))) {
+        s = r->Error("pose step", std::to_string(step) + " is past the last step or not after "
+                                                         "its parent's");
+      }
+      if (s.ok()) s = r->GetBytes("pose", xyh, sizeof(xyh));
+      if (s.ok() && !(std::isfinite(xyh[0]) && std::isfinite(xyh[1]) && std::isfinite(xyh[2]))) {
+        s = r->Error("pose", "a coordinate is not finite");
+      }
+      if (!s.ok()) return fail(s);
+      Node* n = new (pool_.Allocate(slot)) Node;
+      n->step = step;
+      n->x_m = xyh[0];
+      n->y_m = xyh[1];
+      n->heading_rad = xyh[2];
+      n->parent = parent == 0 ? nullptr : nodes[parent - 1];
+      if (parent != 0) ++refs[parent - 1];
+      nodes.push_back(n);
+      refs.push_back(0);
+    }
+    uint64_t saved_heads = 0;
+    Status s = r->Get("path count", &saved_heads);
+    if (s.ok() && saved_heads != head_count) {
+      s = r->Error("path count", std::to_string(saved_heads) + " paths, expected " +
+                                     std::to_string(head_count));
+    }
+    if (!s.ok()) return fail(s);
+    std::vector<Node*> loaded(head_count, nullptr);
+    for (size_t i = 0; i < head_count; ++i) {
+      uint32_t id = 0;
+      s = r->Get("path head", &id);
+      if (s.ok() && id > count) s = r->Error("path head", std::to_string(id) + " is not a pose");
+      if (!s.ok()) return fail(s);
+      if (id != 0) {
+        loaded[i] = nodes[id - 1];
+        ++refs[id - 1];
+      }
+    }
+    for (size_t k = 0; k < nodes.size(); ++k) {
+      if (refs[k] == 0) {
+        return fail(r->Error("poses", "pose " + std::to_string(k) + " is reached by no path"));
+      }
+    }
+    for (size_t k = 0; k < nodes.size(); ++k) {
+      for (uint32_t j = 1; j < refs[k]; ++j) nodes[k]->rc.Acquire();
+    }
+    heads->insert(heads->end(), loaded.begin(), loaded.end());
+    return Status::Ok();
   }
 
   PoolStats stats() const { return pool_.Stats(); }

@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "grove/resampling.h"
@@ -204,6 +205,27 @@ class FootSlam {
   // The heaviest particle's own map.
   std::vector<HexCounts> HeaviestMap() const;
   FootSlamSummary Summary() const;
+
+  // ---- Checkpoints ----
+
+  // The whole state after the last step as the bytes of a checkpoint file (format in the
+  // README): every particle's pose, error states, weight, map and path, with the sharing
+  // between particles kept, so the size follows the distinct map nodes. `user_data` is stored
+  // as is (the grove command keeps its input position there). FailedPrecondition after an
+  // error stopped the engine.
+  StatusOr<std::string> Checkpoint(std::string_view user_data = {}) const;
+
+  // An engine continuing from `checkpoint`, made by Checkpoint() under a configuration equal to
+  // `config` in every field but threads and batch. Stepping it gives, bit for bit, what the
+  // checkpointed engine would have given. `name` (a file name) starts every error message;
+  // `user_data` (may be null) receives the stored user data.
+  // Errors: InvalidArgument for an invalid `config`; DataLoss for a corrupt or truncated
+  // checkpoint (naming the byte offset and the field); FailedPrecondition for a format version
+  // this build cannot read or a configuration that differs (naming the field and both values).
+  static StatusOr<std::unique_ptr<FootSlam>> Resume(const FootSlamConfig& config,
+                                                    std::string_view checkpoint,
+                                                    const std::string& name,
+                                                    std::string* user_data);
 
   class Impl;
 

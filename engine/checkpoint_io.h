@@ -1,0 +1,138 @@
+// Checkpoint bytes: a little-endian writer and a bounds-checked reader, and the sealed file
+// format around them (magic, format version, length, CRC-32 of the body).
+//
+// File layout (every integer little-endian):
+//   offset 0   8 bytes  magic: 0x89 'G' 'R' 'O' 'V' 'E' '\r' '\n' (catches text-mode mangling)
+//   offset 8   u32      format version (kCheckpointFormatVersion)
+//   offset 12  u32      CRC-32 (zlib) of the body
+//   offset 16  u64      body length in bytes
+//   offset 24  body
+// The body is a sequence of fields written by the engine (engine/footslam/footslam.cc).
+//
+// A reader never reads past its end and never trusts a count: every error is a Status naming
+// the field and the byte offset, so a corrupt or hostile file cannot crash the process.
+#ifndef GROVE_ENGINE_CHECKPOINT_IO_H_
+#define GROVE_ENGINE_CHECKPOINT_IO_H_
+
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <string_view>
+#include <type_traits>
+
+#include "grove/status.h"
+
+namespace grove {
+
+static_assert(std::endian::native == std::endian::little,
+              "checkpoints are written in the host's byte order, which must be little-endian");
+
+inline constexpr uint32_t kCheckpointFormatVersion = 1;
+inline constexpr size_t kCheckpointHeaderBytes = 24;
+
+class ByteWriter {
+ public:
+  template <typename T>
+  void Put(const T& value) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    out_.append(reinterpret_cast<const char*>(&value), sizeof(T));
+  }
+  void PutBytes(const void* data, size_t size) {
+    out_.append(static_cast<const char*>(data), size);
+  }
+  void PutString(std::string_view s) {
+    Put<uint64_t>(s.size());
+    out_.append(s);
+  }
+  // Writes a placeholder for a value known later; Patch() fills it in.
+  template <typename T>
+  size_t Reserve() {
+    size_t at = out_.size();
+    out_.append(sizeof(T), '\0');
+    return at;
+  }
+  template <typename T>
+  void Patch(size_t at, const T& value) {
+    std::memcpy(out_.data() + at, &value, sizeof(T));
+  }
+  size_t size() const { return out_.size(); }
+  std::string Take() { return std::move(out_); }
+
+ private:
+  std::string out_;
+};
+
+class ByteReader {
+ public:
+  // `name` prefixes every error ("run.ckpt: ...").
+  ByteReader(std::string_view data, std::string name) : data_(data), name_(std::move(name)) {}
+
+  template <typename T>
+  Status Get(const char* field, T* value) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    GROVE_RETURN_IF_ERROR(Need(field, sizeof(T)));
+    std::memcpy(value, data_.data() + pos_, sizeof(T));
+    pos_ += sizeof(T);
+    return Status::Ok();
+  }
+  Status GetBytes(const char* field, void* out, size_t size) {
+    GROVE_RETURN_IF_ERROR(Need(field, size));
+    std::memcpy(out, data_.data() + pos_, size);
+    pos_ += size;
+    return Status::Ok();
+  }
+  Status GetString(const char* field, std::string* s) {
+    uint64_t size = 0;
+    GROVE_RETURN_IF_ERROR(Get(field, &size));
+    GROVE_RETURN_IF_ERROR(Need(field, size));
+    s->assign(data_.data() + pos_, size);
+    pos_ += size;
+    return Status::Ok();
+  }
+  // A count of records of at least `min_record_bytes` each: refused when the rest of the input
+  // cannot hold that many, so no count makes the caller allocate more than the file's size.
+  Status GetCount(const char* field, size_t min_record_bytes, uint64_t* count) {
+    GROVE_RETURN_IF_ERROR(Get(field, count));
+    if (min_record_bytes > 0 && *count > remaining() / min_record_bytes) {
+      return Error(field, "count " + std::to_string(*count) + " is larger than the " +
+                              std::to_string(remaining()) + " bytes left can hold");
+    }
+    return Status::Ok();
+  }
+
+  size_t offset() const { return pos_; }
+  size_t remaining() const { return data_.size() - pos_; }
+  bool at_end() const { return pos_ == data_.size(); }
+
+  // DataLoss: "<name>: byte <offset>: <field>: <what>".
+  Status Error(const char* field, const std::string& what) const {
+    return DataLossError(name_ + ": byte " + std::to_string(kCheckpointHeaderBytes + pos_) + ": " +
+                         field + ": " + what);
+  }
+
+ private:
+  Status Need(const char* field, uint64_t size) const {
+    if (size > remaining()) {
+      return Error(field, "needs " + std::to_string(size) + " bytes, " +
+                              std::to_string(remaining()) + " left (truncated or corrupt)");
+    }
+    return Status::Ok();
+  }
+
+  std::string_view data_;
+  std::string name_;
+  size_t pos_ = 0;
+};
+
+// The whole file: header and `body`.
+std::string SealCheckpoint(std::string_view body);
+
+// Checks the header and the checksum of a whole file and returns its body (a view into
+// `file`). DataLoss for a short file, a wrong magic, a length or checksum that does not match;
+// FailedPrecondition for a format version this build does not read. `name` starts each message.
+StatusOr<std::string_view> UnsealCheckpoint(std::string_view file, const std::string& name);
+
+}  // namespace grove
+
+#endif  // GROVE_ENGINE_CHECKPOINT_IO_H_
