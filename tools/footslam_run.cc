@@ -3,6 +3,13 @@
 #include <fmt/format.h>
 #include <sys/resource.h>
 #include <unistd.h>
+#include <zlib.h>
+
+#include <atomic>
+#include <cerrno>
+#include <csignal>
+#include <cstring>
+#include <sstream>
 
 #include <algorithm>
 #include <charconv>
@@ -119,6 +126,75 @@ MapImage MakeImage(const FootSlamConfig& config, const std::vector<HexCounts>& m
   return image;
 }
 
+// The signal that asked the run to stop (0: none). A signal handler may only store to a
+// lock-free atomic; the step loop reads it between steps.
+std::atomic<int> g_stop_signal{0};
+static_assert(std::atomic<int>::is_always_lock_free);
+
+extern "C" void OnStopSignal(int signal) { g_stop_signal.store(signal, std::memory_order_relaxed); }
+
+// Installs the stop handler for SIGINT and SIGTERM while alive; the first signal asks for a
+// stop at the next step boundary, a second one kills as usual (SA_RESETHAND).
+class StopSignals {
+ public:
+  StopSignals() {
+    g_stop_signal.store(0);
+    struct sigaction action = {};
+    action.sa_handler = OnStopSignal;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESETHAND;
+    sigaction(SIGINT, &action, &old_int_);
+    sigaction(SIGTERM, &action, &old_term_);
+  }
+  ~StopSignals() {
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+  int received() const { return g_stop_signal.load(std::memory_order_relaxed); }
+
+ private:
+  struct sigaction old_int_ = {};
+  struct sigaction old_term_ = {};
+};
+
+StatusOr<std::string> ReadWholeFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return NotFoundError(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  if (in.bad()) return IoError(fmt::format("{}: read failed", path));
+  return bytes.str();
+}
+
+// Where the run stands in its step file: kept in each checkpoint so a resumed run can check
+// that it reads the same steps.
+struct InputPosition {
+  std::string steps_name;
+  int64_t steps = 0;
+  uint32_t digest = 0;  // CRC-32 of the (t, dx, dy) of every step so far
+
+  void Add(const StepRecord& step) {
+    const double v[3] = {step.t_s, step.dx_m, step.dy_m};
+    digest = static_cast<uint32_t>(crc32(digest, reinterpret_cast<const Bytef*>(v), sizeof(v)));
+    ++steps;
+  }
+  std::string ToJson() const {
+    return nlohmann::json{{"steps_file", steps_name}, {"steps", steps}, {"digest", digest}}.dump();
+  }
+  static StatusOr<InputPosition> FromJson(const std::string& text, const std::string& name) {
+    InputPosition p;
+    try {
+      nlohmann::json j = nlohmann::json::parse(text);
+      p.steps_name = j.at("steps_file").get<std::string>();
+      p.steps = j.at("steps").get<int64_t>();
+      p.digest = j.at("digest").get<uint32_t>();
+    } catch (const nlohmann::json::exception& e) {
+      return DataLossError(fmt::format("{}: the input position is unreadable: {}", name, e.what()));
+    }
+    return p;
+  }
+};
+
 }  // namespace
 
 StatusOr<int64_t> ParseMemorySize(const std::string& text) {
@@ -189,9 +265,37 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
                             budget / 1048576.0));
   }
 
+  // A new engine, or one continuing from a checkpoint.
+  InputPosition resumed_at;
   StatusOr<std::unique_ptr<FootSlam>> created = FootSlam::Create(config);
+  if (!options.resume_path.empty()) {
+    StatusOr<std::string> bytes = ReadWholeFile(options.resume_path);
+    if (!bytes.ok()) return Fail(ExitCodeOf(bytes.status()), bytes.status().message());
+    std::string user;
+    created = FootSlam::Resume(config, *bytes, options.resume_path, &user);
+    if (!created.ok()) {
+      return Fail(created.status().code() == StatusCode::kFailedPrecondition ? kExitUsage
+                                                                             : ExitCodeOf(created.status()),
+                  created.status().message());
+    }
+    StatusOr<InputPosition> at = InputPosition::FromJson(user, options.resume_path);
+    if (!at.ok()) return Fail(kExitInput, at.status().message());
+    resumed_at = *at;
+  }
   if (!created.ok()) return Fail(kExitUsage, created.status().message());
   FootSlam& slam = **created;
+  const std::string checkpoint_path =
+      options.checkpoint_path.empty() ? options.out_dir + "/checkpoint.grove"
+                                      : options.checkpoint_path;
+  InputPosition position;
+  position.steps_name = steps_name;
+  auto write_checkpoint = [&]() -> Status {
+    StatusOr<std::string> bytes = slam.Checkpoint(position.ToJson());
+    if (!bytes.ok()) return bytes.status();
+    if (options.checkpoint_path.empty()) GROVE_RETURN_IF_ERROR(EnsureDirectory(options.out_dir));
+    return WriteFileAtomically(checkpoint_path, *bytes);
+  };
+  StopSignals signals;
 
   // The progress total: lines after the header (comments and blank lines make it an estimate).
   const bool terminal = isatty(fileno(stderr)) != 0;
@@ -199,12 +303,46 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
   if (reader->positions_form()) --total_steps;
   ProgressReporter progress(std::max<int64_t>(total_steps, 0), config.particles, stderr, terminal);
   std::vector<RenderPoint> odometry{{config.start_x_m, config.start_y_m}};
-  bool start_set = false;
+  bool start_set = slam.steps() > 0;
   StepRecord step;
   while (true) {
+    if (int signal = signals.received(); signal != 0) {
+      if (position.steps < resumed_at.steps) {  // still re-reading: nothing new to save
+        std::fprintf(stderr, "\ngrove: stopped by %s before any new step; %s is unchanged\n",
+                     strsignal(signal), options.resume_path.c_str());
+        return kExitSignalBase + signal;
+      }
+      Status s = write_checkpoint();
+      if (!s.ok()) return Fail(kExitOutput, s.message());
+      std::fprintf(stderr,
+                   "\ngrove: stopped by %s after step %lld: wrote %s; continue with the same "
+                   "command and --resume %s\n",
+                   strsignal(signal), static_cast<long long>(slam.steps()),
+                   checkpoint_path.c_str(), checkpoint_path.c_str());
+      return kExitSignalBase + signal;
+    }
     StatusOr<bool> more = reader->Next(&step);
     if (!more.ok()) return Fail(kExitInput, more.status().message());
     if (!*more) break;
+    // The steps a resumed run has taken already: re-read to check them and to redraw the
+    // odometry, not stepped again.
+    const bool replay = position.steps < resumed_at.steps;
+    position.Add(step);
+    if (replay || position.steps == resumed_at.steps) {
+      if (position.steps == resumed_at.steps && position.digest != resumed_at.digest) {
+        return Fail(kExitInput,
+                    fmt::format("{}: the first {} steps differ from those of {} (made from {}): "
+                                "resume with the same step file",
+                                steps_name, resumed_at.steps, options.resume_path,
+                                resumed_at.steps_name));
+      }
+    }
+    if (replay) {
+      double c = std::cos(config.start_heading_rad), sn = std::sin(config.start_heading_rad);
+      odometry.push_back({odometry.back().x_m + c * step.dx_m - sn * step.dy_m,
+                          odometry.back().y_m + sn * step.dx_m + c * step.dy_m});
+      continue;
+    }
     if (!start_set) {
       Status st = slam.SetStartTime(reader->start_time_s());
       if (!st.ok()) return Fail(kExitInput, fmt::format("{}: {}", steps_name, st.message()));
@@ -219,6 +357,16 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
     odometry.push_back({odometry.back().x_m + c * step.dx_m - sn * step.dy_m,
                         odometry.back().y_m + sn * step.dx_m + c * step.dy_m});
     if (options.progress) progress.Update(slam.steps());
+    if (options.checkpoint_every > 0 && slam.steps() % options.checkpoint_every == 0) {
+      Status cs = write_checkpoint();
+      if (!cs.ok()) return Fail(ExitCodeOf(cs), cs.message());
+    }
+  }
+  if (position.steps < resumed_at.steps) {
+    return Fail(kExitInput, fmt::format("{}: has {} steps, but {} was made after step {}: resume "
+                                        "with the same step file",
+                                        steps_name, position.steps, options.resume_path,
+                                        resumed_at.steps));
   }
   if (slam.steps() == 0) return Fail(kExitInput, fmt::format("{}: no steps", steps_name));
   if (options.progress) progress.Finish();

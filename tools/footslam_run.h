@@ -20,6 +20,9 @@ enum ExitCode : int {
   kExitRun = 4,         // the run itself failed: left the grid, filter degenerated
   kExitOutput = 5,      // outputs could not be written (earlier outputs are left intact)
   kExitMemory = 6,      // the predicted memory exceeds --memory-budget; nothing was run
+  // 128 + the signal (130 for SIGINT, 143 for SIGTERM): stopped at a step boundary by the
+  // signal after writing a checkpoint.
+  kExitSignalBase = 128,
 };
 
 // Parses a memory size: a number of bytes with an optional binary suffix K, M, G or T
@@ -35,6 +38,9 @@ struct RunOptions {
   bool progress = true;     // progress on stderr
   double max_step_m = 5.0;  // longer steps in the input are rejected
   int64_t memory_budget_bytes = 0;  // refuse runs predicted to need more; 0: the memory available
+  int64_t checkpoint_every = 0;     // steps between checkpoints; 0: only when stopped by a signal
+  std::string checkpoint_path;      // empty: out_dir + "/checkpoint.grove"
+  std::string resume_path;          // continue from this checkpoint
 };
 
 // Runs FootSLAM and writes every output; returns an exit code after printing any error to

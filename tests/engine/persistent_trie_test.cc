@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <map>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace grove {
@@ -181,6 +182,150 @@ TEST(PersistentTrieTest, DistinctVisitSumsEqualBruteForce) {
   EXPECT_LT(distinct * 10, total_nodes);  // sharing makes the visit much cheaper
   for (auto& r : roots) trie.Release(r, 0);
   EXPECT_EQ(trie.live_nodes(), 0);
+}
+
+// Versions that share nodes in every way Update() and Share() make them.
+template <typename Trie>
+std::vector<typename Trie::Root> SharedVersions(Trie* trie, int versions, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<typename Trie::Root> roots(versions, nullptr);
+  for (int op = 0; op < 400; ++op) {
+    int v = rng() % versions;
+    if (rng() % 5 == 0) {
+      typename Trie::Root copy = Trie::Share(roots[rng() % versions]);
+      trie->Release(roots[v], 0);
+      roots[v] = copy;
+    } else {
+      uint64_t key = rng() % std::min<uint64_t>(trie->key_count(), 300);
+      roots[v] = trie->Update(roots[v], key, 0, [&](Value& x, bool) { x.v = rng(); });
+    }
+  }
+  roots.push_back(nullptr);  // the empty version too
+  return roots;
+}
+
+template <typename Trie>
+std::map<uint64_t, uint64_t> Contents(const Trie& trie, typename Trie::Root root) {
+  std::map<uint64_t, uint64_t> m;
+  trie.ForEach(root, [&](uint64_t k, const Value& x) { m[k] = x.v; });
+  return m;
+}
+
+TEST(PersistentTrieSaveTest, LoadRebuildsEveryVersionWithItsSharing) {
+  using Trie = PersistentTrie<Value, 4>;
+  Trie trie(3, 1);
+  auto roots = SharedVersions(&trie, 10, 5);
+  ByteWriter w;
+  trie.Save(roots, &w);
+  std::string bytes = w.Take();
+
+  Trie copy(3, 1);
+  std::vector<Trie::Root> loaded;
+  ByteReader r(bytes, "t");
+  ASSERT_TRUE(copy.Load(&r, roots.size(), 0, [](const Value&) { return true; }, &loaded).ok());
+  EXPECT_TRUE(r.at_end());
+  ASSERT_EQ(loaded.size(), roots.size());
+  for (size_t v = 0; v < roots.size(); ++v) {
+    EXPECT_EQ(Contents(copy, loaded[v]), Contents(trie, roots[v])) << v;
+  }
+  // The same distinct nodes, and every count right: releasing all versions frees everything,
+  // and updating one loaded version leaves the others as they were.
+  EXPECT_EQ(copy.live_nodes(), trie.live_nodes());
+  auto before = Contents(copy, loaded[1]);
+  loaded[0] = copy.Update(loaded[0], 7, 0, [](Value& x, bool) { x.v = 42; });
+  EXPECT_EQ(Contents(copy, loaded[1]), before);
+  for (auto* root : loaded) copy.Release(root, 0);
+  EXPECT_EQ(copy.live_nodes(), 0);
+  for (auto* root : roots) trie.Release(root, 0);
+}
+
+TEST(PersistentTrieSaveTest, EveryTruncationAndBadStructureIsRefusedWithoutLeaks) {
+  using Trie = PersistentTrie<Value, 2>;
+  Trie trie(4, 1);
+  auto roots = SharedVersions(&trie, 4, 9);
+  ByteWriter w;
+  trie.Save(roots, &w);
+  const std::string good = w.Take();
+  auto load = [&](const std::string& bytes, auto valid) {
+    Trie copy(4, 1);
+    std::vector<Trie::Root> loaded;
+    ByteReader r(bytes, "t");
+    Status s = copy.Load(&r, roots.size(), 0, valid, &loaded);
+    if (s.ok()) {
+      for (auto* root : loaded) copy.Release(root, 0);
+    } else {
+      EXPECT_TRUE(loaded.empty());
+    }
+    EXPECT_EQ(copy.live_nodes(), 0) << "a failed load left nodes allocated";
+    return s;
+  };
+  auto any = [](const Value&) { return true; };
+  ASSERT_TRUE(load(good, any).ok());
+  for (size_t len = 0; len < good.size(); ++len) {
+    Status s = load(good.substr(0, len), any);
+    ASSERT_EQ(s.code(), StatusCode::kDataLoss) << len;
+  }
+  // A rejected leaf value.
+  EXPECT_NE(load(good, [](const Value& x) { return x.v != 0 && x.v % 3 != 0; }).message().find("trie leaf"),
+            std::string::npos);
+  // Layout after the u32 height and u64 count: u8 level, one presence word, then children or
+  // leaves. The first node saved is a bottom node (level 3): claim it is a root-level node.
+  std::string bad = good;
+  bad[12] = 0;
+  Status s = load(bad, any);
+  EXPECT_EQ(s.code(), StatusCode::kDataLoss);
+  // A level past the height.
+  bad = good;
+  bad[12] = 9;
+  EXPECT_NE(load(bad, any).message().find("not below the height"), std::string::npos);
+  // A presence bit beyond the degree.
+  bad = good;
+  bad[13] |= 0x10;
+  EXPECT_NE(load(bad, any).message().find("beyond the degree"), std::string::npos);
+  // Wrong height and wrong root count.
+  bad = good;
+  bad[0] = 5;
+  EXPECT_NE(load(bad, any).message().find("trie height"), std::string::npos);
+  Trie other(4, 1);
+  std::vector<Trie::Root> loaded;
+  ByteReader r(good, "t");
+  EXPECT_NE(other.Load(&r, roots.size() + 1, 0, any, &loaded).message().find("root count"),
+            std::string::npos);
+  EXPECT_EQ(other.live_nodes(), 0);
+  for (auto* root : roots) trie.Release(root, 0);
+}
+
+TEST(PersistentTrieSaveTest, UnreachedAndForwardNodesAreRefused) {
+  using Trie = PersistentTrie<Value, 2>;
+  // Hand-made: height 2, node 0 = bottom with digit 0, node 1 = inner pointing at node 1
+  // (itself, not an earlier node), one root.
+  auto bytes = [](uint32_t child, uint32_t root) {
+    ByteWriter w;
+    w.Put<uint32_t>(2);
+    w.Put<uint64_t>(2);
+    w.Put<uint8_t>(1);
+    w.Put<uint64_t>(1);
+    w.Put<uint64_t>(5);  // the leaf
+    w.Put<uint8_t>(0);
+    w.Put<uint64_t>(1);
+    w.Put<uint32_t>(child);
+    w.Put<uint64_t>(1);
+    w.Put<uint32_t>(root);
+    return w.Take();
+  };
+  auto load = [](const std::string& b) {
+    Trie trie(2, 1);
+    std::vector<Trie::Root> roots;
+    ByteReader r(b, "t");
+    Status s = trie.Load(&r, 1, 0, [](const Value&) { return true; }, &roots);
+    for (auto* root : roots) trie.Release(root, 0);
+    EXPECT_EQ(trie.live_nodes(), 0);
+    return s;
+  };
+  EXPECT_TRUE(load(bytes(0, 2)).ok());
+  EXPECT_NE(load(bytes(1, 2)).message().find("not an earlier node"), std::string::npos);
+  EXPECT_NE(load(bytes(0, 1)).message().find("not a top-level node"), std::string::npos);
+  EXPECT_NE(load(bytes(0, 0)).message().find("referenced by nothing"), std::string::npos);
 }
 
 }  // namespace

@@ -53,6 +53,14 @@ int Main(int argc, char** argv) {
   run->add_option("--memory-budget", memory_budget,
                   "Refuse runs predicted to need more memory, e.g. 512M or 8G (default: the "
                   "memory available)");
+  run->add_option("--checkpoint-every", run_options.checkpoint_every,
+                  "Write a checkpoint every N steps (0: only when stopped by SIGINT or SIGTERM)")
+      ->check(CLI::NonNegativeNumber);
+  run->add_option("--checkpoint", run_options.checkpoint_path,
+                  "Checkpoint file (default: OUT/checkpoint.grove)");
+  run->add_option("--resume", run_options.resume_path,
+                  "Continue from this checkpoint; give the same steps and configuration as the "
+                  "interrupted run (threads may differ)");
   run->add_flag("--print-config", print_config, "Print the effective configuration and exit");
   run->add_flag("--no-progress", no_progress, "No progress output");
 
