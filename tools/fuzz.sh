@@ -5,7 +5,7 @@
 #
 #   tools/fuzz.sh [SECONDS [TARGET...]]
 #     SECONDS  run time per fuzzer (default 60); fuzzers run one after the other
-#     TARGET   step_reader, config_json, csv_readers (default: all three)
+#     TARGET   step_reader, config_json, csv_readers, checkpoint (default: all four)
 #
 # Environment: BUILD_DIR (default build-fuzz), JOBS (build jobs, default 2), WORK_DIR (scratch
 # directory, default a new one under /tmp; kept so the corpora and reproducers can be inspected).
@@ -21,14 +21,14 @@ cd "$(dirname "$0")/.."
 seconds="${1:-60}"
 shift || true
 if ! [[ "$seconds" =~ ^[0-9]+$ ]] || [ "$seconds" -lt 1 ]; then
-  echo "usage: tools/fuzz.sh [SECONDS [step_reader|config_json|csv_readers ...]]" >&2
+  echo "usage: tools/fuzz.sh [SECONDS [step_reader|config_json|csv_readers|checkpoint ...]]" >&2
   exit 2
 fi
 targets=("$@")
-((${#targets[@]})) || targets=(step_reader config_json csv_readers)
+((${#targets[@]})) || targets=(step_reader config_json csv_readers checkpoint)
 for t in "${targets[@]}"; do
   if [ ! -d "tests/fuzz/corpus/$t" ]; then
-    echo "fuzz: unknown target '$t' (known: step_reader config_json csv_readers)" >&2
+    echo "fuzz: unknown target '$t' (known: step_reader config_json csv_readers checkpoint)" >&2
     exit 2
   fi
 done

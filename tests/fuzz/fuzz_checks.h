@@ -14,6 +14,11 @@
 //     max_step_m, an error repeats on the next call, the end repeats too;
 //   - FootSLAM JSON: a failed apply leaves the configuration unchanged, a successful one sets
 //     every key to exactly the value in the text and no other field; Validate() names a field.
+//   - Checkpoints: FootSlam::Resume returns ok, or DataLoss / FailedPrecondition with a one-line
+//     message starting "NAME: "; a resumed engine steps, reports its maps and paths, and its own
+//     checkpoint resumes to an engine whose checkpoint is the same bytes. The input is tried as
+//     it is and with its header's length and checksum made to match, so mutations reach the
+//     body's parser instead of stopping at the checksum.
 #ifndef GROVE_TESTS_FUZZ_FUZZ_CHECKS_H_
 #define GROVE_TESTS_FUZZ_FUZZ_CHECKS_H_
 
@@ -24,6 +29,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -33,6 +39,7 @@
 #include <utility>
 #include <vector>
 
+#include "engine/checkpoint_io.h"
 #include "grove/footslam.h"
 #include "grove/status.h"
 #include "tools/footslam_config_json.h"
@@ -345,7 +352,94 @@ std::string Guarded(const Check& check) {
   }
 }
 
+// The configurations of the checkpoint corpus (tests/fuzz/corpus/checkpoint): three particles
+// on a 16 x 16 grid, with the default H-tree map, the degree-4 map without alphabet, and the
+// naive map.
+inline std::vector<FootSlamConfig> CheckpointConfigs() {
+  FootSlamConfig base;
+  base.particles = 3;
+  base.grid_size = 16;
+  base.threads = 1;
+  std::vector<FootSlamConfig> configs(3, base);
+  configs[1].degree = 4;
+  configs[1].alphabet = 0;
+  configs[2].map = FootSlamMapKind::kNaive;
+  return configs;
+}
+
+inline std::string CheckResumeError(const Status& status) {
+  const std::string shown = "\"" + Printable(status.message()) + "\"";
+  if (status.code() != StatusCode::kDataLoss && status.code() != StatusCode::kFailedPrecondition) {
+    return fmt::format("error code {} (expected DataLoss or FailedPrecondition): {}",
+                       StatusCodeName(status.code()), shown);
+  }
+  if (status.message().find('\n') != std::string::npos) return "error message spans lines: " + shown;
+  if (status.message().rfind("fuzz.ckpt: ", 0) != 0) {
+    return "error message does not start with \"fuzz.ckpt: \": " + shown;
+  }
+  return "";
+}
+
+inline std::string CheckResumedEngine(const FootSlamConfig& config, FootSlam* slam) {
+  (void)slam->CumulativeMap();
+  (void)slam->HeaviestMap();
+  (void)slam->HeaviestTrajectory();
+  (void)slam->Summary();
+  StatusOr<std::string> again = slam->Checkpoint("u");
+  if (!again.ok()) return "a resumed engine has no checkpoint: " + again.status().ToString();
+  auto second = FootSlam::Resume(config, *again, "again.ckpt", nullptr);
+  if (!second.ok()) return "its own checkpoint does not resume: " + second.status().ToString();
+  StatusOr<std::string> third = (*second)->Checkpoint("u");
+  if (!third.ok() || *third != *again) return "checkpoint -> resume -> checkpoint changed bytes";
+  // Stepping must not crash; leaving the grid is a legitimate outcome here.
+  double t = slam->MeanTrajectory().back().t_s;
+  for (int k = 1; k <= 4; ++k) {
+    Status s = slam->Step(t + k, 0.6, 0.2 * k);
+    if (!s.ok()) {
+      if (s.code() != StatusCode::kOutOfRange && s.code() != StatusCode::kFailedPrecondition) {
+        return "stepping a resumed engine: " + s.ToString();
+      }
+      break;
+    }
+  }
+  return "";
+}
+
+inline std::string CheckCheckpointUnguarded(const uint8_t* data, size_t size) {
+  const std::string raw(reinterpret_cast<const char*>(data), size);
+  std::vector<std::string> inputs{raw};
+  if (raw.size() >= kCheckpointHeaderBytes) {
+    // Same magic and version, matching length and checksum.
+    std::string sealed = SealCheckpoint(std::string_view(raw).substr(kCheckpointHeaderBytes));
+    std::memcpy(sealed.data(), raw.data(), 12);
+    inputs.push_back(sealed);
+  }
+  for (const std::string& input : inputs) {
+    for (const FootSlamConfig& config : CheckpointConfigs()) {
+      std::string user;
+      auto slam = FootSlam::Resume(config, input, "fuzz.ckpt", &user);
+      if (!slam.ok()) {
+        if (std::string failure = CheckResumeError(slam.status()); !failure.empty()) {
+          return failure;
+        }
+        continue;
+      }
+      if (std::string failure = CheckResumedEngine(config, slam->get()); !failure.empty()) {
+        return failure;
+      }
+    }
+  }
+  return "";
+}
+
 }  // namespace fuzz_internal
+
+// FootSlam::Resume on the input (and on it with a matching checksum) under each of
+// CheckpointConfigs(), then the resumed engine's outputs, checkpoint round trip and steps.
+inline std::string CheckCheckpoint(const uint8_t* data, size_t size) {
+  return fuzz_internal::Guarded(
+      [&] { return fuzz_internal::CheckCheckpointUnguarded(data, size); });
+}
 
 // StepReader::OpenText on the input, then Next() to the end or the first error.
 inline std::string CheckStepReader(const uint8_t* data, size_t size) {

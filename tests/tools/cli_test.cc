@@ -188,4 +188,103 @@ TEST_F(CliTest, HelpOnEveryLevel) {
   EXPECT_EQ(Grove("footslam bogus").exit_code, 2);
 }
 
+// The outputs that must not depend on interruptions (summary.json holds timings).
+void ExpectSameOutputs(const fs::path& a, const fs::path& b) {
+  for (const char* name : {"map.csv", "map_best.csv", "trajectory.csv", "mean_trajectory.csv",
+                           "map.png", "map.svg"}) {
+    EXPECT_TRUE(Slurp(a / name) == Slurp(b / name)) << name << " differs";
+  }
+}
+
+TEST_F(CliTest, ResumingFromAPeriodicCheckpointGivesIdenticalOutputs) {
+  fs::path full = dir_ / "full", part = dir_ / "part", resumed = dir_ / "resumed";
+  const std::string run = "footslam run --no-progress --particles 400 ";
+  ASSERT_EQ(Grove(run + "--threads 2 --out " + full.string()).exit_code, 0);
+  // The bundled walk has 872 steps: the last checkpoint is at step 800.
+  Outcome o = Grove(run + "--threads 1 --checkpoint-every 200 --out " + part.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  fs::copy_file(part / "checkpoint.grove", dir_ / "at800.grove");
+  o = Grove(run + "--threads 2 --resume " + (dir_ / "at800.grove").string() + " --out " +
+            resumed.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(Slurp(resumed / "summary.json").find("\"steps\": 872"), std::string::npos);
+  ExpectSameOutputs(full, resumed);
+}
+
+TEST_F(CliTest, BadCheckpointsAreRefused) {
+  fs::path out = dir_ / "out";
+  std::string steps = Write("steps.csv", "t,dx,dy\n1,0.7,0\n2,0.7,0\n3,0,0.7\n4,-0.7,0\n");
+  const std::string run = "footslam run --no-progress --particles 30 --steps " + steps + " ";
+  fs::path ckpt = dir_ / "c.grove";
+  ASSERT_EQ(Grove(run + "--checkpoint-every 2 --checkpoint " + ckpt.string() + " --out " +
+                  out.string()).exit_code, 0);
+  const std::string good = Slurp(ckpt);
+  auto resume = [&](const std::string& extra, const std::string& bytes) {
+    std::string path = Write("bad.grove", bytes);
+    return Grove(run + extra + "--resume " + path + " --out " + (dir_ / "r").string());
+  };
+  ASSERT_EQ(resume("", good).exit_code, 0);
+
+  Outcome o = resume("", good.substr(0, good.size() / 2));
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find("bad.grove: truncated"), std::string::npos) << o.err;
+  std::string flipped = good;
+  flipped[flipped.size() - 40] ^= 0x20;
+  o = resume("", flipped);
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find("checksum mismatch"), std::string::npos) << o.err;
+  o = resume("", "t,dx,dy\n");
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find("not a grove checkpoint"), std::string::npos) << o.err;
+  o = resume("--seed 2 ", good);
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find("made with seed = 1, this configuration has seed = 2"), std::string::npos)
+      << o.err;
+  o = Grove(run + "--resume " + (dir_ / "missing.grove").string() + " --out " + out.string());
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find("missing.grove: cannot open"), std::string::npos) << o.err;
+
+  // Another step file: different steps, or too few of them.
+  std::string other = Write("other.csv", "t,dx,dy\n1,0.7,0\n2,0.6,0\n3,0,0.7\n4,-0.7,0\n");
+  o = Grove("footslam run --no-progress --particles 30 --steps " + other + " --resume " +
+            ckpt.string() + " --out " + out.string());
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find("the first 4 steps differ"), std::string::npos) << o.err;
+  std::string shorter = Write("short.csv", "t,dx,dy\n1,0.7,0\n2,0.7,0\n");
+  o = Grove("footslam run --no-progress --particles 30 --steps " + shorter + " --resume " +
+            ckpt.string() + " --out " + out.string());
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find("has 2 steps, but"), std::string::npos) << o.err;
+}
+
+TEST_F(CliTest, SigtermStopsAtAStepBoundaryWithACheckpoint) {
+  fs::path full = dir_ / "full", out = dir_ / "out";
+  const std::string run = "footslam run --no-progress --particles 4000 ";
+  ASSERT_EQ(Grove(run + "--out " + full.string()).exit_code, 0);
+
+  // Start the same run in the background; signal it once its first periodic checkpoint exists
+  // (the run is then well before its end).
+  fs::path ckpt = dir_ / "c.grove", err = dir_ / "bg.err", pid_file = dir_ / "pid";
+  std::string cmd = std::string(GROVE_BINARY) + " " + run + "--checkpoint-every 25 --checkpoint " +
+                    ckpt.string() + " --out " + out.string() + " 2>" + err.string() +
+                    " & echo $! >" + pid_file.string() + "; wait $!; echo $? >" +
+                    (dir_ / "rc").string();
+  std::string bg = "sh -c '" + cmd + "' &";
+  ASSERT_EQ(std::system(bg.c_str()), 0);
+  while (!fs::exists(ckpt) || !fs::exists(pid_file) || Slurp(pid_file).empty()) {
+    ASSERT_FALSE(fs::exists(dir_ / "rc")) << "the run ended before it was signalled: "
+                                          << Slurp(err);
+    std::system("sleep 0.01");
+  }
+  ASSERT_EQ(std::system(("kill -TERM " + Slurp(pid_file)).c_str()), 0);
+  while (!fs::exists(dir_ / "rc") || Slurp(dir_ / "rc").empty()) std::system("sleep 0.01");
+  EXPECT_EQ(std::stoi(Slurp(dir_ / "rc")), 143) << Slurp(err);
+  EXPECT_NE(Slurp(err).find("stopped by"), std::string::npos) << Slurp(err);
+  EXPECT_FALSE(fs::exists(out / "map.csv")) << "an interrupted run wrote final outputs";
+
+  Outcome o = Grove(run + "--resume " + ckpt.string() + " --out " + out.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  ExpectSameOutputs(full, out);
+}
+
 }  // namespace

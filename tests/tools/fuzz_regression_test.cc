@@ -56,6 +56,10 @@ TEST(FuzzCorpusTest, ConfigJsonCorpusKeepsItsProperties) {
   EXPECT_GE(ReplayCorpus("config_json", &CheckConfigJson), 5u);
 }
 
+TEST(FuzzCorpusTest, CheckpointCorpusKeepsItsProperties) {
+  EXPECT_GE(ReplayCorpus("checkpoint", &CheckCheckpoint), 3u);
+}
+
 TEST(FuzzCorpusTest, CsvReadersCorpusKeepsItsProperties) {
   EXPECT_GE(ReplayCorpus("csv_readers", &CheckCsvReaders), 5u);
 }
