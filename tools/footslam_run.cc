@@ -157,6 +157,12 @@ class StopSignals {
   struct sigaction old_term_ = {};
 };
 
+// A string from a file, quoted and escaped (JSON style) so an error stays on one line.
+std::string QuotedForError(const std::string& text) {
+  return nlohmann::json(text.substr(0, 200)).dump(-1, ' ', false,
+                                                  nlohmann::json::error_handler_t::replace);
+}
+
 StatusOr<std::string> ReadWholeFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return NotFoundError(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
@@ -189,7 +195,8 @@ struct InputPosition {
       p.steps = j.at("steps").get<int64_t>();
       p.digest = j.at("digest").get<uint32_t>();
     } catch (const nlohmann::json::exception& e) {
-      return DataLossError(fmt::format("{}: the input position is unreadable: {}", name, e.what()));
+      return DataLossError(
+          fmt::format("{}: the input position is unreadable: {}", name, QuotedForError(e.what())));
     }
     return p;
   }
@@ -289,11 +296,18 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
                                       : options.checkpoint_path;
   InputPosition position;
   position.steps_name = steps_name;
+  int64_t checkpoints_written = 0, checkpoint_bytes = 0;
+  double checkpoint_s = 0;
   auto write_checkpoint = [&]() -> Status {
+    auto t0 = std::chrono::steady_clock::now();
     StatusOr<std::string> bytes = slam.Checkpoint(position.ToJson());
     if (!bytes.ok()) return bytes.status();
     if (options.checkpoint_path.empty()) GROVE_RETURN_IF_ERROR(EnsureDirectory(options.out_dir));
-    return WriteFileAtomically(checkpoint_path, *bytes);
+    GROVE_RETURN_IF_ERROR(WriteFileAtomically(checkpoint_path, *bytes));
+    ++checkpoints_written;
+    checkpoint_bytes = static_cast<int64_t>(bytes->size());
+    checkpoint_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return Status::Ok();
   };
   StopSignals signals;
 
@@ -334,7 +348,7 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
                     fmt::format("{}: the first {} steps differ from those of {} (made from {}): "
                                 "resume with the same step file",
                                 steps_name, resumed_at.steps, options.resume_path,
-                                resumed_at.steps_name));
+                                QuotedForError(resumed_at.steps_name)));
       }
     }
     if (replay) {
@@ -407,6 +421,12 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
       {"mean_scale", summary.mean_scale},
       {"mean_heading_error_rad", summary.mean_heading_error_rad},
       {"hexagons", {{"cumulative", cumulative.size()}, {"heaviest", best_map.size()}}},
+      {"checkpoints",
+       {{"written", checkpoints_written},
+        {"seconds", checkpoint_s},
+        {"last_bytes", checkpoint_bytes},
+        {"resumed_from", options.resume_path},
+        {"resumed_at_step", resumed_at.steps}}},
   };
   const std::string& dir = options.out_dir;
   Status s = EnsureDirectory(dir);

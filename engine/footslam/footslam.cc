@@ -400,7 +400,7 @@ class Engine final : public FootSlam::Impl {
     std::string kind;
     GROVE_RETURN_IF_ERROR(r->GetString("kind", &kind));
     if (kind != kCheckpointKind) {
-      return r->Error("kind", "\"" + kind.substr(0, 40) + "\" is not a FootSLAM checkpoint");
+      return r->Error("kind", Quoted(kind) + " is not a FootSLAM checkpoint");
     }
     GROVE_RETURN_IF_ERROR(LoadConfig(r));
     std::string user;
@@ -476,8 +476,7 @@ class Engine final : public FootSlam::Impl {
       GROVE_RETURN_IF_ERROR(r->Get("configuration field type", &integer));
       GROVE_RETURN_IF_ERROR(r->Get("configuration field value", &bits));
       if (name != f.name || integer != (f.integer ? 1 : 0)) {
-        return r->Error("configuration field name", "\"" + name.substr(0, 40) + "\", expected \"" +
-                                                        f.name + "\"");
+        return r->Error("configuration field name", Quoted(name) + ", expected \"" + f.name + "\"");
       }
       if (bits != f.bits) {
         return FailedPreconditionError(fmt::format(
