@@ -258,7 +258,7 @@ class Engine final : public FootSlam::Impl {
     if (outside >= 0) {
       failed_ = true;
       return OutOfRangeError(fmt::format(
-          "step {} (t = {} s): particle {} at ({:.2f}, {:.2f}) m left the {} x {} hexagon grid "
+          "step {} (t = {} s): particle {} at ({:.7g}, {:.7g}) m left the {} x {} hexagon grid "
           "centred on the start; raise grid_size",
           filter_.steps(), t_s, outside, model_.x(outside), model_.y(outside),
           layout_.grid_size(), layout_.grid_size()));

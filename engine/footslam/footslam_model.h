@@ -107,14 +107,17 @@ class FootSlamModel {
       }
       double lw = 0;
       bool outside = false;
+      // A particle that leaves the grid ends the run: stop walking there, so a step of any
+      // length costs at most the grid's width.
       Hex end_hex = grid_->Traverse(hex_[i], x_[i], y_[i], nx, ny, [&](const Crossing& c) {
         uint64_t key;
-        if (outside || !KeyOf(c.from, &key)) {
+        if (!KeyOf(c.from, &key)) {
           outside = true;
-          return;
+          return false;
         }
         EdgeCounts before = map_->Cross(i, key, c.edge, slot);
         lw += LogEdge(before.edge) - LogTotal(before.total);
+        return true;
       });
       uint64_t end_key;
       if (outside || !KeyOf(end_hex, &end_key)) {
@@ -209,7 +212,13 @@ class FootSlamModel {
       }
     }
     GROVE_RETURN_IF_ERROR(r->GetBytes("hexagon", hex_.data(), n_ * sizeof(Hex)));
+    // Every hexagon of the grid lies within this distance of the start on each axis.
+    const double extent = (layout_->grid_size() + 2.0) * 2.0 * grid_->radius_m();
     for (size_t i = 0; i < n_; ++i) {
+      if (std::abs(x_[i] - config_.start_x_m) > extent ||
+          std::abs(y_[i] - config_.start_y_m) > extent) {
+        return r->Error("x", "particle " + std::to_string(i) + " is far outside the grid");
+      }
       // The hexagon is where the particle stands (or a neighbour, for a point on an edge), on
       // the grid.
       Hex at = grid_->HexAt(x_[i], y_[i]);

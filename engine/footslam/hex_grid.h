@@ -24,6 +24,7 @@
 #include <cstdint>
 #include <iosfwd>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 namespace grove::footslam {
@@ -70,7 +71,9 @@ class HexGrid {
 
   // Walks the straight segment (x0,y0)->(x1,y1), calling on_crossing(const Crossing&) for every
   // edge crossed, in order, and returns the hexagon the segment ends in (= HexAt(x1, y1)).
-  // A zero-length segment, or one that ends where it started, crosses nothing.
+  // A zero-length segment, or one that ends where it started, crosses nothing. When
+  // on_crossing returns bool, false stops the walk there and Traverse returns the hexagon the
+  // segment was leaving (the caller bounds the work of a segment that leaves its grid).
   // REQUIRES: start == HexAt(x0, y0) (or the hexagon a previous Traverse ended in at (x0, y0)).
   // Allocation-free; six bisector tests per hexagon left, one distance test for the last.
   template <typename F>
@@ -171,7 +174,11 @@ Hex HexGrid::Traverse(Hex start, double x0, double y0, double x1, double y1,
       }
     }
     if (best < 0 || budget-- == 0) return h;
-    on_crossing(Crossing{h, best});
+    if constexpr (std::is_same_v<std::invoke_result_t<F&, const Crossing&>, bool>) {
+      if (!on_crossing(Crossing{h, best})) return h;
+    } else {
+      on_crossing(Crossing{h, best});
+    }
     h = Neighbor(h, best);
   }
 }

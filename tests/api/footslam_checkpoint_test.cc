@@ -267,6 +267,20 @@ TEST_F(CorruptCheckpointTest, ADifferentConfigurationIsRefusedNamingTheField) {
   EXPECT_TRUE(ResumeStatus(good_, other).ok());
 }
 
+// A step of any length ends: the walk stops where the particle leaves the grid (it used to walk
+// every hexagon of a 1e9 m step).
+TEST(FootSlamStepTest, AHugeStepLeavesTheGridAndReturns) {
+  for (double d : {1e9, 1e200, 1e307}) {
+    FootSlamConfig config = Small();
+    config.particles = 10;
+    auto slam = Make(config);
+    Status s = slam->Step(1, d, -d);
+    EXPECT_EQ(s.code(), StatusCode::kOutOfRange) << s.ToString();
+    EXPECT_NE(s.message().find("left the 256 x 256 hexagon grid"), std::string::npos);
+    EXPECT_EQ(slam->Step(2, 0.5, 0).code(), StatusCode::kFailedPrecondition);
+  }
+}
+
 TEST(FootSlamCheckpointTest, AStoppedEngineHasNoCheckpoint) {
   FootSlamConfig config = Small();
   config.particles = 10;
