@@ -39,6 +39,7 @@ class ByteWriter {
     out_.append(reinterpret_cast<const char*>(&value), sizeof(T));
   }
   void PutBytes(const void* data, size_t size) {
+    if (size == 0) return;  // `data` may be null
     out_.append(static_cast<const char*>(data), size);
   }
   void PutString(std::string_view s) {
@@ -78,6 +79,7 @@ class ByteReader {
   }
   Status GetBytes(const char* field, void* out, size_t size) {
     GROVE_RETURN_IF_ERROR(Need(field, size));
+    if (size == 0) return Status::Ok();  // `out` may be an empty vector's null data()
     std::memcpy(out, data_.data() + pos_, size);
     pos_ += size;
     return Status::Ok();

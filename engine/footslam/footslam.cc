@@ -213,6 +213,46 @@ class FootSlam::Impl {
 
 namespace {
 
+// Reads the kind and the stored configuration fields of a checkpoint body and compares them
+// with `config`: done before an engine is built for it.
+Status CheckCheckpointConfig(ByteReader* r, const FootSlamConfig& config) {
+  std::string kind;
+  GROVE_RETURN_IF_ERROR(r->GetString("kind", &kind));
+  if (kind != kCheckpointKind) {
+    return r->Error("kind", Quoted(kind) + " is not a FootSLAM checkpoint");
+  }
+  uint32_t hash = 0;
+  uint64_t count = 0;
+  GROVE_RETURN_IF_ERROR(r->Get("configuration hash", &hash));
+  GROVE_RETURN_IF_ERROR(r->GetCount("configuration field count", 17, &count));
+  std::vector<ConfigField> mine = CheckpointFields(config);
+  if (count != mine.size()) {
+    return r->Error("configuration field count",
+                    std::to_string(count) + ", expected " + std::to_string(mine.size()));
+  }
+  for (const ConfigField& f : mine) {
+    std::string name;
+    uint8_t integer = 0;
+    uint64_t bits = 0;
+    GROVE_RETURN_IF_ERROR(r->GetString("configuration field name", &name));
+    GROVE_RETURN_IF_ERROR(r->Get("configuration field type", &integer));
+    GROVE_RETURN_IF_ERROR(r->Get("configuration field value", &bits));
+    if (name != f.name || integer != (f.integer ? 1 : 0)) {
+      return r->Error("configuration field name", Quoted(name) + ", expected \"" + f.name + "\"");
+    }
+    if (bits != f.bits) {
+      return FailedPreconditionError(fmt::format(
+          "the checkpoint was made with {} = {}, this configuration has {} = {}: resume with "
+          "the configuration of the interrupted run (only threads and batch may change)",
+          f.name, FieldValue(f.integer, bits), f.name, FieldValue(f.integer, f.bits)));
+    }
+  }
+  if (hash != ConfigHash(FieldBlock(mine))) {
+    return r->Error("configuration hash", "does not match the fields");
+  }
+  return Status::Ok();
+}
+
 template <typename Map>
 class Engine final : public FootSlam::Impl {
  public:
@@ -397,12 +437,6 @@ class Engine final : public FootSlam::Impl {
   }
 
   Status Load(ByteReader* r, std::string* user_data) override {
-    std::string kind;
-    GROVE_RETURN_IF_ERROR(r->GetString("kind", &kind));
-    if (kind != kCheckpointKind) {
-      return r->Error("kind", Quoted(kind) + " is not a FootSLAM checkpoint");
-    }
-    GROVE_RETURN_IF_ERROR(LoadConfig(r));
     std::string user;
     GROVE_RETURN_IF_ERROR(r->GetString("user data", &user));
     uint64_t count = 0;
@@ -455,40 +489,6 @@ class Engine final : public FootSlam::Impl {
     o.batch = static_cast<size_t>(c.batch);
     o.seed = c.seed;
     return o;
-  }
-
-  // Reads the stored configuration fields and compares them with this engine's.
-  Status LoadConfig(ByteReader* r) {
-    uint32_t hash = 0;
-    uint64_t count = 0;
-    GROVE_RETURN_IF_ERROR(r->Get("configuration hash", &hash));
-    GROVE_RETURN_IF_ERROR(r->GetCount("configuration field count", 17, &count));
-    std::vector<ConfigField> mine = CheckpointFields(config_);
-    if (count != mine.size()) {
-      return r->Error("configuration field count",
-                      std::to_string(count) + ", expected " + std::to_string(mine.size()));
-    }
-    for (const ConfigField& f : mine) {
-      std::string name;
-      uint8_t integer = 0;
-      uint64_t bits = 0;
-      GROVE_RETURN_IF_ERROR(r->GetString("configuration field name", &name));
-      GROVE_RETURN_IF_ERROR(r->Get("configuration field type", &integer));
-      GROVE_RETURN_IF_ERROR(r->Get("configuration field value", &bits));
-      if (name != f.name || integer != (f.integer ? 1 : 0)) {
-        return r->Error("configuration field name", Quoted(name) + ", expected \"" + f.name + "\"");
-      }
-      if (bits != f.bits) {
-        return FailedPreconditionError(fmt::format(
-            "the checkpoint was made with {} = {}, this configuration has {} = {}: resume with "
-            "the configuration of the interrupted run (only threads and batch may change)",
-            f.name, FieldValue(f.integer, bits), f.name, FieldValue(f.integer, f.bits)));
-      }
-    }
-    if (hash != ConfigHash(FieldBlock(mine))) {
-      return r->Error("configuration hash", "does not match the fields");
-    }
-    return Status::Ok();
   }
 
   HexCounts HexOf(uint64_t key) const {
@@ -657,16 +657,16 @@ StatusOr<std::unique_ptr<FootSlam>> FootSlam::Resume(const FootSlamConfig& confi
   GROVE_RETURN_IF_ERROR(config.Validate());
   StatusOr<std::string_view> body = UnsealCheckpoint(checkpoint, name);
   if (!body.ok()) return body.status();
+  ByteReader reader(*body, name);
+  // The configuration first: a checkpoint of another run costs no engine.
+  Status s = CheckCheckpointConfig(&reader, config);
+  if (s.code() == StatusCode::kFailedPrecondition) {
+    return FailedPreconditionError(name + ": " + s.message());
+  }
+  GROVE_RETURN_IF_ERROR(s);
   StatusOr<std::unique_ptr<FootSlam>> slam = Create(config);
   if (!slam.ok()) return slam.status();
-  ByteReader reader(*body, name);
-  Status s = (*slam)->impl_->Load(&reader, user_data);
-  if (!s.ok()) {
-    if (s.code() == StatusCode::kFailedPrecondition) {
-      return FailedPreconditionError(name + ": " + s.message());
-    }
-    return s;
-  }
+  GROVE_RETURN_IF_ERROR((*slam)->impl_->Load(&reader, user_data));  // DataLoss only
   return slam;
 }
 
