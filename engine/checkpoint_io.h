@@ -20,6 +20,7 @@
 #include <string>
 #include <string_view>
 #include <type_traits>
+#include <vector>
 
 #include "grove/status.h"
 
@@ -142,6 +143,38 @@ inline std::string Quoted(std::string_view text, size_t max_bytes = 40) {
   }
   if (text.size() > max_bytes) out += "...";
   return out + "\"";
+}
+
+// The last part of loading a graph of reference-counted nodes (PersistentTrie, PoseHistory):
+// reads `root_count` u32 root ids (0: none, k: nodes[k - 1]) into `roots`, counts a reference for
+// each, checks that every node is referenced (refs[k] counts the links found so far) and gives
+// each node its count (a new node holds one). `accept(k)` says whether node k may be a root.
+// On error nothing is changed but `refs`; the caller frees the nodes.
+template <typename NodeT, typename Accept>
+Status LinkRoots(ByteReader* r, const char* field, size_t root_count,
+                 const std::vector<NodeT*>& nodes, std::vector<uint32_t>* refs, Accept&& accept,
+                 std::vector<NodeT*>* roots) {
+  std::vector<NodeT*> loaded(root_count, nullptr);
+  for (size_t i = 0; i < root_count; ++i) {
+    uint32_t id = 0;
+    GROVE_RETURN_IF_ERROR(r->Get(field, &id));
+    if (id == 0) continue;
+    if (id > nodes.size() || !accept(id - 1)) {
+      return r->Error(field, std::to_string(id) + " is not a node that can start a version");
+    }
+    loaded[i] = nodes[id - 1];
+    ++(*refs)[id - 1];
+  }
+  for (size_t k = 0; k < nodes.size(); ++k) {
+    if ((*refs)[k] == 0) {
+      return r->Error(field, "node " + std::to_string(k) + " is reached from nothing");
+    }
+  }
+  for (size_t k = 0; k < nodes.size(); ++k) {
+    for (uint32_t j = 1; j < (*refs)[k]; ++j) nodes[k]->rc.Acquire();
+  }
+  roots->insert(roots->end(), loaded.begin(), loaded.end());
+  return Status::Ok();
 }
 
 // The whole file: header and `body`.

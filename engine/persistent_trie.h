@@ -414,30 +414,10 @@ class PersistentTrie {
                                           std::to_string(root_count));
     }
     if (!s.ok()) return fail(s);
-    std::vector<Node*> loaded(root_count, nullptr);
-    for (size_t i = 0; i < root_count; ++i) {
-      uint32_t id = 0;
-      s = r->Get("trie root", &id);
-      if (s.ok() && id != 0 && (id > count || levels[id - 1] != 0)) {
-        s = r->Error("trie root", std::to_string(id) + " is not a top-level node");
-      }
-      if (!s.ok()) return fail(s);
-      if (id != 0) {
-        loaded[i] = nodes[id - 1];
-        ++refs[id - 1];
-      }
-    }
-    for (size_t k = 0; k < nodes.size(); ++k) {
-      if (refs[k] == 0) {
-        return fail(r->Error("trie nodes", "node " + std::to_string(k) + " is referenced by nothing"));
-      }
-    }
-    // Each node starts with one reference; add the others (invariant 1).
-    for (size_t k = 0; k < nodes.size(); ++k) {
-      for (uint32_t j = 1; j < refs[k]; ++j) nodes[k]->rc.Acquire();
-    }
-    roots->insert(roots->end(), loaded.begin(), loaded.end());
-    return Status::Ok();
+    // Invariant 1: a node's count is its parent links plus the roots reaching it.
+    s = LinkRoots(r, "trie root", root_count, nodes, &refs,
+                  [&](size_t k) { return levels[k] == 0; }, roots);
+    return s.ok() ? s : fail(s);
   }
 
   PoolStats inner_stats() const { return inner_pool_.Stats(); }

@@ -22,6 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tools/atomic_file.h"
+#include "tools/csv_reader.h"
 #include "tools/footslam_config_json.h"
 #include "tools/map_render.h"
 #include "tools/output_readers.h"
@@ -161,15 +162,6 @@ class StopSignals {
 std::string QuotedForError(const std::string& text) {
   return nlohmann::json(text.substr(0, 200)).dump(-1, ' ', false,
                                                   nlohmann::json::error_handler_t::replace);
-}
-
-StatusOr<std::string> ReadWholeFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return NotFoundError(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  if (in.bad()) return IoError(fmt::format("{}: read failed", path));
-  return bytes.str();
 }
 
 // Where the run stands in its step file: kept in each checkpoint so a resumed run can check

@@ -1,9 +1,11 @@
 // Readers for grove's own CSV outputs, used by `grove footslam render`.
 //
-// Errors: NotFound for a missing file, IoError when it cannot be read, InvalidArgument for a bad
-// record as one line "FILE:LINE:COLUMN: what (detail)" (1-based; COLUMN counts bytes).
-// Both readers accept "\r\n" line ends, blank lines, spaces around fields and extra columns after
-// the required ones; quoted fields are not supported (grove never writes them).
+// Errors: NotFound for a missing file, IoError when it cannot be read (a directory included),
+// InvalidArgument for a bad record as one line "FILE:LINE:COLUMN: what (detail)" (1-based; COLUMN
+// counts bytes), a line longer than 64 KiB included.
+// Both readers are built on tools/csv_reader.h and accept "\r\n" line ends, a UTF-8 byte order
+// mark, blank lines, spaces around fields and extra columns after the required ones; quoted fields
+// are not supported (grove never writes them). Thread-safe (no shared state).
 #ifndef GROVE_TOOLS_OUTPUT_READERS_H_
 #define GROVE_TOOLS_OUTPUT_READERS_H_
 

@@ -17,14 +17,12 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <fstream>
-#include <memory>
 #include <string>
-#include <string_view>
 #include <utility>
 #include <vector>
 
 #include "grove/status.h"
+#include "tools/csv_reader.h"
 
 namespace grove::tools {
 
@@ -43,57 +41,6 @@ struct StepReaderOptions {
   // and applies to comment lines too. Range: [16, 64 MiB]. Default: 4096.
   size_t max_line_bytes = 4096;
 };
-
-namespace internal {
-
-// Reads a file line by line through a buffer of max(64 KiB, max_line_bytes + 2) bytes, so a line
-// over the limit is reported without ever being held whole. Shared by the CSV readers in tools/.
-// After an error every later call returns the same error.
-class LineReader {
- public:
-  static StatusOr<LineReader> Open(const std::string& path, size_t max_line_bytes);
-  // Reads lines from `in`; `path` names it in messages.
-  static StatusOr<LineReader> FromStream(const std::string& path, std::unique_ptr<std::istream> in,
-                                         size_t max_line_bytes);
-
-  // Sets *line to the next line without its terminator; the view is valid until the next call.
-  // Returns false at the end of the file.
-  StatusOr<bool> Next(std::string_view* line);
-  // The 1-based number of the line last returned (or found too long).
-  int64_t line_number() const { return line_number_; }
-  const std::string& path() const { return path_; }
-
- private:
-  LineReader() = default;
-  StatusOr<bool> Finish(size_t first, size_t stop, std::string_view* line);
-
-  std::string path_;
-  size_t max_line_bytes_ = 0;
-  std::unique_ptr<std::istream> in_;
-  std::vector<char> buffer_;
-  size_t begin_ = 0;  // unread bytes are buffer_[begin_, end_)
-  size_t end_ = 0;
-  bool eof_ = false;
-  int64_t line_number_ = 0;
-  Status error_;
-};
-
-struct CsvField {
-  std::string_view text;  // without the blanks around it
-  int64_t column = 1;     // 1-based byte column of text (of the field start when text is empty)
-};
-
-// Splits a line at every ',' (no quoting) into *fields, which it clears first.
-void SplitCsvLine(std::string_view line, std::vector<CsvField>* fields);
-// True for a blank line or one whose first non-blank character is '#'.
-bool IsSkippedLine(std::string_view line);
-// InvalidArgument "path:line:column: what".
-Status LineError(std::string_view path, int64_t line, int64_t column, std::string_view what);
-// Parses field as a finite double named `name` in error messages.
-Status ParseFiniteNumber(std::string_view path, int64_t line, const CsvField& field,
-                         std::string_view name, double* value);
-
-}  // namespace internal
 
 // Reads a step file one record at a time; memory use does not depend on the file's length.
 // Not thread-safe. Movable, not copyable.
@@ -132,13 +79,13 @@ class StepReader {
     int64_t line;
   };
 
-  StepReader(internal::LineReader lines, const StepReaderOptions& options)
+  StepReader(LineReader lines, const StepReaderOptions& options)
       : lines_(std::move(lines)), options_(options) {}
   // Reads the next data row, checking its fields and its time against the row before.
-  static StatusOr<StepReader> Start(internal::LineReader lines, const StepReaderOptions& options);
+  static StatusOr<StepReader> Start(LineReader lines, const StepReaderOptions& options);
   StatusOr<bool> ReadRow(Row* row);
 
-  internal::LineReader lines_;
+  LineReader lines_;
   StepReaderOptions options_;
   bool positions_form_ = false;
   double start_time_s_ = 0;
@@ -153,7 +100,7 @@ class StepReader {
   double previous_y_m_ = 0;
   int64_t steps_read_ = 0;
   Status error_;
-  std::vector<internal::CsvField> fields_;  // scratch, reused across rows
+  std::vector<CsvField> fields_;  // scratch, reused across rows
 };
 
 // Reads every step of a file; for tests and small files. A file without steps is an error.

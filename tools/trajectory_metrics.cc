@@ -8,7 +8,7 @@
 #include <numbers>
 #include <string_view>
 
-#include "tools/step_reader.h"
+#include "tools/csv_reader.h"
 
 namespace grove::tools {
 namespace {
@@ -37,10 +37,10 @@ Status CheckPoints(const std::vector<TimedPoint>& points, std::string_view name)
 }  // namespace
 
 StatusOr<std::vector<TimedPoint>> ReadTimedPoints(const std::string& path) {
-  StatusOr<internal::LineReader> opened = internal::LineReader::Open(path, kMaxLineBytes);
+  StatusOr<LineReader> opened = LineReader::Open(path, kMaxLineBytes);
   if (!opened.ok()) return opened.status();
-  internal::LineReader& lines = *opened;
-  std::vector<internal::CsvField> fields;
+  LineReader& lines = *opened;
+  std::vector<CsvField> fields;
   std::vector<TimedPoint> points;
   std::string_view line;
   size_t field_count = 0;
@@ -48,13 +48,13 @@ StatusOr<std::vector<TimedPoint>> ReadTimedPoints(const std::string& path) {
     StatusOr<bool> more = lines.Next(&line);
     if (!more.ok()) return more.status();
     if (!*more) break;
-    if (internal::IsSkippedLine(line)) continue;
-    internal::SplitCsvLine(line, &fields);
+    if (IsSkippedLine(line)) continue;
+    SplitCsvLine(line, &fields);
     const int64_t number = lines.line_number();
     if (field_count == 0) {
       if (fields.size() < 3 || fields[0].text != "t" || fields[1].text != "x" ||
           fields[2].text != "y") {
-        return internal::LineError(
+        return LineError(
             path, number, 1,
             fmt::format("unknown header \"{}\": expected one starting with \"t,x,y\"", line));
       }
@@ -62,16 +62,16 @@ StatusOr<std::vector<TimedPoint>> ReadTimedPoints(const std::string& path) {
       continue;
     }
     if (fields.size() != field_count) {
-      return internal::LineError(
+      return LineError(
           path, number, 1,
           fmt::format("expected {} fields as in the header, found {}", field_count, fields.size()));
     }
     TimedPoint p;
-    GROVE_RETURN_IF_ERROR(internal::ParseFiniteNumber(path, number, fields[0], "t", &p.t_s));
-    GROVE_RETURN_IF_ERROR(internal::ParseFiniteNumber(path, number, fields[1], "x", &p.x_m));
-    GROVE_RETURN_IF_ERROR(internal::ParseFiniteNumber(path, number, fields[2], "y", &p.y_m));
+    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, number, fields[0], "t", &p.t_s));
+    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, number, fields[1], "x", &p.x_m));
+    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, number, fields[2], "y", &p.y_m));
     if (!points.empty() && !(p.t_s > points.back().t_s)) {
-      return internal::LineError(
+      return LineError(
           path, number, fields[0].column,
           fmt::format("t = {} is not after the previous time {}: times must be strictly increasing",
                       p.t_s, points.back().t_s));

@@ -149,27 +149,8 @@ class PoseHistory {
                                      std::to_string(head_count));
     }
     if (!s.ok()) return fail(s);
-    std::vector<Node*> loaded(head_count, nullptr);
-    for (size_t i = 0; i < head_count; ++i) {
-      uint32_t id = 0;
-      s = r->Get("path head", &id);
-      if (s.ok() && id > count) s = r->Error("path head", std::to_string(id) + " is not a pose");
-      if (!s.ok()) return fail(s);
-      if (id != 0) {
-        loaded[i] = nodes[id - 1];
-        ++refs[id - 1];
-      }
-    }
-    for (size_t k = 0; k < nodes.size(); ++k) {
-      if (refs[k] == 0) {
-        return fail(r->Error("poses", "pose " + std::to_string(k) + " is reached by no path"));
-      }
-    }
-    for (size_t k = 0; k < nodes.size(); ++k) {
-      for (uint32_t j = 1; j < refs[k]; ++j) nodes[k]->rc.Acquire();
-    }
-    heads->insert(heads->end(), loaded.begin(), loaded.end());
-    return Status::Ok();
+    s = LinkRoots(r, "path head", head_count, nodes, &refs, [](size_t) { return true; }, heads);
+    return s.ok() ? s : fail(s);
   }
 
   PoolStats stats() const { return pool_.Stats(); }

@@ -9,30 +9,13 @@
 #include <vector>
 
 #include "grove/footslam.h"
+#include "tests/api/test_walk.h"
 
 namespace grove {
 namespace {
 
-struct Step {
-  double t, dx, dy;
-};
-
-// A wandering walk with revisits, kept within 12 m of the start.
-std::vector<Step> Walk(int n, uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> turn(0, 0.35);
-  std::vector<Step> steps;
-  double x = 0, y = 0, heading = 0;
-  for (int k = 0; k < n; ++k) {
-    heading += turn(rng);
-    if (std::hypot(x, y) > 12 && std::cos(heading - std::atan2(-y, -x)) < 0) heading += M_PI;
-    double dx = 0.7 * std::cos(heading), dy = 0.7 * std::sin(heading);
-    x += dx;
-    y += dy;
-    steps.push_back({0.5 * (k + 1), dx * 1.01, dy * 1.01});
-  }
-  return steps;
-}
+using testing::Step;
+using testing::Walk;
 
 void RunSteps(FootSlam* slam, const std::vector<Step>& steps, size_t begin, size_t end) {
   for (size_t k = begin; k < end; ++k) {

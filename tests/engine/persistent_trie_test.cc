@@ -324,8 +324,8 @@ TEST(PersistentTrieSaveTest, UnreachedAndForwardNodesAreRefused) {
   };
   EXPECT_TRUE(load(bytes(0, 2)).ok());
   EXPECT_NE(load(bytes(1, 2)).message().find("not an earlier node"), std::string::npos);
-  EXPECT_NE(load(bytes(0, 1)).message().find("not a top-level node"), std::string::npos);
-  EXPECT_NE(load(bytes(0, 0)).message().find("referenced by nothing"), std::string::npos);
+  EXPECT_NE(load(bytes(0, 1)).message().find("not a node that can start a version"), std::string::npos);
+  EXPECT_NE(load(bytes(0, 0)).message().find("reached from nothing"), std::string::npos);
 }
 
 }  // namespace

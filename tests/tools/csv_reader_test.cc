@@ -1,0 +1,159 @@
+#include "tools/csv_reader.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+
+namespace grove::tools {
+namespace {
+
+class CsvReaderTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = (std::filesystem::path(::testing::TempDir()) /
+            ("csv_reader_" + std::to_string(::getpid())))
+               .string();
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ignored;
+    std::filesystem::remove_all(dir_, ignored);
+  }
+  std::string Write(const std::string& name, const std::string& contents) {
+    std::string path = dir_ + "/" + name;
+    std::ofstream(path, std::ios::binary) << contents;
+    return path;
+  }
+  std::string dir_;
+};
+
+TEST_F(CsvReaderTest, ReadWholeFileReturnsEveryByte) {
+  const std::string bytes("a\0b\r\n\xff", 6);
+  StatusOr<std::string> read = ReadWholeFile(Write("bytes", bytes));
+  ASSERT_TRUE(read.ok()) << read.status().ToString();
+  EXPECT_EQ(*read, bytes);
+}
+
+TEST_F(CsvReaderTest, ReadWholeFileMissingIsNotFoundNamingPathAndReason) {
+  const std::string path = dir_ + "/absent";
+  StatusOr<std::string> read = ReadWholeFile(path);
+  EXPECT_EQ(read.status().code(), StatusCode::kNotFound);
+  EXPECT_EQ(read.status().message(), path + ": cannot open: No such file or directory");
+}
+
+TEST_F(CsvReaderTest, ReadWholeFileOfADirectoryIsAnIoError) {
+  StatusOr<std::string> read = ReadWholeFile(dir_);
+  EXPECT_EQ(read.status().code(), StatusCode::kIoError);
+  EXPECT_EQ(read.status().message().rfind(dir_ + ": ", 0), 0u) << read.status().message();
+}
+
+TEST_F(CsvReaderTest, LineReaderOfADirectoryIsAnIoErrorAndMissingIsNotFound) {
+  EXPECT_EQ(LineReader::Open(dir_, 64).status().code(), StatusCode::kIoError);
+  EXPECT_EQ(LineReader::Open(dir_ + "/absent", 64).status().code(), StatusCode::kNotFound);
+  EXPECT_EQ(LineReader::Open(Write("f", ""), 15).status().code(), StatusCode::kInvalidArgument);
+}
+
+TEST(LineReaderTest, StripsTerminatorsAndTheByteOrderMarkAndCountsLines) {
+  StatusOr<LineReader> lines = LineReader::FromStream(
+      "f", std::make_unique<std::istringstream>("\xEF\xBB\xBFone\r\n\ntwo"), 16);
+  ASSERT_TRUE(lines.ok());
+  std::string_view line;
+  std::vector<std::string> got;
+  for (;;) {
+    StatusOr<bool> more = lines->Next(&line);
+    ASSERT_TRUE(more.ok()) << more.status().ToString();
+    if (!*more) break;
+    got.emplace_back(line);
+  }
+  EXPECT_EQ(got, (std::vector<std::string>{"one", "", "two"}));
+  EXPECT_EQ(lines->line_number(), 3);
+}
+
+TEST(LineReaderTest, LongLineIsAnErrorAtItsLineAndStays) {
+  StatusOr<LineReader> lines = LineReader::FromStream(
+      "f", std::make_unique<std::istringstream>("ok\n" + std::string(17, 'x') + "\n"), 16);
+  ASSERT_TRUE(lines.ok());
+  std::string_view line;
+  ASSERT_TRUE(*lines->Next(&line));
+  StatusOr<bool> more = lines->Next(&line);
+  EXPECT_EQ(more.status().message(), "f:2:1: line longer than 16 bytes");
+  EXPECT_EQ(lines->Next(&line).status().message(), more.status().message());
+}
+
+TEST(CsvFieldsTest, SplitTrimsBlanksAndGivesColumns) {
+  std::vector<CsvField> fields;
+  SplitCsvLine(" a ,\tb,,  ", &fields);
+  ASSERT_EQ(fields.size(), 4u);
+  EXPECT_EQ(fields[0].text, "a");
+  EXPECT_EQ(fields[0].column, 2);
+  EXPECT_EQ(fields[1].text, "b");
+  EXPECT_EQ(fields[1].column, 6);
+  EXPECT_EQ(fields[2].text, "");
+  EXPECT_EQ(fields[2].column, 8);
+  EXPECT_EQ(fields[3].text, "");
+  EXPECT_EQ(fields[3].column, 9);
+}
+
+TEST(CsvFieldsTest, BlankAndSkippedLines) {
+  EXPECT_TRUE(IsBlankLine(""));
+  EXPECT_TRUE(IsBlankLine(" \t "));
+  EXPECT_FALSE(IsBlankLine(" # note"));
+  EXPECT_TRUE(IsSkippedLine(" # note"));
+  EXPECT_FALSE(IsSkippedLine("1,#"));
+}
+
+TEST(CsvFieldsTest, QuotedFieldIsShortened) {
+  EXPECT_EQ(QuotedField("abc"), "\"abc\"");
+  EXPECT_EQ(QuotedField(std::string(41, 'z')), "\"" + std::string(40, 'z') + "...\"");
+}
+
+TEST(CsvNumbersTest, DoubleClassifiesEveryFailure) {
+  double v = 7;
+  EXPECT_EQ(ParseCsvDouble("+1.5e1", &v), NumberParse::kOk);
+  EXPECT_EQ(v, 15.0);
+  v = 7;
+  EXPECT_EQ(ParseCsvDouble("", &v), NumberParse::kEmpty);
+  EXPECT_EQ(ParseCsvDouble("+-1", &v), NumberParse::kNotANumber);
+  EXPECT_EQ(ParseCsvDouble("++1", &v), NumberParse::kNotANumber);
+  EXPECT_EQ(ParseCsvDouble("0x1p3", &v), NumberParse::kNotANumber);
+  EXPECT_EQ(ParseCsvDouble("1e999x", &v), NumberParse::kNotANumber);
+  EXPECT_EQ(ParseCsvDouble("1e999", &v), NumberParse::kOutOfRange);
+  EXPECT_EQ(ParseCsvDouble("nan", &v), NumberParse::kNotFinite);
+  EXPECT_EQ(ParseCsvDouble("-inf", &v), NumberParse::kNotFinite);
+  EXPECT_EQ(v, 7.0);  // untouched by failures
+}
+
+TEST(CsvNumbersTest, Int32ClassifiesEveryFailure) {
+  int32_t v = 7;
+  EXPECT_EQ(ParseCsvInt32("+12", &v), NumberParse::kOk);
+  EXPECT_EQ(v, 12);
+  EXPECT_EQ(ParseCsvInt32("-2147483648", &v), NumberParse::kOk);
+  EXPECT_EQ(v, std::numeric_limits<int32_t>::min());
+  v = 7;
+  EXPECT_EQ(ParseCsvInt32("", &v), NumberParse::kEmpty);
+  EXPECT_EQ(ParseCsvInt32("1.5", &v), NumberParse::kNotANumber);
+  EXPECT_EQ(ParseCsvInt32("2147483648", &v), NumberParse::kOutOfRange);
+  EXPECT_EQ(v, 7);
+}
+
+TEST(CsvNumbersTest, ParseFiniteNumberMessages) {
+  double v = 0;
+  EXPECT_TRUE(ParseFiniteNumber("f", 3, {"-2.5", 4}, "x", &v).ok());
+  EXPECT_EQ(v, -2.5);
+  EXPECT_EQ(ParseFiniteNumber("f", 3, {"", 4}, "x", &v).message(), "f:3:4: x: \"\" is not a number");
+  EXPECT_EQ(ParseFiniteNumber("f", 3, {"inf", 4}, "x", &v).message(), "f:3:4: x = inf: must be finite");
+  EXPECT_EQ(ParseFiniteNumber("f", 3, {"1e999", 4}, "x", &v).message(),
+            "f:3:4: x: \"1e999\" is out of the range of a double");
+  const std::string junk(500, 'z');
+  EXPECT_LT(ParseFiniteNumber("f", 3, {junk, 4}, "x", &v).message().size(), 100u);
+  EXPECT_EQ(ParseFiniteNumber("f", 3, {"1", 4}, "x", &v).code(), StatusCode::kOk);
+}
+
+}  // namespace
+}  // namespace grove::tools

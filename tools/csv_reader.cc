@@ -1,0 +1,229 @@
+#include "tools/csv_reader.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <system_error>
+#include <utility>
+
+namespace grove::tools {
+namespace {
+
+constexpr size_t kMinBufferBytes = size_t{64} << 10;
+constexpr size_t kMinLineBytes = 16;
+constexpr size_t kMaxLineBytes = size_t{64} << 20;
+constexpr size_t kMaxQuotedBytes = 40;
+constexpr std::string_view kByteOrderMark = "\xEF\xBB\xBF";
+
+bool IsBlank(char c) { return c == ' ' || c == '\t'; }
+
+Status CheckMaxLineBytes(size_t max_line_bytes) {
+  if (max_line_bytes < kMinLineBytes || max_line_bytes > kMaxLineBytes) {
+    return InvalidArgumentError(fmt::format("max_line_bytes = {}: must be in [{}, {}]",
+                                            max_line_bytes, kMinLineBytes, kMaxLineBytes));
+  }
+  return Status::Ok();
+}
+
+// The text cut after kMaxQuotedBytes bytes, marked by "...".
+std::string Shortened(std::string_view text) {
+  if (text.size() <= kMaxQuotedBytes) return std::string(text);
+  return fmt::format("{}...", text.substr(0, kMaxQuotedBytes));
+}
+
+// from_chars takes no '+'; accept exactly one in front of a digit or '.'.
+std::string_view WithoutPlus(std::string_view text) {
+  if (text.size() > 1 && text[0] == '+' && text[1] != '+' && text[1] != '-') text.remove_prefix(1);
+  return text;
+}
+
+template <typename T, typename... Format>
+NumberParse ParseWhole(std::string_view field, T* value, Format... format) {
+  if (field.empty()) return NumberParse::kEmpty;
+  const std::string_view text = WithoutPlus(field);
+  T parsed{};
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), parsed, format...);
+  if (end != text.data() + text.size()) return NumberParse::kNotANumber;
+  if (ec == std::errc::result_out_of_range) return NumberParse::kOutOfRange;
+  if (ec != std::errc()) return NumberParse::kNotANumber;
+  *value = parsed;
+  return NumberParse::kOk;
+}
+
+}  // namespace
+
+StatusOr<std::string> ReadWholeFile(const std::string& path) {
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
+                                                       &std::fclose);
+  if (file == nullptr) {
+    const int err = errno;
+    std::string message =
+        fmt::format("{}: cannot open: {}", path, std::generic_category().message(err));
+    if (err == ENOENT) return NotFoundError(std::move(message));
+    return IoError(std::move(message));
+  }
+  std::string contents;
+  char chunk[1 << 16];
+  size_t n;
+  while ((n = std::fread(chunk, 1, sizeof(chunk), file.get())) > 0) contents.append(chunk, n);
+  if (std::ferror(file.get())) {
+    return IoError(
+        fmt::format("{}: cannot read: {}", path, std::generic_category().message(errno)));
+  }
+  return contents;
+}
+
+StatusOr<LineReader> LineReader::Open(const std::string& path, size_t max_line_bytes) {
+  GROVE_RETURN_IF_ERROR(CheckMaxLineBytes(max_line_bytes));
+  std::error_code ec;
+  const std::filesystem::file_status status = std::filesystem::status(path, ec);
+  if (status.type() == std::filesystem::file_type::not_found) {
+    return NotFoundError(fmt::format("{}: no such file", path));
+  }
+  if (ec) return IoError(fmt::format("{}: {}", path, ec.message()));
+  if (std::filesystem::is_directory(status)) {
+    return IoError(fmt::format("{}: is a directory, not a file", path));
+  }
+  auto in = std::make_unique<std::ifstream>(path, std::ios::binary);
+  if (!in->is_open()) return IoError(fmt::format("{}: cannot open for reading", path));
+  return FromStream(path, std::move(in), max_line_bytes);
+}
+
+StatusOr<LineReader> LineReader::FromStream(const std::string& path,
+                                            std::unique_ptr<std::istream> in,
+                                            size_t max_line_bytes) {
+  GROVE_RETURN_IF_ERROR(CheckMaxLineBytes(max_line_bytes));
+  LineReader reader;
+  reader.path_ = path;
+  reader.max_line_bytes_ = max_line_bytes;
+  reader.in_ = std::move(in);
+  reader.buffer_.resize(std::max(kMinBufferBytes, max_line_bytes + 2));
+  return reader;
+}
+
+StatusOr<bool> LineReader::Next(std::string_view* line) {
+  if (!error_.ok()) return error_;
+  for (;;) {
+    const size_t pending = end_ - begin_;
+    const void* newline =
+        pending == 0 ? nullptr : std::memchr(buffer_.data() + begin_, '\n', pending);
+    if (newline != nullptr) {
+      const size_t stop = static_cast<const char*>(newline) - buffer_.data();
+      const size_t first = begin_;
+      begin_ = stop + 1;
+      return Finish(first, stop, line);
+    }
+    if (eof_) {
+      if (pending == 0) return false;
+      const size_t first = begin_;
+      begin_ = end_;
+      return Finish(first, end_, line);
+    }
+    // No newline yet. More than max + 1 bytes (a '\r' may precede the '\n') is too long already.
+    if (pending > max_line_bytes_ + 1) {
+      ++line_number_;
+      error_ = LineError(path_, line_number_, 1,
+                         fmt::format("line longer than {} bytes", max_line_bytes_));
+      return error_;
+    }
+    if (begin_ > 0) {
+      std::memmove(buffer_.data(), buffer_.data() + begin_, pending);
+      begin_ = 0;
+      end_ = pending;
+    }
+    // The buffer holds at least max + 2 bytes, so there is room for one more byte at least.
+    in_->read(buffer_.data() + end_, static_cast<std::streamsize>(buffer_.size() - end_));
+    end_ += static_cast<size_t>(in_->gcount());
+    if (in_->bad() || (in_->fail() && !in_->eof())) {
+      error_ = IoError(fmt::format("{}: read failed after line {}", path_, line_number_));
+      return error_;
+    }
+    if (in_->eof()) eof_ = true;
+  }
+}
+
+StatusOr<bool> LineReader::Finish(size_t first, size_t stop, std::string_view* line) {
+  ++line_number_;
+  std::string_view text(buffer_.data() + first, stop - first);
+  if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
+  if (line_number_ == 1 && text.starts_with(kByteOrderMark)) text.remove_prefix(3);
+  if (text.size() > max_line_bytes_) {
+    error_ = LineError(path_, line_number_, 1,
+                       fmt::format("line longer than {} bytes", max_line_bytes_));
+    return error_;
+  }
+  *line = text;
+  return true;
+}
+
+void SplitCsvLine(std::string_view line, std::vector<CsvField>* fields) {
+  fields->clear();
+  size_t start = 0;
+  for (;;) {
+    size_t stop = line.find(',', start);
+    if (stop == std::string_view::npos) stop = line.size();
+    size_t first = start;
+    while (first < stop && IsBlank(line[first])) ++first;
+    size_t last = stop;
+    while (last > first && IsBlank(line[last - 1])) --last;
+    const size_t column = first < stop ? first : start;
+    fields->push_back({line.substr(first, last - first), static_cast<int64_t>(column) + 1});
+    if (stop == line.size()) break;
+    start = stop + 1;
+  }
+}
+
+bool IsBlankLine(std::string_view line) { return std::all_of(line.begin(), line.end(), IsBlank); }
+
+bool IsSkippedLine(std::string_view line) {
+  for (char c : line) {
+    if (!IsBlank(c)) return c == '#';
+  }
+  return true;
+}
+
+Status LineError(std::string_view path, int64_t line, int64_t column, std::string_view what) {
+  return InvalidArgumentError(fmt::format("{}:{}:{}: {}", path, line, column, what));
+}
+
+std::string QuotedField(std::string_view text) { return fmt::format("\"{}\"", Shortened(text)); }
+
+NumberParse ParseCsvDouble(std::string_view text, double* value) {
+  double parsed = 0;
+  const NumberParse result = ParseWhole(text, &parsed, std::chars_format::general);
+  if (result != NumberParse::kOk) return result;
+  if (!std::isfinite(parsed)) return NumberParse::kNotFinite;
+  *value = parsed;
+  return NumberParse::kOk;
+}
+
+NumberParse ParseCsvInt32(std::string_view text, int32_t* value) { return ParseWhole(text, value); }
+
+Status ParseFiniteNumber(std::string_view path, int64_t line, const CsvField& field,
+                         std::string_view name, double* value) {
+  switch (ParseCsvDouble(field.text, value)) {
+    case NumberParse::kOk:
+      return Status::Ok();
+    case NumberParse::kOutOfRange:
+      return LineError(path, line, field.column,
+                       fmt::format("{}: {} is out of the range of a double", name,
+                                   QuotedField(field.text)));
+    case NumberParse::kNotFinite:
+      return LineError(path, line, field.column,
+                       fmt::format("{} = {}: must be finite", name, Shortened(field.text)));
+    case NumberParse::kEmpty:
+    case NumberParse::kNotANumber:
+      break;
+  }
+  return LineError(path, line, field.column,
+                   fmt::format("{}: {} is not a number", name, QuotedField(field.text)));
+}
+
+}  // namespace grove::tools
