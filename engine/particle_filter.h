@@ -126,6 +126,9 @@ class ParticleFilter {
     if (!(ess >= 0 && ess <= static_cast<double>(n) * (1 + 1e-9)) || !std::isfinite(ess_sum)) {
       return r->Error("ESS", "outside [0, particles]");
     }
+    for (double t : {times.advance_s, times.normalize_s, times.resample_s, times.release_s}) {
+      if (!(t >= 0 && t < 1e12)) return r->Error("phase times", "not a duration");
+    }
     if (count != n) return r->Error("weight count", "does not match the particle count");
     std::vector<double> log_w(n);
     GROVE_RETURN_IF_ERROR(r->GetBytes("log weights", log_w.data(), n * sizeof(double)));

@@ -454,6 +454,9 @@ class Engine final : public FootSlam::Impl {
     uint8_t unset = 0;
     GROVE_RETURN_IF_ERROR(r->Get("bookkeeping time", &bookkeeping_s));
     GROVE_RETURN_IF_ERROR(r->Get("start time unset", &unset));
+    if (!(bookkeeping_s >= 0 && bookkeeping_s < 1e12)) {
+      return r->Error("bookkeeping time", "not a duration");
+    }
     GROVE_RETURN_IF_ERROR(filter_.Load(r));
     const uint64_t steps = filter_.steps();
     if (times.size() != steps + 1 || mean.size() != steps + 1) {
@@ -463,6 +466,10 @@ class Engine final : public FootSlam::Impl {
       bool ordered = k == 0 || (k == 1 ? times[1] >= times[0] : times[k] > times[k - 1]);
       if (!std::isfinite(times[k]) || !ordered || mean[k].t_s != times[k]) {
         return r->Error("times", "not finite and increasing");
+      }
+      const Pose2& p = mean[k].pose;
+      if (!std::isfinite(p.x_m) || !std::isfinite(p.y_m) || !std::isfinite(p.heading_rad)) {
+        return r->Error("mean pose", "not finite");
       }
     }
     if (unset > 1 || (unset == 1 && steps > 0)) return r->Error("start time unset", "invalid");
