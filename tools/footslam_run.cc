@@ -266,7 +266,9 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
 
   // A new engine, or one continuing from a checkpoint.
   InputPosition resumed_at;
-  StatusOr<std::unique_ptr<FootSlam>> created = FootSlam::Create(config);
+  StatusOr<std::unique_ptr<FootSlam>> created =
+      options.resume_path.empty() ? FootSlam::Create(config)
+                                  : StatusOr<std::unique_ptr<FootSlam>>(InternalError("unset"));
   if (!options.resume_path.empty()) {
     StatusOr<std::string> bytes = ReadWholeFile(options.resume_path);
     if (!bytes.ok()) return Fail(ExitCodeOf(bytes.status()), bytes.status().message());
@@ -308,7 +310,13 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
   int64_t total_steps = lines - 1;
   if (reader->positions_form()) --total_steps;
   ProgressReporter progress(std::max<int64_t>(total_steps, 0), config.particles, stderr, terminal);
+  // The raw odometry drawn in the map frame: rotated by the configured start heading.
   std::vector<RenderPoint> odometry{{config.start_x_m, config.start_y_m}};
+  auto add_odometry = [&](const StepRecord& step) {
+    double c = std::cos(config.start_heading_rad), sn = std::sin(config.start_heading_rad);
+    odometry.push_back({odometry.back().x_m + c * step.dx_m - sn * step.dy_m,
+                        odometry.back().y_m + sn * step.dx_m + c * step.dy_m});
+  };
   bool start_set = slam.steps() > 0;
   StepRecord step;
   while (true) {
@@ -334,19 +342,15 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
     // odometry, not stepped again.
     const bool replay = position.steps < resumed_at.steps;
     position.Add(step);
-    if (replay || position.steps == resumed_at.steps) {
-      if (position.steps == resumed_at.steps && position.digest != resumed_at.digest) {
-        return Fail(kExitInput,
-                    fmt::format("{}: the first {} steps differ from those of {} (made from {}): "
-                                "resume with the same step file",
-                                steps_name, resumed_at.steps, options.resume_path,
-                                QuotedForError(resumed_at.steps_name)));
-      }
+    if (replay && position.steps == resumed_at.steps && position.digest != resumed_at.digest) {
+      return Fail(kExitInput,
+                  fmt::format("{}: the first {} steps differ from those of {} (made from {}): "
+                              "resume with the same step file",
+                              steps_name, resumed_at.steps, options.resume_path,
+                              QuotedForError(resumed_at.steps_name)));
     }
     if (replay) {
-      double c = std::cos(config.start_heading_rad), sn = std::sin(config.start_heading_rad);
-      odometry.push_back({odometry.back().x_m + c * step.dx_m - sn * step.dy_m,
-                          odometry.back().y_m + sn * step.dx_m + c * step.dy_m});
+      add_odometry(step);
       continue;
     }
     if (!start_set) {
@@ -358,10 +362,7 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
     if (!s.ok()) {
       return Fail(ExitCodeOf(s), fmt::format("{}:{}: {}", steps_name, step.line, s.message()));
     }
-    // The raw odometry drawn in the map frame: rotated by the configured start heading.
-    double c = std::cos(config.start_heading_rad), sn = std::sin(config.start_heading_rad);
-    odometry.push_back({odometry.back().x_m + c * step.dx_m - sn * step.dy_m,
-                        odometry.back().y_m + sn * step.dx_m + c * step.dy_m});
+    add_odometry(step);
     if (options.progress) progress.Update(slam.steps());
     if (options.checkpoint_every > 0 && slam.steps() % options.checkpoint_every == 0) {
       Status cs = write_checkpoint();
