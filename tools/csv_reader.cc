@@ -212,9 +212,9 @@ Status ParseFiniteNumber(std::string_view path, int64_t line, const CsvField& fi
     case NumberParse::kOk:
       return Status::Ok();
     case NumberParse::kOutOfRange:
-      return LineError(path, line, field.column,
-                       fmt::format("{}: {} is out of the range of a double", name,
-                                   QuotedField(field.text)));
+      return LineError(
+          path, line, field.column,
+          fmt::format("{}: {} is out of the range of a double", name, QuotedField(field.text)));
     case NumberParse::kNotFinite:
       return LineError(path, line, field.column,
                        fmt::format("{} = {}: must be finite", name, Shortened(field.text)));

@@ -33,7 +33,7 @@ StatusOr<std::string> ReadWholeFile(const std::string& path);
 // whole. After an error every later call returns the same error. Movable, not copyable.
 class LineReader {
  public:
-  // max_line_bytes: the longest accepted line in bytes, without its terminator. Range: [16, 64 MiB].
+  // max_line_bytes: the longest line accepted, in bytes without its terminator; in [16, 64 MiB].
   static StatusOr<LineReader> Open(const std::string& path, size_t max_line_bytes);
   // Reads lines from `in`; `path` names it in messages.
   static StatusOr<LineReader> FromStream(const std::string& path, std::unique_ptr<std::istream> in,

@@ -57,8 +57,7 @@ class CsvRows {
 
   // Reads field i as a finite double or as an int32, named `name` in messages.
   Status Double(size_t i, std::string_view name, double* value) const {
-    return FieldError(i, name, ParseCsvDouble(fields_[i].text, value), "a number",
-                      "out of range");
+    return FieldError(i, name, ParseCsvDouble(fields_[i].text, value), "a number", "out of range");
   }
   Status Int32(size_t i, std::string_view name, int32_t* value) const {
     return FieldError(i, name, ParseCsvInt32(fields_[i].text, value), "an integer",

@@ -38,8 +38,7 @@ StatusOr<StepReader> StepReader::OpenText(const std::string& name, std::string t
   return Start(std::move(lines).value(), options);
 }
 
-StatusOr<StepReader> StepReader::Start(LineReader lines,
-                                       const StepReaderOptions& options) {
+StatusOr<StepReader> StepReader::Start(LineReader lines, const StepReaderOptions& options) {
   const std::string path = lines.path();
   StepReader reader(std::move(lines), options);
 
@@ -62,9 +61,8 @@ StatusOr<StepReader> StepReader::Start(LineReader lines,
   } else if (header_is("t", "x", "y")) {
     reader.positions_form_ = true;
   } else {
-    return LineError(
-        path, reader.lines_.line_number(), 1,
-        fmt::format("unknown header \"{}\": expected \"t,dx,dy\" or \"t,x,y\"", line));
+    return LineError(path, reader.lines_.line_number(), 1,
+                     fmt::format("unknown header \"{}\": expected \"t,dx,dy\" or \"t,x,y\"", line));
   }
 
   while (reader.lookahead_end_ < 2) {
@@ -101,8 +99,7 @@ StatusOr<bool> StepReader::ReadRow(Row* row) {
   const int64_t number = lines_.line_number();
   SplitCsvLine(line, &fields_);
   if (fields_.size() != 3) {
-    return LineError(path, number, 1,
-                               fmt::format("expected 3 fields, found {}", fields_.size()));
+    return LineError(path, number, 1, fmt::format("expected 3 fields, found {}", fields_.size()));
   }
   Row parsed{0, 0, 0, number};
   GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, number, fields_[0], "t", &parsed.t_s));
@@ -110,13 +107,12 @@ StatusOr<bool> StepReader::ReadRow(Row* row) {
   // to be strictly ordered (a second is still resolved at 1e12 s, about 31,700 years).
   if (std::fabs(parsed.t_s) > kMaxAbsTime) {
     return LineError(path, number, fields_[0].column,
-                               fmt::format("t = {}: must be within +-{:g} s", parsed.t_s,
-                                           kMaxAbsTime));
+                     fmt::format("t = {}: must be within +-{:g} s", parsed.t_s, kMaxAbsTime));
   }
-  GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, number, fields_[1],
-                                                    positions_form_ ? "x" : "dx", &parsed.a_m));
-  GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, number, fields_[2],
-                                                    positions_form_ ? "y" : "dy", &parsed.b_m));
+  GROVE_RETURN_IF_ERROR(
+      ParseFiniteNumber(path, number, fields_[1], positions_form_ ? "x" : "dx", &parsed.a_m));
+  GROVE_RETURN_IF_ERROR(
+      ParseFiniteNumber(path, number, fields_[2], positions_form_ ? "y" : "dy", &parsed.b_m));
   if (has_previous_time_ && !(parsed.t_s > previous_time_s_)) {
     return LineError(
         path, number, fields_[0].column,
@@ -158,8 +154,8 @@ StatusOr<bool> StepReader::Next(StepRecord* step) {
   const double length = std::hypot(dx, dy);
   if (!(length <= options_.max_step_m)) {
     error_ = LineError(path(), row.line, 1,
-                                 fmt::format("step of {:.6g} m is longer than max_step_m = {}",
-                                             length, options_.max_step_m));
+                       fmt::format("step of {:.6g} m is longer than max_step_m = {}", length,
+                                   options_.max_step_m));
     return error_;
   }
   if (positions_form_) {

@@ -12,51 +12,41 @@
 namespace grove::tools {
 namespace {
 
-class CsvReaderTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = (std::filesystem::path(::testing::TempDir()) /
-            ("csv_reader_" + std::to_string(::getpid())))
-               .string();
-    std::filesystem::remove_all(dir_);
-    std::filesystem::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ignored;
-    std::filesystem::remove_all(dir_, ignored);
-  }
-  std::string Write(const std::string& name, const std::string& contents) {
-    std::string path = dir_ + "/" + name;
-    std::ofstream(path, std::ios::binary) << contents;
-    return path;
-  }
-  std::string dir_;
-};
+// A path under the test temporary directory that is this process's own.
+std::string TempPath(const std::string& name) {
+  return (std::filesystem::path(::testing::TempDir()) /
+          ("csv_reader_" + std::to_string(::getpid()) + "_" + name))
+      .string();
+}
 
-TEST_F(CsvReaderTest, ReadWholeFileReturnsEveryByte) {
+TEST(ReadWholeFileTest, ReturnsEveryByte) {
   const std::string bytes("a\0b\r\n\xff", 6);
-  StatusOr<std::string> read = ReadWholeFile(Write("bytes", bytes));
+  const std::string path = TempPath("bytes");
+  std::ofstream(path, std::ios::binary) << bytes;
+  StatusOr<std::string> read = ReadWholeFile(path);
+  std::filesystem::remove(path);
   ASSERT_TRUE(read.ok()) << read.status().ToString();
   EXPECT_EQ(*read, bytes);
 }
 
-TEST_F(CsvReaderTest, ReadWholeFileMissingIsNotFoundNamingPathAndReason) {
-  const std::string path = dir_ + "/absent";
+TEST(ReadWholeFileTest, MissingIsNotFoundNamingPathAndReason) {
+  const std::string path = TempPath("absent");
   StatusOr<std::string> read = ReadWholeFile(path);
   EXPECT_EQ(read.status().code(), StatusCode::kNotFound);
   EXPECT_EQ(read.status().message(), path + ": cannot open: No such file or directory");
 }
 
-TEST_F(CsvReaderTest, ReadWholeFileOfADirectoryIsAnIoError) {
-  StatusOr<std::string> read = ReadWholeFile(dir_);
+TEST(ReadWholeFileTest, DirectoryIsAnIoError) {
+  const std::string dir = ::testing::TempDir();
+  StatusOr<std::string> read = ReadWholeFile(dir);
   EXPECT_EQ(read.status().code(), StatusCode::kIoError);
-  EXPECT_EQ(read.status().message().rfind(dir_ + ": ", 0), 0u) << read.status().message();
+  EXPECT_EQ(read.status().message().rfind(dir + ": ", 0), 0u) << read.status().message();
 }
 
-TEST_F(CsvReaderTest, LineReaderOfADirectoryIsAnIoErrorAndMissingIsNotFound) {
-  EXPECT_EQ(LineReader::Open(dir_, 64).status().code(), StatusCode::kIoError);
-  EXPECT_EQ(LineReader::Open(dir_ + "/absent", 64).status().code(), StatusCode::kNotFound);
-  EXPECT_EQ(LineReader::Open(Write("f", ""), 15).status().code(), StatusCode::kInvalidArgument);
+TEST(LineReaderTest, DirectoryIsAnIoErrorMissingIsNotFoundBadLimitIsInvalid) {
+  EXPECT_EQ(LineReader::Open(::testing::TempDir(), 64).status().code(), StatusCode::kIoError);
+  EXPECT_EQ(LineReader::Open(TempPath("absent"), 64).status().code(), StatusCode::kNotFound);
+  EXPECT_EQ(LineReader::Open(TempPath("absent"), 15).status().code(), StatusCode::kInvalidArgument);
 }
 
 TEST(LineReaderTest, StripsTerminatorsAndTheByteOrderMarkAndCountsLines) {
@@ -146,8 +136,10 @@ TEST(CsvNumbersTest, ParseFiniteNumberMessages) {
   double v = 0;
   EXPECT_TRUE(ParseFiniteNumber("f", 3, {"-2.5", 4}, "x", &v).ok());
   EXPECT_EQ(v, -2.5);
-  EXPECT_EQ(ParseFiniteNumber("f", 3, {"", 4}, "x", &v).message(), "f:3:4: x: \"\" is not a number");
-  EXPECT_EQ(ParseFiniteNumber("f", 3, {"inf", 4}, "x", &v).message(), "f:3:4: x = inf: must be finite");
+  EXPECT_EQ(ParseFiniteNumber("f", 3, {"", 4}, "x", &v).message(),
+            "f:3:4: x: \"\" is not a number");
+  EXPECT_EQ(ParseFiniteNumber("f", 3, {"inf", 4}, "x", &v).message(),
+            "f:3:4: x = inf: must be finite");
   EXPECT_EQ(ParseFiniteNumber("f", 3, {"1e999", 4}, "x", &v).message(),
             "f:3:4: x: \"1e999\" is out of the range of a double");
   const std::string junk(500, 'z');
