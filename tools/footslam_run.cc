@@ -39,6 +39,8 @@ int Fail(int code, const std::string& message) {
   return code;
 }
 
+// The exit code of a run's or an output's error. An error reading an input file (steps,
+// checkpoint, truth, CSV) is kExitInput whatever its code.
 int ExitCodeOf(const Status& s) {
   switch (s.code()) {
     case StatusCode::kInvalidArgument:
@@ -244,7 +246,7 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
       options.steps_path.empty()
           ? StepReader::OpenText(EmbeddedWalkName(), EmbeddedWalkSteps(), reader_options)
           : StepReader::Open(options.steps_path, reader_options);
-  if (!reader.ok()) return Fail(ExitCodeOf(reader.status()), reader.status().message());
+  if (!reader.ok()) return Fail(kExitInput, reader.status().message());
 
   // Refuse a run that would not fit before building anything.
   const int64_t lines = options.steps_path.empty() ? CountLines(EmbeddedWalkSteps())
@@ -271,7 +273,7 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
                                   : StatusOr<std::unique_ptr<FootSlam>>(InternalError("unset"));
   if (!options.resume_path.empty()) {
     StatusOr<std::string> bytes = ReadWholeFile(options.resume_path);
-    if (!bytes.ok()) return Fail(ExitCodeOf(bytes.status()), bytes.status().message());
+    if (!bytes.ok()) return Fail(kExitInput, bytes.status().message());
     std::string user;
     created = FootSlam::Resume(config, *bytes, options.resume_path, &user);
     if (!created.ok()) {
@@ -472,9 +474,9 @@ int SimulateCommand(const std::string& out_dir, double minutes, uint64_t seed,
 
 int EvaluateCommand(const std::string& truth_path, const std::string& trajectory_path) {
   auto truth = ReadTimedPoints(truth_path);
-  if (!truth.ok()) return Fail(ExitCodeOf(truth.status()), truth.status().message());
+  if (!truth.ok()) return Fail(kExitInput, truth.status().message());
   auto estimate = ReadTimedPoints(trajectory_path);
-  if (!estimate.ok()) return Fail(ExitCodeOf(estimate.status()), estimate.status().message());
+  if (!estimate.ok()) return Fail(kExitInput, estimate.status().message());
   auto error = CompareTrajectories(*truth, *estimate);
   if (!error.ok()) return Fail(kExitInput, error.status().message());
   std::printf("%s\n", TrajectoryErrorJson(*error).c_str());
@@ -483,9 +485,9 @@ int EvaluateCommand(const std::string& truth_path, const std::string& trajectory
 
 int RenderCommand(const std::string& dir, double hex_radius_m, const std::string& odometry_path) {
   auto hexes = ReadMapCsv(dir + "/map.csv");
-  if (!hexes.ok()) return Fail(ExitCodeOf(hexes.status()), hexes.status().message());
+  if (!hexes.ok()) return Fail(kExitInput, hexes.status().message());
   auto path = ReadPathCsv(dir + "/trajectory.csv");
-  if (!path.ok()) return Fail(ExitCodeOf(path.status()), path.status().message());
+  if (!path.ok()) return Fail(kExitInput, path.status().message());
   MapImage image;
   image.hex_radius_m = hex_radius_m;
   image.hexes = std::move(*hexes);

@@ -243,6 +243,10 @@ TEST_F(CliTest, BadCheckpointsAreRefused) {
   o = Grove(run + "--resume " + (dir_ / "missing.grove").string() + " --out " + out.string());
   EXPECT_EQ(o.exit_code, 3);
   EXPECT_NE(o.err.find("missing.grove: cannot open"), std::string::npos) << o.err;
+  o = Grove(run + "--resume " + dir_.string() + " --out " + out.string());
+  EXPECT_EQ(o.exit_code, 3) << "a directory is a bad input, not an output error: " << o.err;
+  o = Grove("footslam run --no-progress --steps " + dir_.string() + " --out " + out.string());
+  EXPECT_EQ(o.exit_code, 3) << o.err;
 
   // Another step file: different steps, or too few of them.
   std::string other = Write("other.csv", "t,dx,dy\n1,0.7,0\n2,0.6,0\n3,0,0.7\n4,-0.7,0\n");
