@@ -80,6 +80,26 @@ class PersistentTrie {
     return b->Has(d) ? &b->leaf[d] : nullptr;
   }
 
+  // Starts loading the node at `depth` (0 = the root, at most height - 1) on the path to `key`:
+  // its count and the link or leaf Update() will read. The nodes above it should already be
+  // cached (an earlier call with a smaller depth), so a caller staggers the depths of several
+  // versions to overlap their misses. A hint only: reads links of the caller's own version.
+  // Always inlined: GCC deduces that a call to it has no side effects (a prefetch does not
+  // count) and would delete the call.
+  [[gnu::always_inline]] void PrefetchPath(const Node* root, uint64_t key, int depth) const {
+    const Node* cur = root;
+    for (int level = 0; cur != nullptr && level < depth; ++level) {
+      cur = static_cast<const Inner*>(cur)->child[Digit(key, level)];
+    }
+    if (cur == nullptr) return;
+    __builtin_prefetch(cur);
+    if (depth < height_ - 1) {
+      __builtin_prefetch(&static_cast<const Inner*>(cur)->child[Digit(key, depth)]);
+    } else {
+      __builtin_prefetch(&static_cast<const Bottom*>(cur)->leaf[Digit(key, depth)]);
+    }
+  }
+
   // A second reference to the same version: O(1).
   static Node* Share(Node* root) {
     if (root != nullptr) root->rc.Acquire();

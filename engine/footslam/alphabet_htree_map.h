@@ -74,6 +74,11 @@ class AlphabetHTreeMap {
 
   // Starts loading particle i's root node into the cache.
   void Prefetch(size_t i) const { __builtin_prefetch(symbol_roots_[i]); }
+  // Starts loading the node at `depth` on particle i's path to `key` (see PersistentTrie).
+  [[gnu::always_inline]] void PrefetchPath(size_t i, uint64_t key, int depth) const {
+    symbols_.PrefetchPath(symbol_roots_[i], key, depth);
+  }
+  int height() const { return symbols_.height(); }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     std::vector<typename SymbolTrie::Root> next_symbols =

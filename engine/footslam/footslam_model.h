@@ -10,6 +10,7 @@
 #ifndef GROVE_ENGINE_FOOTSLAM_FOOTSLAM_MODEL_H_
 #define GROVE_ENGINE_FOOTSLAM_FOOTSLAM_MODEL_H_
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -82,11 +83,21 @@ class FootSlamModel {
                double* log_w) {
     const double odo_length = std::hypot(in.dx_m, in.dy_m);
     const double odo_heading = std::atan2(in.dy_m, in.dx_m) + config_.start_heading_rad;
+    // Particles are independent: start the cache misses of later ones while this one runs. A
+    // particle's first crossing (if any) leaves its current hexagon, so its map path is known
+    // before its motion is drawn: particle i + kPathGap * (levels - depth) has the node at
+    // `depth` of that path loaded, one level deeper every kPathGap particles.
+    int levels = map_->height();
+    if (levels > kMaxPathLevels) levels = kMaxPathLevels;
     for (size_t i = begin; i < end; ++i) {
-      // Particles are independent: start the cache misses of a later one while this one runs.
       if (i + kPrefetchAhead < end) {
-        map_->Prefetch(i + kPrefetchAhead);
+        if (levels == 0) map_->Prefetch(i + kPrefetchAhead);
         __builtin_prefetch(history_roots_[i + kPrefetchAhead]);
+      }
+      for (int depth = 0; depth < levels; ++depth) {
+        const size_t j = i + kPathGap * static_cast<size_t>(levels - depth);
+        uint64_t key;
+        if (j < end && KeyOf(hex_[j], &key)) map_->PrefetchPath(j, key, depth);
       }
       RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), kMotionPurpose);
       if (config_.heading_drift_sigma_rad > 0) {
@@ -207,6 +218,8 @@ class FootSlamModel {
   PoseHistory history_;
   size_t n_;
   static constexpr size_t kPrefetchAhead = 4;
+  static constexpr size_t kPathGap = 2;
+  static constexpr int kMaxPathLevels = 8;
   static constexpr uint32_t kLogTable = 256;
   double log_edge_bias_ = 0;
   double log_edge_[kLogTable];

@@ -38,6 +38,11 @@ class HTreeMap {
 
   // Starts loading particle i's root node into the cache.
   void Prefetch(size_t i) const { __builtin_prefetch(roots_[i]); }
+  // Starts loading the node at `depth` on particle i's path to `key` (see PersistentTrie).
+  [[gnu::always_inline]] void PrefetchPath(size_t i, uint64_t key, int depth) const {
+    trie_.PrefetchPath(roots_[i], key, depth);
+  }
+  int height() const { return trie_.height(); }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     std::vector<typename Trie::Root> next = GatherShared(parents, &roots_, workers, &Trie::Share);
