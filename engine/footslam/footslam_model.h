@@ -161,7 +161,8 @@ class FootSlamModel {
 
   void ReleaseDead(WorkerPool& workers) {
     workers.ParallelFor(dead_history_.size(), 1024, [&](int slot, size_t b, size_t e) {
-      for (size_t k = b; k < e; ++k) history_.Release(dead_history_[k], slot);
+      history_.ReleaseMany(std::span<PoseHistory::Node* const>(dead_history_).subspan(b, e - b),
+                           slot);
     });
     dead_history_.clear();
     map_->ReleaseDead(workers);
