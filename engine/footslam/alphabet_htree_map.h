@@ -93,10 +93,10 @@ class AlphabetHTreeMap {
 
   void ReleaseDead(WorkerPool& workers) {
     workers.ParallelFor(dead_symbol_roots_.size(), 1024, [&](int slot, size_t b, size_t e) {
-      for (size_t k = b; k < e; ++k) {
-        symbols_.Release(dead_symbol_roots_[k], slot);
-        full_.Release(dead_full_roots_[k], slot);
-      }
+      symbols_.ReleaseMany(
+          std::span<typename SymbolTrie::Root const>(dead_symbol_roots_).subspan(b, e - b), slot);
+      full_.ReleaseMany(
+          std::span<typename FullTrie::Root const>(dead_full_roots_).subspan(b, e - b), slot);
     });
     dead_symbol_roots_.clear();
     dead_full_roots_.clear();

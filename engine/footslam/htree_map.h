@@ -52,7 +52,7 @@ class HTreeMap {
 
   void ReleaseDead(WorkerPool& workers) {
     workers.ParallelFor(dead_.size(), 1024, [&](int slot, size_t b, size_t e) {
-      for (size_t k = b; k < e; ++k) trie_.Release(dead_[k], slot);
+      trie_.ReleaseMany(std::span<typename Trie::Root const>(dead_).subspan(b, e - b), slot);
     });
     dead_.clear();
   }
