@@ -52,6 +52,7 @@ class FootSlamModel {
     x_.assign(n_, config.start_x_m);
     y_.assign(n_, config.start_y_m);
     heading_.assign(n_, config.start_heading_rad);
+    heading_unit_.assign(n_, {std::cos(config.start_heading_rad), std::sin(config.start_heading_rad)});
     heading_error_.resize(n_);
     scale_.resize(n_);
     Hex start = grid_->HexAt(config.start_x_m, config.start_y_m);
@@ -108,8 +109,10 @@ class FootSlamModel {
       if (config_.step_length_sigma_m > 0) length += config_.step_length_sigma_m * rs.NextNormal();
       double heading = odo_heading + heading_error_[i];
       if (config_.heading_sigma_rad > 0) heading += config_.heading_sigma_rad * rs.NextNormal();
-      double nx = x_[i] + length * std::cos(heading);
-      double ny = y_[i] + length * std::sin(heading);
+      const double cos_heading = std::cos(heading);
+      const double sin_heading = std::sin(heading);
+      double nx = x_[i] + length * cos_heading;
+      double ny = y_[i] + length * sin_heading;
       if (config_.position_sigma_m > 0) {
         nx += config_.position_sigma_m * rs.NextNormal();
         ny += config_.position_sigma_m * rs.NextNormal();
@@ -139,6 +142,7 @@ class FootSlamModel {
       x_[i] = nx;
       y_[i] = ny;
       heading_[i] = heading;
+      heading_unit_[i] = {cos_heading, sin_heading};
       hex_[i] = end_hex;
       history_roots_[i] =
           history_.Append(history_roots_[i], static_cast<uint32_t>(step + 1), nx, ny, heading, slot);
@@ -149,6 +153,7 @@ class FootSlamModel {
     GatherVector(parents, workers, &x_);
     GatherVector(parents, workers, &y_);
     GatherVector(parents, workers, &heading_);
+    GatherVector(parents, workers, &heading_unit_);
     GatherVector(parents, workers, &heading_error_);
     GatherVector(parents, workers, &scale_);
     GatherVector(parents, workers, &hex_);
@@ -195,6 +200,9 @@ class FootSlamModel {
   double x(size_t i) const { return x_[i]; }
   double y(size_t i) const { return y_[i]; }
   double heading(size_t i) const { return heading_[i]; }
+  // std::cos(heading(i)) and std::sin(heading(i)), kept from the motion that set the heading.
+  double cos_heading(size_t i) const { return heading_unit_[i].c; }
+  double sin_heading(size_t i) const { return heading_unit_[i].s; }
   double scale(size_t i) const { return scale_[i]; }
   double heading_error(size_t i) const { return heading_error_[i]; }
   const PoseHistory::Node* history(size_t i) const { return history_roots_[i]; }
@@ -226,6 +234,10 @@ class FootSlamModel {
   double log_edge_[kLogTable];
   double log_total_[kLogTable];
   std::vector<double> x_, y_, heading_, heading_error_, scale_;
+  struct Unit {
+    double c, s;
+  };
+  std::vector<Unit> heading_unit_;
   Hex start_hex_;
   std::vector<Hex> hex_;
   std::vector<PoseHistory::Node*> history_roots_;
