@@ -57,7 +57,8 @@ class PersistentTrie {
   PersistentTrie(int height, int slots)
       : height_(height),
         inner_pool_(sizeof(Inner), slots),
-        bottom_pool_(sizeof(Bottom), slots) {
+        bottom_pool_(sizeof(Bottom), slots),
+        release_scratch_(slots) {
     GROVE_CHECK(height >= 1 && height <= kMaxHeight);
   }
   PersistentTrie(const PersistentTrie&) = delete;
@@ -79,6 +80,26 @@ class PersistentTrie {
     const Bottom* b = static_cast<const Bottom*>(cur);
     int d = Digit(key, height_ - 1);
     return b->Has(d) ? &b->leaf[d] : nullptr;
+  }
+
+  // Starts loading the node at `depth` (0 = the root, at most height - 1) on the path to `key`:
+  // its count and the link or leaf Update() will read. The nodes above it should already be
+  // cached (an earlier call with a smaller depth), so a caller staggers the depths of several
+  // versions to overlap their misses. A hint only: reads links of the caller's own version.
+  // Always inlined: GCC deduces that a call to it has no side effects (a prefetch does not
+  // count) and would delete the call.
+  [[gnu::always_inline]] void PrefetchPath(const Node* root, uint64_t key, int depth) const {
+    const Node* cur = root;
+    for (int level = 0; cur != nullptr && level < depth; ++level) {
+      cur = static_cast<const Inner*>(cur)->child[Digit(key, level)];
+    }
+    if (cur == nullptr) return;
+    __builtin_prefetch(cur);
+    if (depth < height_ - 1) {
+      __builtin_prefetch(&static_cast<const Inner*>(cur)->child[Digit(key, depth)]);
+    } else {
+      __builtin_prefetch(&static_cast<const Bottom*>(cur)->leaf[Digit(key, depth)]);
+    }
   }
 
   // A second reference to the same version: O(1).
@@ -170,6 +191,61 @@ class PersistentTrie {
       } else {
         FreeNode(item.node, /*bottom=*/true, slot);
       }
+    }
+  }
+
+  // Release() of every version in `roots` (nullptr entries skipped), with the cache misses of
+  // many nodes overlapped: a node's count is dropped kInFlight drops after it was queued and
+  // prefetched, and a dead inner node's links are read kInFlight dead nodes after its lines
+  // were prefetched. Frees the same nodes as Release() one by one; only the order differs.
+  void ReleaseMany(std::span<Node* const> roots, int slot) {
+    constexpr size_t kInFlight = 16;
+    using Item = ReleaseItem;
+    // FIFOs: nodes whose count is to be dropped, and dead inner nodes to expand and free.
+    std::vector<Item>& drop = release_scratch_[slot].drop;
+    std::vector<Item>& dead = release_scratch_[slot].dead;
+    drop.clear();
+    dead.clear();
+    size_t drop_head = 0, dead_head = 0, next = 0;
+    auto queue = [&](Node* n, int level) {
+      __builtin_prefetch(n, 1);
+      drop.push_back({n, level});
+    };
+    for (;;) {
+      while (drop.size() - drop_head < kInFlight && next < roots.size()) {
+        if (roots[next] != nullptr) queue(roots[next], 0);
+        ++next;
+      }
+      if (drop_head < drop.size()) {
+        Item item = drop[drop_head++];
+        if (drop_head == drop.size()) {
+          drop.clear();
+          drop_head = 0;
+        }
+        if (item.node->rc.Release()) {
+          if (item.level < height_ - 1) {
+            const char* p = reinterpret_cast<const char*>(item.node);
+            for (size_t off = 0; off < sizeof(Inner); off += 64) __builtin_prefetch(p + off);
+            dead.push_back(item);
+          } else {
+            FreeNode(item.node, /*bottom=*/true, slot);
+          }
+        }
+      }
+      if (dead_head < dead.size() &&
+          (dead.size() - dead_head >= kInFlight || drop_head == drop.size())) {
+        Item item = dead[dead_head++];
+        if (dead_head == dead.size()) {
+          dead.clear();
+          dead_head = 0;
+        }
+        Inner* n = static_cast<Inner*>(item.node);
+        for (int i = 0; i < kDegree; ++i) {
+          if (n->child[i] != nullptr) queue(n->child[i], item.level + 1);
+        }
+        FreeNode(n, /*bottom=*/false, slot);
+      }
+      if (drop_head == drop.size() && dead_head == dead.size() && next == roots.size()) return;
     }
   }
 
@@ -467,6 +543,16 @@ class PersistentTrie {
   int height_;
   NodePool inner_pool_;
   NodePool bottom_pool_;
+  // ReleaseMany's queues, per worker slot (reused: no allocation per call once grown).
+  struct ReleaseItem {
+    Node* node;
+    int level;
+  };
+  struct alignas(64) ReleaseScratch {
+    std::vector<ReleaseItem> drop;
+    std::vector<ReleaseItem> dead;
+  };
+  std::vector<ReleaseScratch> release_scratch_;
 };
 
 }  // namespace grove

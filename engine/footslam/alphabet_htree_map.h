@@ -74,6 +74,11 @@ class AlphabetHTreeMap {
 
   // Starts loading particle i's root node into the cache.
   void Prefetch(size_t i) const { __builtin_prefetch(symbol_roots_[i]); }
+  // Starts loading the node at `depth` on particle i's path to `key` (see PersistentTrie).
+  [[gnu::always_inline]] void PrefetchPath(size_t i, uint64_t key, int depth) const {
+    symbols_.PrefetchPath(symbol_roots_[i], key, depth);
+  }
+  int height() const { return symbols_.height(); }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     std::vector<typename SymbolTrie::Root> next_symbols =
@@ -88,10 +93,10 @@ class AlphabetHTreeMap {
 
   void ReleaseDead(WorkerPool& workers) {
     workers.ParallelFor(dead_symbol_roots_.size(), 1024, [&](int slot, size_t b, size_t e) {
-      for (size_t k = b; k < e; ++k) {
-        symbols_.Release(dead_symbol_roots_[k], slot);
-        full_.Release(dead_full_roots_[k], slot);
-      }
+      symbols_.ReleaseMany(
+          std::span<typename SymbolTrie::Root const>(dead_symbol_roots_).subspan(b, e - b), slot);
+      full_.ReleaseMany(
+          std::span<typename FullTrie::Root const>(dead_full_roots_).subspan(b, e - b), slot);
     });
     dead_symbol_roots_.clear();
     dead_full_roots_.clear();

@@ -516,13 +516,15 @@ class Engine final : public FootSlam::Impl {
     std::vector<Sum> sums =
         workers_.MapBlocks<Sum>(model_.size(), kSumBlock, [&](size_t, size_t b, size_t e) {
           Sum s;
+          double w = 0;
           for (size_t i = b; i < e; ++i) {
-            double w = std::exp(lw[i]);
+            // After resampling every weight is the same: one exp, not one per particle.
+            if (i == b || lw[i] != lw[i - 1]) w = std::exp(lw[i]);
             s.w += w;
             s.x += w * model_.x(i);
             s.y += w * model_.y(i);
-            s.c += w * std::cos(model_.heading(i));
-            s.s += w * std::sin(model_.heading(i));
+            s.c += w * model_.cos_heading(i);
+            s.s += w * model_.sin_heading(i);
           }
           return s;
         });
@@ -585,8 +587,9 @@ int64_t PathBytesFor(const FootSlamConfig& config, int height) {
 int64_t FootSlam::EstimatePeakBytes(const FootSlamConfig& config, int64_t steps) {
   const int64_t n = config.particles;
   const int64_t fixed = int64_t{64} << 20;
-  // Pose, errors, hexagon, weights, parents and the gather's temporaries.
-  const int64_t state = 160;
+  // Pose (and its heading's cosine and sine), errors, hexagon, weights, parents and the
+  // gather's temporaries.
+  const int64_t state = 176;
   // Live poses stay near steps + C N log N (tests/stress/footslam_long_run_test.cc): with the
   // 32-byte nodes of two generations, about 3 nodes per particle at 30,000 to 1,000,000.
   const int64_t history = 3 * 32;

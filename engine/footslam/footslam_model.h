@@ -53,6 +53,7 @@ class FootSlamModel {
     x_.assign(n_, config.start_x_m);
     y_.assign(n_, config.start_y_m);
     heading_.assign(n_, config.start_heading_rad);
+    heading_unit_.assign(n_, {std::cos(config.start_heading_rad), std::sin(config.start_heading_rad)});
     heading_error_.resize(n_);
     scale_.resize(n_);
     Hex start = grid_->HexAt(config.start_x_m, config.start_y_m);
@@ -84,11 +85,21 @@ class FootSlamModel {
                double* log_w) {
     const double odo_length = std::hypot(in.dx_m, in.dy_m);
     const double odo_heading = std::atan2(in.dy_m, in.dx_m) + config_.start_heading_rad;
+    // Particles are independent: start the cache misses of later ones while this one runs. A
+    // particle's first crossing (if any) leaves its current hexagon, so its map path is known
+    // before its motion is drawn: particle i + kPathGap * (levels - depth) has the node at
+    // `depth` of that path loaded, one level deeper every kPathGap particles.
+    int levels = map_->height();
+    if (levels > kMaxPathLevels) levels = kMaxPathLevels;
     for (size_t i = begin; i < end; ++i) {
-      // Particles are independent: start the cache misses of a later one while this one runs.
       if (i + kPrefetchAhead < end) {
-        map_->Prefetch(i + kPrefetchAhead);
+        if (levels == 0) map_->Prefetch(i + kPrefetchAhead);
         __builtin_prefetch(history_roots_[i + kPrefetchAhead]);
+      }
+      for (int depth = 0; depth < levels; ++depth) {
+        const size_t j = i + kPathGap * static_cast<size_t>(levels - depth);
+        uint64_t key;
+        if (j < end && KeyOf(hex_[j], &key)) map_->PrefetchPath(j, key, depth);
       }
       RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), kMotionPurpose);
       if (config_.heading_drift_sigma_rad > 0) {
@@ -99,8 +110,10 @@ class FootSlamModel {
       if (config_.step_length_sigma_m > 0) length += config_.step_length_sigma_m * rs.NextNormal();
       double heading = odo_heading + heading_error_[i];
       if (config_.heading_sigma_rad > 0) heading += config_.heading_sigma_rad * rs.NextNormal();
-      double nx = x_[i] + length * std::cos(heading);
-      double ny = y_[i] + length * std::sin(heading);
+      const double cos_heading = std::cos(heading);
+      const double sin_heading = std::sin(heading);
+      double nx = x_[i] + length * cos_heading;
+      double ny = y_[i] + length * sin_heading;
       if (config_.position_sigma_m > 0) {
         nx += config_.position_sigma_m * rs.NextNormal();
         ny += config_.position_sigma_m * rs.NextNormal();
@@ -133,6 +146,7 @@ class FootSlamModel {
       x_[i] = nx;
       y_[i] = ny;
       heading_[i] = heading;
+      heading_unit_[i] = {cos_heading, sin_heading};
       hex_[i] = end_hex;
       history_roots_[i] =
           history_.Append(history_roots_[i], static_cast<uint32_t>(step + 1), nx, ny, heading, slot);
@@ -143,6 +157,7 @@ class FootSlamModel {
     GatherVector(parents, workers, &x_);
     GatherVector(parents, workers, &y_);
     GatherVector(parents, workers, &heading_);
+    GatherVector(parents, workers, &heading_unit_);
     GatherVector(parents, workers, &heading_error_);
     GatherVector(parents, workers, &scale_);
     GatherVector(parents, workers, &hex_);
@@ -155,7 +170,8 @@ class FootSlamModel {
 
   void ReleaseDead(WorkerPool& workers) {
     workers.ParallelFor(dead_history_.size(), 1024, [&](int slot, size_t b, size_t e) {
-      for (size_t k = b; k < e; ++k) history_.Release(dead_history_[k], slot);
+      history_.ReleaseMany(std::span<PoseHistory::Node* const>(dead_history_).subspan(b, e - b),
+                           slot);
     });
     dead_history_.clear();
     map_->ReleaseDead(workers);
@@ -211,6 +227,8 @@ class FootSlamModel {
         if (!std::isfinite(v)) return r->Error(names[k], "a value is not finite");
       }
     }
+    // Derived state: the same calls on the same values as in Advance(), so bit-identical.
+    for (size_t i = 0; i < n_; ++i) heading_unit_[i] = {std::cos(heading_[i]), std::sin(heading_[i])};
     GROVE_RETURN_IF_ERROR(r->GetBytes("hexagon", hex_.data(), n_ * sizeof(Hex)));
     // Every hexagon of the grid lies within this distance of the start on each axis.
     const double extent = (layout_->grid_size() + 2.0) * 2.0 * grid_->radius_m();
@@ -247,6 +265,9 @@ class FootSlamModel {
   double x(size_t i) const { return x_[i]; }
   double y(size_t i) const { return y_[i]; }
   double heading(size_t i) const { return heading_[i]; }
+  // std::cos(heading(i)) and std::sin(heading(i)), kept from the motion that set the heading.
+  double cos_heading(size_t i) const { return heading_unit_[i].c; }
+  double sin_heading(size_t i) const { return heading_unit_[i].s; }
   double scale(size_t i) const { return scale_[i]; }
   double heading_error(size_t i) const { return heading_error_[i]; }
   const PoseHistory::Node* history(size_t i) const { return history_roots_[i]; }
@@ -271,11 +292,17 @@ class FootSlamModel {
   PoseHistory history_;
   size_t n_;
   static constexpr size_t kPrefetchAhead = 4;
+  static constexpr size_t kPathGap = 2;
+  static constexpr int kMaxPathLevels = 8;
   static constexpr uint32_t kLogTable = 256;
   double log_edge_bias_ = 0;
   double log_edge_[kLogTable];
   double log_total_[kLogTable];
   std::vector<double> x_, y_, heading_, heading_error_, scale_;
+  struct Unit {
+    double c, s;
+  };
+  std::vector<Unit> heading_unit_;
   Hex start_hex_;
   std::vector<Hex> hex_;
   std::vector<PoseHistory::Node*> history_roots_;

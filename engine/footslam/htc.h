@@ -5,6 +5,10 @@
 //       particle i leaves hexagon `key` across `edge`: returns the counters before the crossing
 //       and adds one
 //   void Prefetch(size_t i) const;  // a hint: particle i's map will be used soon
+//   void PrefetchPath(size_t i, uint64_t key, int depth) const;
+//       a hint: load the node at `depth` (< height()) on particle i's path to `key`; the nodes
+//       above it were hinted earlier
+//   int height() const;  // levels PrefetchPath walks (0: none)
 //   void Gather(std::span<const uint32_t> parents, WorkerPool&);  // next generation
 //   void ReleaseDead(WorkerPool&);                                  // frees the previous one
 //   void ForEachHex(size_t i, F f) const;  // f(key, const Htc&) in key order

@@ -38,6 +38,11 @@ class HTreeMap {
 
   // Starts loading particle i's root node into the cache.
   void Prefetch(size_t i) const { __builtin_prefetch(roots_[i]); }
+  // Starts loading the node at `depth` on particle i's path to `key` (see PersistentTrie).
+  [[gnu::always_inline]] void PrefetchPath(size_t i, uint64_t key, int depth) const {
+    trie_.PrefetchPath(roots_[i], key, depth);
+  }
+  int height() const { return trie_.height(); }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     std::vector<typename Trie::Root> next = GatherShared(parents, &roots_, workers, &Trie::Share);
@@ -47,7 +52,7 @@ class HTreeMap {
 
   void ReleaseDead(WorkerPool& workers) {
     workers.ParallelFor(dead_.size(), 1024, [&](int slot, size_t b, size_t e) {
-      for (size_t k = b; k < e; ++k) trie_.Release(dead_[k], slot);
+      trie_.ReleaseMany(std::span<typename Trie::Root const>(dead_).subspan(b, e - b), slot);
     });
     dead_.clear();
   }

@@ -84,6 +84,8 @@ class NaiveMap {
   }
 
   void Prefetch(size_t) const {}
+  void PrefetchPath(size_t, uint64_t, int) const {}
+  int height() const { return 0; }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     std::vector<HexTable> next(parents.size());

@@ -60,6 +60,36 @@ class PoseHistory {
     }
   }
 
+  // Release() of every history in `nodes` (nullptr entries skipped). Walks many chains at once:
+  // a pose is dropped kInFlight drops after it was queued and prefetched, so the cache misses of
+  // up to kInFlight chains overlap (one chain alone is a series of dependent misses). The poses
+  // freed are the same as by Release() one by one; only the order differs.
+  void ReleaseMany(std::span<Node* const> nodes, int slot) {
+    constexpr size_t kInFlight = 16;
+    constexpr size_t kRing = 32;  // a power of two >= kInFlight + 1
+    Node* ring[kRing];
+    size_t head = 0, tail = 0;  // queued: ring[head .. tail), indices mod kRing
+    size_t next = 0;
+    for (;;) {
+      while (tail - head < kInFlight && next < nodes.size()) {
+        Node* n = nodes[next++];
+        if (n == nullptr) continue;
+        __builtin_prefetch(n, 1);
+        ring[tail++ % kRing] = n;
+      }
+      if (head == tail) return;
+      Node* n = ring[head++ % kRing];
+      if (!n->rc.Release()) continue;
+      Node* parent = n->parent;
+      n->~Node();
+      pool_.Free(n, slot);
+      if (parent != nullptr) {
+        __builtin_prefetch(parent, 1);
+        ring[tail++ % kRing] = parent;
+      }
+    }
+  }
+
   // The path ending at `n`, oldest pose first.
   static std::vector<const Node*> Path(const Node* n) {
     std::vector<const Node*> path;

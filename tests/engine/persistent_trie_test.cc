@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <map>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -150,6 +151,59 @@ TEST(PersistentTrieTest, SharedVersionCopiesOnlyThePath) {
   trie.Release(root, 0);
   trie.Release(copy, 0);
   EXPECT_EQ(trie.live_nodes(), 0);
+}
+
+// ReleaseMany frees exactly what Release one by one frees: two tries built by the same random
+// updates and shares, one released each way, keep the same live nodes and the same contents.
+TEST(PersistentTrieTest, ReleaseManyFreesWhatReleaseFrees) {
+  using Trie = PersistentTrie<Value, 4>;
+  Trie one(4, 2), many(4, 2);
+  constexpr int kVersions = 300;
+  std::vector<Trie::Root> a(kVersions, nullptr), b(kVersions, nullptr);
+  std::mt19937_64 rng(21);
+  for (int round = 0; round < 6; ++round) {
+    for (int op = 0; op < 4000; ++op) {
+      int v = rng() % kVersions;
+      if (rng() % 4 == 0) {
+        int from = rng() % kVersions;
+        Trie::Root ca = Trie::Share(a[from]);
+        Trie::Root cb = Trie::Share(b[from]);
+        one.Release(a[v], 0);
+        many.Release(b[v], 0);
+        a[v] = ca;
+        b[v] = cb;
+      } else {
+        uint64_t key = rng() % 65536;
+        uint64_t val = rng();
+        a[v] = one.Update(a[v], key, 0, [&](Value& x, bool) { x.v = val; });
+        b[v] = many.Update(b[v], key, 0, [&](Value& x, bool) { x.v = val; });
+      }
+    }
+    // Release a random half (and some nullptr entries), in two spans, from slot 1.
+    std::vector<Trie::Root> dead_a, dead_b;
+    for (int v = 0; v < kVersions; ++v) {
+      if (rng() % 2 == 0) {
+        dead_a.push_back(a[v]);
+        dead_b.push_back(b[v]);
+        a[v] = b[v] = nullptr;
+      }
+    }
+    for (Trie::Root r : dead_a) one.Release(r, 1);
+    std::span<Trie::Root const> all(dead_b);
+    many.ReleaseMany(all.first(all.size() / 2), 1);
+    many.ReleaseMany(all.subspan(all.size() / 2), 1);
+    ASSERT_EQ(one.live_nodes(), many.live_nodes()) << "round " << round;
+    for (int v = 0; v < kVersions; ++v) {
+      std::map<uint64_t, uint64_t> ma, mb;
+      one.ForEach(a[v], [&](uint64_t k, const Value& x) { ma[k] = x.v; });
+      many.ForEach(b[v], [&](uint64_t k, const Value& x) { mb[k] = x.v; });
+      ASSERT_EQ(ma, mb) << "round " << round << " version " << v;
+    }
+  }
+  many.ReleaseMany(b, 0);
+  for (Trie::Root r : a) one.Release(r, 0);
+  EXPECT_EQ(one.live_nodes(), 0);
+  EXPECT_EQ(many.live_nodes(), 0);
 }
 
 TEST(PersistentTrieTest, DistinctVisitSumsEqualBruteForce) {

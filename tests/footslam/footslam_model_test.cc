@@ -10,6 +10,7 @@
 #include "engine/footslam/hex_grid.h"
 #include "engine/footslam/htree_layout.h"
 #include "engine/footslam/htree_map.h"
+#include "engine/footslam/pose_history.h"
 #include "grove/footslam.h"
 
 namespace grove::footslam {
@@ -99,6 +100,45 @@ TEST(FootSlamModelTest, ZeroNoiseMapEqualsOdometryTransitions) {
   Pose2 pose = (*slam)->HeaviestPose();
   EXPECT_NEAR(pose.x_m, x, 1e-9);
   EXPECT_NEAR(pose.y_m, y, 1e-9);
+}
+
+// ReleaseMany frees exactly what Release one by one frees, and leaves the other paths intact.
+TEST(PoseHistoryTest, ReleaseManyFreesWhatReleaseFrees) {
+  PoseHistory one(2), many(2);
+  std::mt19937_64 rng(3);
+  constexpr int kPaths = 500;
+  std::vector<PoseHistory::Node*> a(kPaths, nullptr), b(kPaths, nullptr);
+  for (uint32_t step = 1; step <= 60; ++step) {
+    // Resample: each path is replaced by a copy of a random one (shared, not copied).
+    std::vector<PoseHistory::Node*> next_a(kPaths), next_b(kPaths);
+    for (int k = 0; k < kPaths; ++k) {
+      int from = rng() % kPaths;
+      next_a[k] = PoseHistory::Share(a[from]);
+      next_b[k] = PoseHistory::Share(b[from]);
+    }
+    for (PoseHistory::Node* n : a) one.Release(n, 1);
+    many.ReleaseMany(b, 1);
+    a.swap(next_a);
+    b.swap(next_b);
+    ASSERT_EQ(one.stats().live_nodes, many.stats().live_nodes) << "step " << step;
+    for (int k = 0; k < kPaths; ++k) {
+      a[k] = one.Append(a[k], step, k, step, 0, 0);
+      b[k] = many.Append(b[k], step, k, step, 0, 0);
+    }
+  }
+  for (int k = 0; k < kPaths; ++k) {
+    auto pa = PoseHistory::Path(a[k]);
+    auto pb = PoseHistory::Path(b[k]);
+    ASSERT_EQ(pa.size(), pb.size());
+    for (size_t j = 0; j < pa.size(); ++j) {
+      ASSERT_EQ(pa[j]->step, pb[j]->step);
+      ASSERT_EQ(pa[j]->x_m, pb[j]->x_m);
+    }
+  }
+  for (PoseHistory::Node* n : a) one.Release(n, 0);
+  many.ReleaseMany(b, 0);
+  EXPECT_EQ(one.stats().live_nodes, 0);
+  EXPECT_EQ(many.stats().live_nodes, 0);
 }
 
 }  // namespace
