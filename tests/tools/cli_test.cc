@@ -2,6 +2,7 @@
 // in --out after a failure, and a full run's outputs.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -29,8 +30,12 @@ std::string Slurp(const fs::path& p) {
 class CliTest : public ::testing::Test {
  protected:
   void SetUp() override {
+    // The process id too: two test runs on one machine (a build and a sanitizer build) must not
+    // share a directory.
     dir_ = fs::path(::testing::TempDir()) /
-           ("grove_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("grove_cli_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
