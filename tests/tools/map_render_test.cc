@@ -16,78 +16,20 @@
 #include <string>
 #include <string_view>
 
+#include "tests/tools/decoded_png.h"
 #include "tools/atomic_file.h"
 
 namespace grove::tools {
 namespace {
 
-struct Rgb8 {
-  int r, g, b;
-  int Luma() const { return (299 * r + 587 * g + 114 * b) / 1000; }
-};
-
-// A PNG decoded back with cairo, for reading pixels.
-class DecodedPng {
- public:
-  explicit DecodedPng(const std::string& png) : png_(png) {
-    surface_.reset(cairo_image_surface_create_from_png_stream(&DecodedPng::Read, this));
-  }
-  bool ok() const { return cairo_surface_status(surface_.get()) == CAIRO_STATUS_SUCCESS; }
-  int width() const { return cairo_image_surface_get_width(surface_.get()); }
-  int height() const { return cairo_image_surface_get_height(surface_.get()); }
-  Rgb8 At(double x_px, double y_px) const {
-    int x = static_cast<int>(std::floor(x_px));
-    int y = static_cast<int>(std::floor(y_px));
-    EXPECT_TRUE(x >= 0 && x < width() && y >= 0 && y < height()) << x << "," << y;
-    cairo_surface_flush(surface_.get());
-    const unsigned char* row = cairo_image_surface_get_data(surface_.get()) +
-                               y * cairo_image_surface_get_stride(surface_.get());
-    uint32_t pixel;
-    std::memcpy(&pixel, row + 4 * x, 4);
-    return {static_cast<int>((pixel >> 16) & 255), static_cast<int>((pixel >> 8) & 255),
-            static_cast<int>(pixel & 255)};
-  }
-
- private:
-  static cairo_status_t Read(void* closure, unsigned char* data, unsigned int length) {
-    auto* self = static_cast<DecodedPng*>(closure);
-    if (self->offset_ + length > self->png_.size()) return CAIRO_STATUS_READ_ERROR;
-    std::memcpy(data, self->png_.data() + self->offset_, length);
-    self->offset_ += length;
-    return CAIRO_STATUS_SUCCESS;
-  }
-  struct Deleter {
-    void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
-  };
-  std::string png_;
-  size_t offset_ = 0;
-  std::unique_ptr<cairo_surface_t, Deleter> surface_;
-};
-
-void ExpectColourNear(const Rgb8& actual, const Rgb8& expected, int tolerance) {
-  EXPECT_NEAR(actual.r, expected.r, tolerance);
-  EXPECT_NEAR(actual.g, expected.g, tolerance);
-  EXPECT_NEAR(actual.b, expected.b, tolerance);
-}
-
-// The pixel nearest to `expected` among those within a pixel of (x_px, y_px) vertically: a
-// horizontal line of width >= 2 px fully covers one of them, wherever it falls on the grid.
-Rgb8 NearestAlongColumn(const DecodedPng& image, double x_px, double y_px, const Rgb8& expected) {
-  Rgb8 best{-1000, -1000, -1000};
-  auto distance = [&](const Rgb8& c) {
-    return std::abs(c.r - expected.r) + std::abs(c.g - expected.g) + std::abs(c.b - expected.b);
-  };
-  for (double dy : {-1.0, 0.0, 1.0}) {
-    Rgb8 c = image.At(x_px, y_px + dy);
-    if (distance(c) < distance(best)) best = c;
-  }
-  return best;
-}
+using test_images::DecodedPng;
+using test_images::ExpectColourNear;
+using test_images::kWhite;
+using test_images::Rgb8;
 
 // The renderer's documented colours, in 8 bits.
 constexpr Rgb8 kPathRgb = {179, 13, 26};
 constexpr Rgb8 kTruthRgb = {26, 158, 51};
-constexpr Rgb8 kWhite = {255, 255, 255};
 
 MapImage HexMap() {
   MapImage image;
@@ -220,9 +162,9 @@ TEST(RenderPngTest, PathAndTruthPixelsHaveTheirColours) {
   ASSERT_TRUE(layout.ok() && png.ok());
   DecodedPng decoded(*png);
   ASSERT_TRUE(decoded.ok());
-  ExpectColourNear(NearestAlongColumn(decoded, layout->XPx(7.0), layout->YPx(0.0), kPathRgb),
+  ExpectColourNear(decoded.NearestAlongColumn(layout->XPx(7.0), layout->YPx(0.0), kPathRgb),
                    kPathRgb, 3);
-  ExpectColourNear(NearestAlongColumn(decoded, layout->XPx(7.0), layout->YPx(3.0), kTruthRgb),
+  ExpectColourNear(decoded.NearestAlongColumn(layout->XPx(7.0), layout->YPx(3.0), kTruthRgb),
                    kTruthRgb, 3);
   // Between the lines there is only background.
   ExpectColourNear(decoded.At(layout->XPx(7.0), layout->YPx(1.5)), kWhite, 0);
@@ -243,7 +185,7 @@ TEST(RenderPngTest, PathIsDrawnOverHexes) {
   StatusOr<std::string> png = RenderPng(image, options);
   ASSERT_TRUE(layout.ok() && png.ok());
   DecodedPng decoded(*png);
-  ExpectColourNear(NearestAlongColumn(decoded, layout->XPx(0.0), layout->YPx(0.0), kPathRgb),
+  ExpectColourNear(decoded.NearestAlongColumn(layout->XPx(0.0), layout->YPx(0.0), kPathRgb),
                    kPathRgb, 3);
 }
 
