@@ -9,12 +9,12 @@
 #include <cstdio>
 #include <cstdlib>
 
-#define GROVE_CHECK(cond)                                                                  \
-  do {                                                                                     \
-    if (!(cond)) [[unlikely]] {                                                            \
+#define GROVE_CHECK(cond)                                                                 \
+  do {                                                                                    \
+    if (!(cond)) [[unlikely]] {                                                           \
       std::fprintf(stderr, "%s:%d: GROVE_CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
-      std::abort();                                                                        \
-    }                                                                                      \
+      std::abort();                                                                       \
+    }                                                                                     \
   } while (0)
 
 #ifdef NDEBUG

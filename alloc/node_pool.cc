@@ -27,7 +27,8 @@ void* MapSlab() {
   uintptr_t aligned = (begin + kHugePageBytes - 1) & ~(kHugePageBytes - 1);
   if (aligned > begin) munmap(raw, aligned - begin);
   uintptr_t end = begin + span;
-  if (end > aligned + kSlabBytes) munmap(reinterpret_cast<void*>(aligned + kSlabBytes), end - (aligned + kSlabBytes));
+  if (end > aligned + kSlabBytes)
+    munmap(reinterpret_cast<void*>(aligned + kSlabBytes), end - (aligned + kSlabBytes));
 #ifdef MADV_HUGEPAGE
   madvise(reinterpret_cast<void*>(aligned), kSlabBytes, MADV_HUGEPAGE);
 #endif
@@ -53,8 +54,8 @@ struct NodePool::Page {
 };
 
 struct alignas(128) NodePool::Heap {
-  Page* current = nullptr;     // the page allocations come from
-  Page* avail = nullptr;       // other pages that have free nodes
+  Page* current = nullptr;  // the page allocations come from
+  Page* avail = nullptr;    // other pages that have free nodes
   char* slab_cursor = nullptr;
   char* slab_end = nullptr;
   std::vector<void*> slabs;
@@ -191,7 +192,7 @@ NodePool::Page* NodePool::Refill(Heap* heap) {
 #else  // !GROVE_NODE_POOL: plain allocation, same counters.
 
 void* NodePool::Allocate(int slot) {
-  void* p = ::operator new(node_bytes_, std::align_val_t{kNodeAlign});
+  void* p = ::operator new (node_bytes_, std::align_val_t{kNodeAlign});
   // Relaxed: a statistic.
   heaps_[slot < 0 ? 0 : slot]->live.fetch_add(1, std::memory_order_relaxed);
   NotePeak();
@@ -199,7 +200,7 @@ void* NodePool::Allocate(int slot) {
 }
 
 void NodePool::Free(void* p, int slot) {
-  ::operator delete(p, std::align_val_t{kNodeAlign});
+  ::operator delete (p, std::align_val_t{kNodeAlign});
   heaps_[slot < 0 ? 0 : slot]->live.fetch_sub(1, std::memory_order_relaxed);
 }
 
@@ -217,8 +218,7 @@ void NodePool::NotePeak() const {
   }
   int64_t peak = peak_live_.load(std::memory_order_relaxed);
   // Relaxed: the peak is a statistic; the CAS loop only keeps it monotone.
-  while (live > peak &&
-         !peak_live_.compare_exchange_weak(peak, live, std::memory_order_relaxed)) {
+  while (live > peak && !peak_live_.compare_exchange_weak(peak, live, std::memory_order_relaxed)) {
   }
 }
 

@@ -22,8 +22,9 @@ int main(int argc, char** argv) {
   benchmark::AddCustomContext("allocator", "jemalloc (linked into this executable)");
   benchmark::AddCustomContext("node_pool", grove::NodePool::kPooling ? "on" : "off");
 #ifndef NDEBUG
-  std::fprintf(stderr, "WARNING: assertions are on (not an NDEBUG build): timings are not "
-                       "representative\n");
+  std::fprintf(stderr,
+               "WARNING: assertions are on (not an NDEBUG build): timings are not "
+               "representative\n");
   benchmark::AddCustomContext("warning", "assertions on");
 #endif
 #if !defined(__OPTIMIZE__)

@@ -42,8 +42,9 @@ std::string SealCheckpoint(std::string_view body) {
 
 StatusOr<std::string_view> UnsealCheckpoint(std::string_view file, const std::string& name) {
   if (file.size() < sizeof(kMagic) || std::memcmp(file.data(), kMagic, sizeof(kMagic)) != 0) {
-    return DataLossError(name + ": not a grove checkpoint (the first 8 bytes are not the magic "
-                                "\\x89GROVE\\r\\n)");
+    return DataLossError(name +
+                         ": not a grove checkpoint (the first 8 bytes are not the magic "
+                         "\\x89GROVE\\r\\n)");
   }
   if (file.size() < kCheckpointHeaderBytes) {
     return DataLossError(name + ": truncated: " + std::to_string(file.size()) +
@@ -54,10 +55,9 @@ StatusOr<std::string_view> UnsealCheckpoint(std::string_view file, const std::st
   const uint32_t crc = Load<uint32_t>(file.data() + 12);
   const uint64_t length = Load<uint64_t>(file.data() + 16);
   if (version != kCheckpointFormatVersion) {
-    return FailedPreconditionError(
-        name + ": checkpoint format version " + std::to_string(version) +
-        " cannot be read by this grove, which reads version " +
-        std::to_string(kCheckpointFormatVersion));
+    return FailedPreconditionError(name + ": checkpoint format version " + std::to_string(version) +
+                                   " cannot be read by this grove, which reads version " +
+                                   std::to_string(kCheckpointFormatVersion));
   }
   const uint64_t actual = file.size() - kCheckpointHeaderBytes;
   if (length != actual) {

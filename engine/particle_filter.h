@@ -195,8 +195,8 @@ class ParticleFilter {
       }
     }
     if (!std::isfinite(max)) return Degenerate("every particle weight is zero or infinite");
-    std::vector<double> sums = workers_->MapBlocks<double>(
-        n, kSumBlock, [&](size_t, size_t begin, size_t end) {
+    std::vector<double> sums =
+        workers_->MapBlocks<double>(n, kSumBlock, [&](size_t, size_t begin, size_t end) {
           double s = 0;
           for (size_t i = begin; i < end; ++i) s += std::exp(log_w_[i] - max);
           return s;
@@ -206,8 +206,8 @@ class ParticleFilter {
     const double log_total = max + std::log(total);
     // The normalised weights are kept: resampling draws from them.
     weights_.resize(n);
-    std::vector<double> squares = workers_->MapBlocks<double>(
-        n, kSumBlock, [&](size_t, size_t begin, size_t end) {
+    std::vector<double> squares =
+        workers_->MapBlocks<double>(n, kSumBlock, [&](size_t, size_t begin, size_t end) {
           double s = 0;
           for (size_t i = begin; i < end; ++i) {
             log_w_[i] -= log_total;

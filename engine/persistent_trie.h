@@ -286,7 +286,8 @@ class PersistentTrie {
   // or updated in place), so for sums that are bit-identical at any thread count use an exact W
   // (an integer); the visit order is deterministic given the roots.
   template <typename W, typename F>
-  size_t VisitDistinct(std::span<Node* const> roots, std::span<const W> weights, F&& on_leaf) const {
+  size_t VisitDistinct(std::span<Node* const> roots, std::span<const W> weights,
+                       F&& on_leaf) const {
     GROVE_CHECK(roots.size() == weights.size());
     std::vector<const Node*> level_nodes;
     std::vector<uint64_t> level_prefix;
@@ -443,8 +444,8 @@ class PersistentTrie {
       uint64_t present[kWords];
       Status s = r->Get("trie node level", &level);
       if (s.ok() && level >= height_) {
-        s = r->Error("trie node level", std::to_string(level) + " is not below the height " +
-                                            std::to_string(height_));
+        s = r->Error("trie node level",
+                     std::to_string(level) + " is not below the height " + std::to_string(height_));
       }
       if (s.ok()) s = r->GetBytes("trie node presence", present, sizeof(present));
       if (s.ok() && kDegree % 64 != 0 && (present[kWords - 1] >> (kDegree % 64)) != 0) {
@@ -486,13 +487,13 @@ class PersistentTrie {
     uint64_t saved_roots = 0;
     Status s = r->Get("trie root count", &saved_roots);
     if (s.ok() && saved_roots != root_count) {
-      s = r->Error("trie root count", std::to_string(saved_roots) + " roots, expected " +
-                                          std::to_string(root_count));
+      s = r->Error("trie root count",
+                   std::to_string(saved_roots) + " roots, expected " + std::to_string(root_count));
     }
     if (!s.ok()) return fail(s);
     // Invariant 1: a node's count is its parent links plus the roots reaching it.
-    s = LinkRoots(r, "trie root", root_count, nodes, &refs,
-                  [&](size_t k) { return levels[k] == 0; }, roots);
+    s = LinkRoots(
+        r, "trie root", root_count, nodes, &refs, [&](size_t k) { return levels[k] == 0; }, roots);
     return s.ok() ? s : fail(s);
   }
 

@@ -17,8 +17,8 @@ void SystematicResample(std::span<const double> weights, double u, WorkerPool& w
                         std::span<uint32_t> parents) {
   const size_t n_in = weights.size();
   const size_t n_out = parents.size();
-  std::vector<double> block_sum = workers.MapBlocks<double>(
-      n_in, kSumBlock, [&](size_t, size_t begin, size_t end) {
+  std::vector<double> block_sum =
+      workers.MapBlocks<double>(n_in, kSumBlock, [&](size_t, size_t begin, size_t end) {
         double s = 0;
         for (size_t i = begin; i < end; ++i) s += weights[i];
         return s;
@@ -71,10 +71,14 @@ void AssignSorted(std::span<const double> weights, const std::vector<double>& so
 
 const char* ResamplingSchemeName(ResamplingScheme scheme) {
   switch (scheme) {
-    case ResamplingScheme::kSystematic: return "systematic";
-    case ResamplingScheme::kStratified: return "stratified";
-    case ResamplingScheme::kResidual: return "residual";
-    case ResamplingScheme::kMultinomial: return "multinomial";
+    case ResamplingScheme::kSystematic:
+      return "systematic";
+    case ResamplingScheme::kStratified:
+      return "stratified";
+    case ResamplingScheme::kResidual:
+      return "residual";
+    case ResamplingScheme::kMultinomial:
+      return "multinomial";
   }
   return "unknown";
 }

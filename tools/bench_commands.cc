@@ -166,7 +166,8 @@ int PaperBenchCommand(const PaperBenchOptions& options) {
       out += fmt::format("# steps {} peak_rss_mib {}\n", done, PeakRssBytes() / 1048576.0);
       return WriteFileAtomically(series_path, out).ok() ? 0 : 12;
     });
-    if (code != 0) return Fail(kExitRun, fmt::format("{}: the run failed (code {})", pc.name, code));
+    if (code != 0)
+      return Fail(kExitRun, fmt::format("{}: the run failed (code {})", pc.name, code));
     std::string text = Slurp(series_path);
     std::remove(series_path.c_str());
     Result r;
@@ -186,12 +187,24 @@ int PaperBenchCommand(const PaperBenchOptions& options) {
   // CSV, plots and a markdown table.
   std::vector<std::vector<std::string>> rows;
   // Log scale: grove runs orders of magnitude below the real-time line.
-  LinePlot runtime{"Run time against walk time (Fig. 9)", "walk time (s)",
-                   "cumulative run time (s, log scale)", {}, false, true};
-  LinePlot memory{"Resident memory against walk time (Fig. 10)", "walk time (s)", "RSS (MiB)", {},
-                  false, false};
-  LinePlot map_memory{"Live map memory against walk time", "walk time (s)", "live map nodes (MiB)",
-                      {}, false, false};
+  LinePlot runtime{"Run time against walk time (Fig. 9)",
+                   "walk time (s)",
+                   "cumulative run time (s, log scale)",
+                   {},
+                   false,
+                   true};
+  LinePlot memory{"Resident memory against walk time (Fig. 10)",
+                  "walk time (s)",
+                  "RSS (MiB)",
+                  {},
+                  false,
+                  false};
+  LinePlot map_memory{"Live map memory against walk time",
+                      "walk time (s)",
+                      "live map nodes (MiB)",
+                      {},
+                      false,
+                      false};
   double walk_end = walk->back().t_s;
   PlotSeries real_time{"real time", {}, {}, true};
   for (double t = 1; t < walk_end + 5; t += 5) {
@@ -205,8 +218,9 @@ int PaperBenchCommand(const PaperBenchOptions& options) {
     PlotSeries rss_series{r.config->name, {}, {}, false};
     PlotSeries map_series{r.config->name, {}, {}, false};
     for (const Sample& s : r.samples) {
-      rows.push_back({r.config->name, fmt::format("{:.2f}", s.walk_s), fmt::format("{:.3f}", s.run_s),
-                      fmt::format("{:.1f}", s.rss_mib), fmt::format("{:.2f}", s.map_mib)});
+      rows.push_back({r.config->name, fmt::format("{:.2f}", s.walk_s),
+                      fmt::format("{:.3f}", s.run_s), fmt::format("{:.1f}", s.rss_mib),
+                      fmt::format("{:.2f}", s.map_mib)});
       time_series.x.push_back(s.walk_s);
       time_series.y.push_back(s.run_s);
       rss_series.x.push_back(s.walk_s);
@@ -235,7 +249,8 @@ int PaperBenchCommand(const PaperBenchOptions& options) {
     double ratio = first_n > 0 && last_n > 0 && first_minute > 0
                        ? (last_minute / last_n) / (first_minute / first_n)
                        : 0;
-    double ns = r.steps > 0 ? r.run_s * 1e9 / (static_cast<double>(r.steps) * options.particles) : 0;
+    double ns =
+        r.steps > 0 ? r.run_s * 1e9 / (static_cast<double>(r.steps) * options.particles) : 0;
     double walked = r.samples.empty() ? 0 : r.samples.back().walk_s;
     double peak_map = 0;
     for (const Sample& s : r.samples) peak_map = std::max(peak_map, s.map_mib);
@@ -250,14 +265,14 @@ int PaperBenchCommand(const PaperBenchOptions& options) {
       "{} particles, {} threads.\n\n",
       MachineDescription(), options.minutes, walk->size(), options.particles,
       options.threads == 0 ? std::thread::hardware_concurrency() : options.threads);
-  md += MarkdownTable({"configuration", "steps run", "walk s", "run s", "run / walk time",
-                       "ns per particle-step", "last/first minute time per step",
-                       "peak RSS MiB", "peak live map MiB"},
-                      table);
+  md += MarkdownTable(
+      {"configuration", "steps run", "walk s", "run s", "run / walk time", "ns per particle-step",
+       "last/first minute time per step", "peak RSS MiB", "peak live map MiB"},
+      table);
   const std::string& dir = options.out_dir;
-  s = WriteFileAtomically(dir + "/paper.csv",
-                          CsvTable({"configuration", "walk_s", "run_s", "rss_mib", "live_map_mib"},
-                                   rows));
+  s = WriteFileAtomically(
+      dir + "/paper.csv",
+      CsvTable({"configuration", "walk_s", "run_s", "rss_mib", "live_map_mib"}, rows));
   if (s.ok()) s = WriteLinePlotPng(dir + "/paper_runtime.png", runtime);
   if (s.ok()) s = WriteLinePlotPng(dir + "/paper_memory.png", memory);
   if (s.ok()) s = WriteLinePlotPng(dir + "/paper_map_memory.png", map_memory);
@@ -304,10 +319,10 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
     points.push_back({n, cores, *r});
   }
   std::vector<std::vector<std::string>> rows;
-  LinePlot threads_plot{"Throughput against threads", "threads", "M particle-steps / s", {}, false,
-                        false};
-  LinePlot particles_plot{"Cost against particles", "particles", "ns per particle-step", {}, true,
-                          false};
+  LinePlot threads_plot{
+      "Throughput against threads", "threads", "M particle-steps / s", {}, false, false};
+  LinePlot particles_plot{
+      "Cost against particles", "particles", "ns per particle-step", {}, true, false};
   PlotSeries tp{fmt::format("{} particles", options.thread_sweep_particles), {}, {}, false};
   PlotSeries pp{fmt::format("{} threads", cores), {}, {}, false};
   std::vector<PlotSeries> phase_series = {{"advance", {}, {}, true},
@@ -346,10 +361,19 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
   threads_plot.series.push_back(tp);
   particles_plot.series.push_back(pp);
   for (auto& ps : phase_series) particles_plot.series.push_back(ps);
-  std::vector<std::string> header = {"sweep", "particles", "threads", "steps", "run s",
-                                     "M particle-steps/s", "ns per particle-step",
-                                     "advance ns", "normalise ns", "resample ns", "release ns",
-                                     "bookkeeping ns", "peak live map MiB"};
+  std::vector<std::string> header = {"sweep",
+                                     "particles",
+                                     "threads",
+                                     "steps",
+                                     "run s",
+                                     "M particle-steps/s",
+                                     "ns per particle-step",
+                                     "advance ns",
+                                     "normalise ns",
+                                     "resample ns",
+                                     "release ns",
+                                     "bookkeeping ns",
+                                     "peak live map MiB"};
   std::string md = fmt::format(
       "# grove bench scaling\n\nMachine: {}\n\nThe first {} steps of the paper walk (simulated "
       "open area), H-tree s = 16, T = 5; per-phase costs in ns per particle-step.\n\n",

@@ -20,7 +20,7 @@ int PaperBenchCommand(const PaperBenchOptions& options);
 
 struct ScalingBenchOptions {
   std::string out_dir;
-  int64_t steps = 300;               // first steps of the paper walk used for every point
+  int64_t steps = 300;  // first steps of the paper walk used for every point
   int64_t max_particles = 1000000;
   int64_t thread_sweep_particles = 30000;
 };

@@ -23,36 +23,37 @@ struct Field {
 
 template <typename T>
 Field Number(const char* name, T FootSlamConfig::*member) {
-  return {name, [member](const FootSlamConfig& c) { return json(c.*member); },
-          [member](const json& v, FootSlamConfig* c) -> std::string {
-            if constexpr (std::is_floating_point_v<T>) {
-              if (!v.is_number()) return "a number";
+  return {
+      name, [member](const FootSlamConfig& c) { return json(c.*member); },
+      [member](const json& v, FootSlamConfig* c) -> std::string {
+        if constexpr (std::is_floating_point_v<T>) {
+          if (!v.is_number()) return "a number";
+          c->*member = v.get<T>();
+        } else {
+          if (!v.is_number_integer()) return "an integer";
+          if constexpr (std::is_unsigned_v<T>) {
+            if (v.is_number_unsigned()) {
               c->*member = v.get<T>();
             } else {
-              if (!v.is_number_integer()) return "an integer";
-              if constexpr (std::is_unsigned_v<T>) {
-                if (v.is_number_unsigned()) {
-                  c->*member = v.get<T>();
-                } else {
-                  if (v.get<int64_t>() < 0) return "a non-negative integer";
-                  c->*member = static_cast<T>(v.get<int64_t>());
-                }
-              } else {
-                if (v.is_number_unsigned() &&
-                    v.get<uint64_t>() > static_cast<uint64_t>(std::numeric_limits<int64_t>::max())) {
-                  return "an integer in range";
-                }
-                int64_t x = v.is_number_unsigned() ? static_cast<int64_t>(v.get<uint64_t>())
-                                                   : v.get<int64_t>();
-                if (x < static_cast<int64_t>(std::numeric_limits<T>::min()) ||
-                    x > static_cast<int64_t>(std::numeric_limits<T>::max())) {
-                  return "an integer in range";
-                }
-                c->*member = static_cast<T>(x);
-              }
+              if (v.get<int64_t>() < 0) return "a non-negative integer";
+              c->*member = static_cast<T>(v.get<int64_t>());
             }
-            return "";
-          }};
+          } else {
+            if (v.is_number_unsigned() &&
+                v.get<uint64_t>() > static_cast<uint64_t>(std::numeric_limits<int64_t>::max())) {
+              return "an integer in range";
+            }
+            int64_t x =
+                v.is_number_unsigned() ? static_cast<int64_t>(v.get<uint64_t>()) : v.get<int64_t>();
+            if (x < static_cast<int64_t>(std::numeric_limits<T>::min()) ||
+                x > static_cast<int64_t>(std::numeric_limits<T>::max())) {
+              return "an integer in range";
+            }
+            c->*member = static_cast<T>(x);
+          }
+        }
+        return "";
+      }};
 }
 
 template <typename E>
@@ -77,8 +78,8 @@ const std::vector<Field>& Fields() {
       Number("seed", &FootSlamConfig::seed),
       Number("hex_radius_m", &FootSlamConfig::hex_radius_m),
       Number("prior_count", &FootSlamConfig::prior_count),
-      Enum("weighting", &FootSlamConfig::weighting, &FootSlamWeightingName,
-           &ParseFootSlamWeighting, "\"paper\", \"prior_ratio\""),
+      Enum("weighting", &FootSlamConfig::weighting, &FootSlamWeightingName, &ParseFootSlamWeighting,
+           "\"paper\", \"prior_ratio\""),
       Number("start_x_m", &FootSlamConfig::start_x_m),
       Number("start_y_m", &FootSlamConfig::start_y_m),
       Number("start_heading_rad", &FootSlamConfig::start_heading_rad),
@@ -103,9 +104,7 @@ const std::vector<Field>& Fields() {
   return fields;
 }
 
-std::string TypeName(const json& v) {
-  return std::string(v.type_name());
-}
+std::string TypeName(const json& v) { return std::string(v.type_name()); }
 
 // 1-based line and column of byte offset `pos` in `text`.
 std::pair<int64_t, int64_t> LineColumn(const std::string& text, size_t pos) {
@@ -183,9 +182,10 @@ Status ApplyFootSlamConfigJson(const std::string& name, const std::string& text,
     return InvalidArgumentError(fmt::format("{}: invalid JSON: {}", name, e.what()));
   }
   if (!doc.is_object()) {
-    return InvalidArgumentError(fmt::format("{}:1:1: the configuration must be a JSON object, "
-                                            "found {}",
-                                            name, TypeName(doc)));
+    return InvalidArgumentError(
+        fmt::format("{}:1:1: the configuration must be a JSON object, "
+                    "found {}",
+                    name, TypeName(doc)));
   }
   std::vector<std::string> known;
   for (const Field& f : Fields()) known.push_back(f.name);
@@ -198,9 +198,9 @@ Status ApplyFootSlamConfigJson(const std::string& name, const std::string& text,
     auto [line, column] = KeyPosition(text, key);
     if (it == Fields().end()) {
       std::string nearest = NearestKey(key, known);
-      return InvalidArgumentError(fmt::format(
-          "{}:{}:{}: unknown key {}{}", name, line, column, QuotedKey(key),
-          nearest.empty() ? "" : fmt::format(" (did you mean \"{}\"?)", nearest)));
+      return InvalidArgumentError(
+          fmt::format("{}:{}:{}: unknown key {}{}", name, line, column, QuotedKey(key),
+                      nearest.empty() ? "" : fmt::format(" (did you mean \"{}\"?)", nearest)));
     }
     std::string expected = it->set(value, &result);
     if (!expected.empty()) {

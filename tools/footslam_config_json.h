@@ -4,7 +4,6 @@
 #define GROVE_TOOLS_FOOTSLAM_CONFIG_JSON_H_
 
 #include <nlohmann/json.hpp>
-
 #include <string>
 #include <vector>
 

@@ -5,21 +5,20 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
-#include <csignal>
-#include <cstring>
-#include <sstream>
-
-#include <algorithm>
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
 #include <string_view>
 #include <vector>
-#include <nlohmann/json.hpp>
 
 #include "tools/atomic_file.h"
 #include "tools/csv_reader.h"
@@ -162,8 +161,8 @@ class StopSignals {
 
 // A string from a file, quoted and escaped (JSON style) so an error stays on one line.
 std::string QuotedForError(const std::string& text) {
-  return nlohmann::json(text.substr(0, 200)).dump(-1, ' ', false,
-                                                  nlohmann::json::error_handler_t::replace);
+  return nlohmann::json(text.substr(0, 200))
+      .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 // Where the run stands in its step file: kept in each checkpoint so a resumed run can check
@@ -206,11 +205,24 @@ StatusOr<int64_t> ParseMemorySize(const std::string& text) {
   double scale = 1;
   if (ec == std::errc() && ptr + 1 == end) {
     switch (*ptr) {
-      case 'K': case 'k': scale = 1024.0; break;
-      case 'M': case 'm': scale = 1024.0 * 1024; break;
-      case 'G': case 'g': scale = 1024.0 * 1024 * 1024; break;
-      case 'T': case 't': scale = 1024.0 * 1024 * 1024 * 1024; break;
-      default: ec = std::errc::invalid_argument;
+      case 'K':
+      case 'k':
+        scale = 1024.0;
+        break;
+      case 'M':
+      case 'm':
+        scale = 1024.0 * 1024;
+        break;
+      case 'G':
+      case 'g':
+        scale = 1024.0 * 1024 * 1024;
+        break;
+      case 'T':
+      case 't':
+        scale = 1024.0 * 1024 * 1024 * 1024;
+        break;
+      default:
+        ec = std::errc::invalid_argument;
     }
   } else if (ptr != end) {
     ec = std::errc::invalid_argument;
@@ -255,15 +267,15 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
       options.memory_budget_bytes > 0 ? options.memory_budget_bytes : AvailableMemoryBytes();
   const int64_t predicted = FootSlam::EstimatePeakBytes(config, std::max<int64_t>(lines - 1, 0));
   if (budget > 0 && predicted > budget) {
-    return Fail(kExitMemory,
-                fmt::format("the run is predicted to need {:.1f} MiB ({} particles, {} map, {} "
-                            "steps), more than the {} of {:.1f} MiB; use fewer particles or raise "
-                            "--memory-budget",
-                            predicted / 1048576.0, config.particles,
-                            FootSlamMapKindName(config.map), std::max<int64_t>(lines - 1, 0),
-                            options.memory_budget_bytes > 0 ? "--memory-budget"
-                                                            : "memory available",
-                            budget / 1048576.0));
+    return Fail(
+        kExitMemory,
+        fmt::format("the run is predicted to need {:.1f} MiB ({} particles, {} map, {} "
+                    "steps), more than the {} of {:.1f} MiB; use fewer particles or raise "
+                    "--memory-budget",
+                    predicted / 1048576.0, config.particles, FootSlamMapKindName(config.map),
+                    std::max<int64_t>(lines - 1, 0),
+                    options.memory_budget_bytes > 0 ? "--memory-budget" : "memory available",
+                    budget / 1048576.0));
   }
 
   // A new engine, or one continuing from a checkpoint.
@@ -277,8 +289,9 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
     std::string user;
     created = FootSlam::Resume(config, *bytes, options.resume_path, &user);
     if (!created.ok()) {
-      return Fail(created.status().code() == StatusCode::kFailedPrecondition ? kExitUsage
-                                                                             : ExitCodeOf(created.status()),
+      return Fail(created.status().code() == StatusCode::kFailedPrecondition
+                      ? kExitUsage
+                      : ExitCodeOf(created.status()),
                   created.status().message());
     }
     StatusOr<InputPosition> at = InputPosition::FromJson(user, options.resume_path);
@@ -287,9 +300,9 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
   }
   if (!created.ok()) return Fail(kExitUsage, created.status().message());
   FootSlam& slam = **created;
-  const std::string checkpoint_path =
-      options.checkpoint_path.empty() ? options.out_dir + "/checkpoint.grove"
-                                      : options.checkpoint_path;
+  const std::string checkpoint_path = options.checkpoint_path.empty()
+                                          ? options.out_dir + "/checkpoint.grove"
+                                          : options.checkpoint_path;
   InputPosition position;
   position.steps_name = steps_name;
   int64_t checkpoints_written = 0, checkpoint_bytes = 0;
@@ -333,8 +346,8 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
       std::fprintf(stderr,
                    "\ngrove: stopped by %s after step %lld: wrote %s; continue with the same "
                    "command and --resume %s\n",
-                   strsignal(signal), static_cast<long long>(slam.steps()),
-                   checkpoint_path.c_str(), checkpoint_path.c_str());
+                   strsignal(signal), static_cast<long long>(slam.steps()), checkpoint_path.c_str(),
+                   checkpoint_path.c_str());
       return kExitSignalBase + signal;
     }
     StatusOr<bool> more = reader->Next(&step);
@@ -372,10 +385,10 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
     }
   }
   if (position.steps < resumed_at.steps) {
-    return Fail(kExitInput, fmt::format("{}: has {} steps, but {} was made after step {}: resume "
-                                        "with the same step file",
-                                        steps_name, position.steps, options.resume_path,
-                                        resumed_at.steps));
+    return Fail(kExitInput,
+                fmt::format("{}: has {} steps, but {} was made after step {}: resume "
+                            "with the same step file",
+                            steps_name, position.steps, options.resume_path, resumed_at.steps));
   }
   if (slam.steps() == 0) return Fail(kExitInput, fmt::format("{}: no steps", steps_name));
   if (options.progress) progress.Finish();
@@ -430,10 +443,11 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
                              fmt::format("FootSLAM, {} particles, {} steps: cumulative map, "
                                          "heaviest particle's path, raw odometry",
                                          config.particles, slam.steps()));
-  for (auto [name, text] : {std::pair<const char*, std::string>{"map.csv", MapCsv(cumulative, false)},
-                            {"map_best.csv", MapCsv(best_map, true)},
-                            {"trajectory.csv", TrajectoryCsv(trajectory)},
-                            {"mean_trajectory.csv", TrajectoryCsv(slam.MeanTrajectory())}}) {
+  for (auto [name, text] :
+       {std::pair<const char*, std::string>{"map.csv", MapCsv(cumulative, false)},
+        {"map_best.csv", MapCsv(best_map, true)},
+        {"trajectory.csv", TrajectoryCsv(trajectory)},
+        {"mean_trajectory.csv", TrajectoryCsv(slam.MeanTrajectory())}}) {
     s = WriteFileAtomically(dir + "/" + name, text);
     if (!s.ok()) return Fail(kExitOutput, s.message());
   }
@@ -441,7 +455,8 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
   if (!s.ok()) return Fail(kExitOutput, s.message());
   s = WriteFileAtomically(dir + "/summary.json", report.dump(2) + "\n");
   if (!s.ok()) return Fail(kExitOutput, s.message());
-  std::fprintf(stderr, "%s\nwrote %s/{map.csv, map_best.csv, trajectory.csv, "
+  std::fprintf(stderr,
+               "%s\nwrote %s/{map.csv, map_best.csv, trajectory.csv, "
                "mean_trajectory.csv, map.png, map.svg, summary.json}\n",
                summary.BriefReport().c_str(), dir.c_str());
   return kExitOk;
@@ -497,7 +512,8 @@ int RenderCommand(const std::string& dir, double hex_radius_m, const std::string
     if (!steps.ok()) return Fail(kExitInput, steps.status().message());
     image.odometry.push_back({0, 0});
     for (const StepRecord& s : *steps) {
-      image.odometry.push_back({image.odometry.back().x_m + s.dx_m, image.odometry.back().y_m + s.dy_m});
+      image.odometry.push_back(
+          {image.odometry.back().x_m + s.dx_m, image.odometry.back().y_m + s.dy_m});
     }
   }
   image.title = "FootSLAM map (redrawn from " + dir + ")";

@@ -14,12 +14,12 @@ namespace grove::tools {
 // Exit codes of the grove command (documented in the README).
 enum ExitCode : int {
   kExitOk = 0,
-  kExitInternal = 1,    // a bug: please report
-  kExitUsage = 2,       // bad command line or configuration
-  kExitInput = 3,       // bad input file (steps, truth, CSV)
-  kExitRun = 4,         // the run itself failed: left the grid, filter degenerated
-  kExitOutput = 5,      // outputs could not be written (earlier outputs are left intact)
-  kExitMemory = 6,      // the predicted memory exceeds --memory-budget; nothing was run
+  kExitInternal = 1,  // a bug: please report
+  kExitUsage = 2,     // bad command line or configuration
+  kExitInput = 3,     // bad input file (steps, truth, CSV)
+  kExitRun = 4,       // the run itself failed: left the grid, filter degenerated
+  kExitOutput = 5,    // outputs could not be written (earlier outputs are left intact)
+  kExitMemory = 6,    // the predicted memory exceeds --memory-budget; nothing was run
   // 128 + the signal (130 for SIGINT, 143 for SIGTERM): stopped at a step boundary by the
   // signal after writing a checkpoint.
   kExitSignalBase = 128,
@@ -33,10 +33,10 @@ int64_t AvailableMemoryBytes();
 
 // Options of `grove footslam run` that are not part of FootSlamConfig.
 struct RunOptions {
-  std::string steps_path;   // empty: the walk bundled in the binary
+  std::string steps_path;  // empty: the walk bundled in the binary
   std::string out_dir;
-  bool progress = true;     // progress on stderr
-  double max_step_m = 5.0;  // longer steps in the input are rejected
+  bool progress = true;             // progress on stderr
+  double max_step_m = 5.0;          // longer steps in the input are rejected
   int64_t memory_budget_bytes = 0;  // refuse runs predicted to need more; 0: the memory available
   int64_t checkpoint_every = 0;     // steps between checkpoints; 0: only when stopped by a signal
   std::string checkpoint_path;      // empty: out_dir + "/checkpoint.grove"

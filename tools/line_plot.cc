@@ -409,7 +409,6 @@ void Draw(cairo_t* cr, const LinePlot& plot, const PlotLayout& layout) {
   DrawLegend(cr, plot, layout);
 }
 
-
 Status CheckText(const std::string& text, std::string_view name) {
   if (IsValidUtf8(text)) return Status::Ok();
   return InvalidArgumentError(fmt::format("{} is not valid UTF-8", name));

@@ -316,7 +316,6 @@ void Draw(cairo_t* cr, const MapImage& image, const MapLayout& layout) {
   DrawColourBar(cr, layout, max_use);
 }
 
-
 struct SurfaceDeleter {
   void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
 };

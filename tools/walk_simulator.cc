@@ -49,7 +49,7 @@ struct Waypoint {
   double y_m;
   double jitter_m;  // each visit aims at a uniform point within this radius
   std::vector<int> next;
-  int door = -1;    // for a point inside a room: the room's door
+  int door = -1;  // for a point inside a room: the room's door
 };
 
 struct WaypointGraph {
@@ -135,7 +135,8 @@ WaypointGraph BuildingGraph() {
 }
 
 // Paths between junctions on a 5 x 5 grid of 25 m, interior junctions moved up to 4 m, four grid
-// paths missing and three diagonals added. Junctions lie in [-50, 50] x [-50, 50]; the walk starts at the centre one.
+// paths missing and three diagonals added. Junctions lie in [-50, 50] x [-50, 50]; the walk starts
+// at the centre one.
 WaypointGraph OpenGraph() {
   constexpr int kSide = 5;
   constexpr double kSpacing = 25;

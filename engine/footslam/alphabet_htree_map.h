@@ -122,13 +122,13 @@ class AlphabetHTreeMap {
 
   template <typename F>
   void Cumulative(std::span<const uint64_t> weights, F&& f) const {
-    symbols_.template VisitDistinct<uint64_t>(
-        symbol_roots_, weights, [&](uint64_t key, const uint16_t& s, uint64_t w) {
-          if (s == kEscaped) return;
-          Htc h;
-          alphabet_->Decode(s, h.c);
-          f(key, h, w);
-        });
+    symbols_.template VisitDistinct<uint64_t>(symbol_roots_, weights,
+                                              [&](uint64_t key, const uint16_t& s, uint64_t w) {
+                                                if (s == kEscaped) return;
+                                                Htc h;
+                                                alphabet_->Decode(s, h.c);
+                                                f(key, h, w);
+                                              });
     full_.template VisitDistinct<uint64_t>(full_roots_, weights, f);
   }
 
@@ -142,8 +142,8 @@ class AlphabetHTreeMap {
     std::vector<typename SymbolTrie::Root> symbols;
     std::vector<typename FullTrie::Root> full;
     GROVE_RETURN_IF_ERROR(symbols_.Load(
-        r, symbol_roots_.size(), 0,
-        [&](uint16_t s) { return s == kEscaped || s < symbol_count; }, &symbols));
+        r, symbol_roots_.size(), 0, [&](uint16_t s) { return s == kEscaped || s < symbol_count; },
+        &symbols));
     if (Status s = full_.Load(r, full_roots_.size(), 0, &PlausibleHtc, &full); !s.ok()) {
       for (auto* root : symbols) symbols_.Release(root, 0);
       return s;

@@ -1,6 +1,8 @@
 #include "grove/footslam.h"
 
 #include <fmt/format.h>
+#include <oneapi/tbb/info.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
@@ -8,10 +10,6 @@
 #include <limits>
 #include <thread>
 #include <unordered_map>
-
-#include <zlib.h>
-
-#include <oneapi/tbb/info.h>
 
 #include "concurrency/worker_pool.h"
 #include "engine/checkpoint_io.h"
@@ -32,9 +30,9 @@ using footslam::AlphabetHTreeMap;
 using footslam::FootSlamModel;
 using footslam::Hex;
 using footslam::HexGrid;
+using footslam::Htc;
 using footslam::HTreeLayout;
 using footslam::HTreeMap;
-using footslam::Htc;
 using footslam::NaiveMap;
 using footslam::StepInput;
 
@@ -63,7 +61,9 @@ struct ConfigField {
 };
 
 std::vector<ConfigField> CheckpointFields(const FootSlamConfig& c) {
-  auto i = [](const char* name, int64_t v) { return ConfigField{name, true, static_cast<uint64_t>(v)}; };
+  auto i = [](const char* name, int64_t v) {
+    return ConfigField{name, true, static_cast<uint64_t>(v)};
+  };
   auto d = [](const char* name, double v) {
     uint64_t bits;
     std::memcpy(&bits, &v, sizeof(bits));
@@ -112,9 +112,9 @@ std::string FieldBlock(const std::vector<ConfigField>& fields) {
 }
 
 uint32_t ConfigHash(const std::string& block) {
-  return static_cast<uint32_t>(
-      crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(block.data()),
-            static_cast<uInt>(block.size())));
+  return static_cast<uint32_t>(crc32(crc32(0L, Z_NULL, 0),
+                                     reinterpret_cast<const Bytef*>(block.data()),
+                                     static_cast<uInt>(block.size())));
 }
 
 constexpr char kCheckpointKind[] = "grove footslam";
@@ -162,18 +162,24 @@ const char* FootSlamMapKindName(FootSlamMapKind kind) {
   return kind == FootSlamMapKind::kNaive ? "naive" : "htree";
 }
 bool ParseFootSlamMapKind(const std::string& name, FootSlamMapKind* kind) {
-  if (name == "htree") *kind = FootSlamMapKind::kHTree;
-  else if (name == "naive") *kind = FootSlamMapKind::kNaive;
-  else return false;
+  if (name == "htree")
+    *kind = FootSlamMapKind::kHTree;
+  else if (name == "naive")
+    *kind = FootSlamMapKind::kNaive;
+  else
+    return false;
   return true;
 }
 const char* FootSlamWeightingName(FootSlamWeighting w) {
   return w == FootSlamWeighting::kPaper ? "paper" : "prior_ratio";
 }
 bool ParseFootSlamWeighting(const std::string& name, FootSlamWeighting* w) {
-  if (name == "paper") *w = FootSlamWeighting::kPaper;
-  else if (name == "prior_ratio") *w = FootSlamWeighting::kPriorRatio;
-  else return false;
+  if (name == "paper")
+    *w = FootSlamWeighting::kPaper;
+  else if (name == "prior_ratio")
+    *w = FootSlamWeighting::kPriorRatio;
+  else
+    return false;
   return true;
 }
 
@@ -300,8 +306,8 @@ class Engine final : public FootSlam::Impl {
       return OutOfRangeError(fmt::format(
           "step {} (t = {} s): particle {} at ({:.7g}, {:.7g}) m left the {} x {} hexagon grid "
           "centred on the start; raise grid_size",
-          filter_.steps(), t_s, outside, model_.x(outside), model_.y(outside),
-          layout_.grid_size(), layout_.grid_size()));
+          filter_.steps(), t_s, outside, model_.x(outside), model_.y(outside), layout_.grid_size(),
+          layout_.grid_size()));
     }
     if (!status.ok()) {
       failed_ = true;
@@ -604,10 +610,18 @@ int64_t FootSlam::EstimatePeakBytes(const FootSlamConfig& config, int64_t steps)
     const int height = layout.ok() ? layout->height() : 1;
     int64_t path = 0;
     switch (config.degree) {
-      case 4: path = PathBytesFor<2>(config, height); break;
-      case 16: path = PathBytesFor<4>(config, height); break;
-      case 64: path = PathBytesFor<6>(config, height); break;
-      default: path = PathBytesFor<8>(config, height); break;
+      case 4:
+        path = PathBytesFor<2>(config, height);
+        break;
+      case 16:
+        path = PathBytesFor<4>(config, height);
+        break;
+      case 64:
+        path = PathBytesFor<6>(config, height);
+        break;
+      default:
+        path = PathBytesFor<8>(config, height);
+        break;
     }
     // Every particle owns the path it updated last, in two generations while resampling.
     map = 2 * path;
@@ -620,8 +634,9 @@ FootSlam::~FootSlam() = default;
 
 StatusOr<std::unique_ptr<FootSlam>> FootSlam::Create(const FootSlamConfig& config) {
   GROVE_RETURN_IF_ERROR(config.Validate());
-  int threads = config.threads > 0 ? config.threads
-                                   : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  int threads = config.threads > 0
+                    ? config.threads
+                    : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   StatusOr<HTreeLayout> layout = HTreeLayout::Create(config.grid_size, config.degree);
   if (!layout.ok()) return layout.status();
   std::unique_ptr<Impl> impl;
@@ -629,10 +644,18 @@ StatusOr<std::unique_ptr<FootSlam>> FootSlam::Create(const FootSlamConfig& confi
     impl = std::make_unique<Engine<NaiveMap>>(config, threads, std::move(*layout), nullptr);
   } else {
     switch (config.degree) {
-      case 4: impl = MakeHTreeEngine<2>(config, threads, std::move(*layout)); break;
-      case 16: impl = MakeHTreeEngine<4>(config, threads, std::move(*layout)); break;
-      case 64: impl = MakeHTreeEngine<6>(config, threads, std::move(*layout)); break;
-      default: impl = MakeHTreeEngine<8>(config, threads, std::move(*layout)); break;
+      case 4:
+        impl = MakeHTreeEngine<2>(config, threads, std::move(*layout));
+        break;
+      case 16:
+        impl = MakeHTreeEngine<4>(config, threads, std::move(*layout));
+        break;
+      case 64:
+        impl = MakeHTreeEngine<6>(config, threads, std::move(*layout));
+        break;
+      default:
+        impl = MakeHTreeEngine<8>(config, threads, std::move(*layout));
+        break;
     }
   }
   return std::unique_ptr<FootSlam>(new FootSlam(std::move(impl)));
@@ -647,9 +670,7 @@ Pose2 FootSlam::MeanPose() const { return impl_->MeanPose(); }
 std::vector<StampedPose> FootSlam::HeaviestTrajectory() const {
   return impl_->HeaviestTrajectory();
 }
-const std::vector<StampedPose>& FootSlam::MeanTrajectory() const {
-  return impl_->MeanTrajectory();
-}
+const std::vector<StampedPose>& FootSlam::MeanTrajectory() const { return impl_->MeanTrajectory(); }
 std::vector<HexCounts> FootSlam::CumulativeMap() const { return impl_->CumulativeMap(); }
 std::vector<HexCounts> FootSlam::HeaviestMap() const { return impl_->HeaviestMap(); }
 FootSlamSummary FootSlam::Summary() const { return impl_->Summary(); }

@@ -53,7 +53,8 @@ class FootSlamModel {
     x_.assign(n_, config.start_x_m);
     y_.assign(n_, config.start_y_m);
     heading_.assign(n_, config.start_heading_rad);
-    heading_unit_.assign(n_, {std::cos(config.start_heading_rad), std::sin(config.start_heading_rad)});
+    heading_unit_.assign(n_,
+                         {std::cos(config.start_heading_rad), std::sin(config.start_heading_rad)});
     heading_error_.resize(n_);
     scale_.resize(n_);
     Hex start = grid_->HexAt(config.start_x_m, config.start_y_m);
@@ -64,8 +65,8 @@ class FootSlamModel {
       heading_error_[i] = config.initial_heading_sigma_rad * rs.NextNormal();
       scale_[i] = 1.0 + config.scale_sigma * rs.NextNormal();
     }
-    PoseHistory::Node* root =
-        history_.Append(nullptr, 0, config.start_x_m, config.start_y_m, config.start_heading_rad, 0);
+    PoseHistory::Node* root = history_.Append(nullptr, 0, config.start_x_m, config.start_y_m,
+                                              config.start_heading_rad, 0);
     history_roots_.assign(n_, root);
     for (size_t i = 1; i < n_; ++i) PoseHistory::Share(root);
     if (config.weighting == FootSlamWeighting::kPriorRatio) log_edge_bias_ = std::log(6.0);
@@ -148,8 +149,8 @@ class FootSlamModel {
       heading_[i] = heading;
       heading_unit_[i] = {cos_heading, sin_heading};
       hex_[i] = end_hex;
-      history_roots_[i] =
-          history_.Append(history_roots_[i], static_cast<uint32_t>(step + 1), nx, ny, heading, slot);
+      history_roots_[i] = history_.Append(history_roots_[i], static_cast<uint32_t>(step + 1), nx,
+                                          ny, heading, slot);
     }
   }
 
@@ -228,7 +229,8 @@ class FootSlamModel {
       }
     }
     // Derived state: the same calls on the same values as in Advance(), so bit-identical.
-    for (size_t i = 0; i < n_; ++i) heading_unit_[i] = {std::cos(heading_[i]), std::sin(heading_[i])};
+    for (size_t i = 0; i < n_; ++i)
+      heading_unit_[i] = {std::cos(heading_[i]), std::sin(heading_[i])};
     GROVE_RETURN_IF_ERROR(r->GetBytes("hexagon", hex_.data(), n_ * sizeof(Hex)));
     // Every hexagon of the grid lies within this distance of the start on each axis.
     const double extent = (layout_->grid_size() + 2.0) * 2.0 * grid_->radius_m();

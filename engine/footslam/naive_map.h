@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "concurrency/worker_pool.h"
-#include "engine/footslam/alphabet.h"
 #include "engine/checkpoint_io.h"
+#include "engine/footslam/alphabet.h"
 #include "engine/footslam/htc.h"
 
 namespace grove::footslam {

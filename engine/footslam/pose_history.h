@@ -154,8 +154,9 @@ class PoseHistory {
       }
       if (s.ok()) s = r->Get("pose step", &step);
       if (s.ok() && (step > max_step || (parent != 0 && step <= nodes[parent - 1]->step))) {
-        s = r->Error("pose step", std::to_string(step) + " is past the last step or not after "
-                                                         "its parent's");
+        s = r->Error("pose step", std::to_string(step) +
+                                      " is past the last step or not after "
+                                      "its parent's");
       }
       if (s.ok()) s = r->GetBytes("pose", xyh, sizeof(xyh));
       if (s.ok() && !(std::isfinite(xyh[0]) && std::isfinite(xyh[1]) && std::isfinite(xyh[2]))) {
@@ -175,11 +176,12 @@ class PoseHistory {
     uint64_t saved_heads = 0;
     Status s = r->Get("path count", &saved_heads);
     if (s.ok() && saved_heads != head_count) {
-      s = r->Error("path count", std::to_string(saved_heads) + " paths, expected " +
-                                     std::to_string(head_count));
+      s = r->Error("path count",
+                   std::to_string(saved_heads) + " paths, expected " + std::to_string(head_count));
     }
     if (!s.ok()) return fail(s);
-    s = LinkRoots(r, "path head", head_count, nodes, &refs, [](size_t) { return true; }, heads);
+    s = LinkRoots(
+        r, "path head", head_count, nodes, &refs, [](size_t) { return true; }, heads);
     return s.ok() ? s : fail(s);
   }
 

@@ -145,7 +145,8 @@ TEST(FootSlamApiTest, ConfigErrorsNameFieldValueAndRule) {
   };
   const Case cases[] = {
       {[](FootSlamConfig* c) { c->particles = 0; }, "particles = 0: must be in 1.."},
-      {[](FootSlamConfig* c) { c->heading_sigma_rad = -1; }, "heading_sigma_rad = -1: must be >= 0"},
+      {[](FootSlamConfig* c) { c->heading_sigma_rad = -1; },
+       "heading_sigma_rad = -1: must be >= 0"},
       {[](FootSlamConfig* c) { c->resample_threshold = 1.5; },
        "resample_threshold = 1.5: must be in (0, 1]"},
       {[](FootSlamConfig* c) { c->resample_threshold = 0; },

@@ -98,8 +98,7 @@ RunResult RunToy(int threads, ResamplingScheme scheme, double threshold) {
     EXPECT_TRUE(filter.Step(drift).ok());
   }
   auto lw = filter.log_weights();
-  return {std::vector<double>(lw.begin(), lw.end()), model.x(), model.Maps(),
-          filter.resamplings()};
+  return {std::vector<double>(lw.begin(), lw.end()), model.x(), model.Maps(), filter.resamplings()};
 }
 
 TEST(ParticleFilterTest, SameSeedIsBitIdenticalAtAnyThreadCount) {

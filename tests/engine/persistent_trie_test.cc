@@ -52,7 +52,8 @@ void RunModelCheck(int height, uint64_t seed, int ops, uint64_t key_space) {
           models[v].clear();
         }
         break;
-      case 2: case 3: {  // look up
+      case 2:
+      case 3: {  // look up
         uint64_t k = rng() % limit;
         const Value* found = trie.Find(roots[v], k);
         auto it = models[v].find(k);
@@ -94,12 +95,8 @@ TEST(PersistentTrieTest, MatchesReferenceMapDegree4) {
 TEST(PersistentTrieTest, MatchesReferenceMapDegree16) {
   for (uint64_t seed = 1; seed <= 3; ++seed) RunModelCheck<4>(4, seed, 20000, 1 << 16);
 }
-TEST(PersistentTrieTest, MatchesReferenceMapDegree64) {
-  RunModelCheck<6>(2, 11, 20000, 4096);
-}
-TEST(PersistentTrieTest, MatchesReferenceMapDegree256) {
-  RunModelCheck<8>(2, 12, 10000, 1 << 16);
-}
+TEST(PersistentTrieTest, MatchesReferenceMapDegree64) { RunModelCheck<6>(2, 11, 20000, 4096); }
+TEST(PersistentTrieTest, MatchesReferenceMapDegree256) { RunModelCheck<8>(2, 12, 10000, 1 << 16); }
 TEST(PersistentTrieTest, MatchesReferenceMapHeightOne) { RunModelCheck<4>(1, 13, 5000, 16); }
 TEST(PersistentTrieTest, MatchesReferenceMapFullWidthKeys) {
   RunModelCheck<4>(16, 14, 20000, ~uint64_t{0});
@@ -276,7 +273,9 @@ TEST(PersistentTrieSaveTest, LoadRebuildsEveryVersionWithItsSharing) {
   Trie copy(3, 1);
   std::vector<Trie::Root> loaded;
   ByteReader r(bytes, "t");
-  ASSERT_TRUE(copy.Load(&r, roots.size(), 0, [](const Value&) { return true; }, &loaded).ok());
+  ASSERT_TRUE(copy.Load(
+                      &r, roots.size(), 0, [](const Value&) { return true; }, &loaded)
+                  .ok());
   EXPECT_TRUE(r.at_end());
   ASSERT_EQ(loaded.size(), roots.size());
   for (size_t v = 0; v < roots.size(); ++v) {
@@ -320,7 +319,9 @@ TEST(PersistentTrieSaveTest, EveryTruncationAndBadStructureIsRefusedWithoutLeaks
     ASSERT_EQ(s.code(), StatusCode::kDataLoss) << len;
   }
   // A rejected leaf value.
-  EXPECT_NE(load(good, [](const Value& x) { return x.v != 0 && x.v % 3 != 0; }).message().find("trie leaf"),
+  EXPECT_NE(load(good, [](const Value& x) { return x.v != 0 && x.v % 3 != 0; })
+                .message()
+                .find("trie leaf"),
             std::string::npos);
   // Layout after the u32 height and u64 count: u8 level, one presence word, then children or
   // leaves. The first node saved is a bottom node (level 3): claim it is a root-level node.
@@ -371,14 +372,16 @@ TEST(PersistentTrieSaveTest, UnreachedAndForwardNodesAreRefused) {
     Trie trie(2, 1);
     std::vector<Trie::Root> roots;
     ByteReader r(b, "t");
-    Status s = trie.Load(&r, 1, 0, [](const Value&) { return true; }, &roots);
+    Status s = trie.Load(
+        &r, 1, 0, [](const Value&) { return true; }, &roots);
     for (auto* root : roots) trie.Release(root, 0);
     EXPECT_EQ(trie.live_nodes(), 0);
     return s;
   };
   EXPECT_TRUE(load(bytes(0, 2)).ok());
   EXPECT_NE(load(bytes(1, 2)).message().find("not an earlier node"), std::string::npos);
-  EXPECT_NE(load(bytes(0, 1)).message().find("not a node that can start a version"), std::string::npos);
+  EXPECT_NE(load(bytes(0, 1)).message().find("not a node that can start a version"),
+            std::string::npos);
   EXPECT_NE(load(bytes(0, 0)).message().find("reached from nothing"), std::string::npos);
 }
 

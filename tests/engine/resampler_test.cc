@@ -66,9 +66,8 @@ TEST(ResamplerTest, AllSchemesAreUnbiased) {
   const std::vector<double> w = {0.05, 0.3, 0.0, 0.15, 0.2, 0.001, 0.299};
   const size_t n = 20;
   const int reps = 4000;
-  for (ResamplingScheme scheme :
-       {ResamplingScheme::kSystematic, ResamplingScheme::kStratified,
-        ResamplingScheme::kResidual, ResamplingScheme::kMultinomial}) {
+  for (ResamplingScheme scheme : {ResamplingScheme::kSystematic, ResamplingScheme::kStratified,
+                                  ResamplingScheme::kResidual, ResamplingScheme::kMultinomial}) {
     SCOPED_TRACE(ResamplingSchemeName(scheme));
     std::vector<double> sum(w.size(), 0);
     for (int r = 0; r < reps; ++r) {

@@ -1,4 +1,6 @@
 // White-box tests of the FootSLAM particle: weights by hand, maps against the odometry.
+#include "engine/footslam/footslam_model.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -6,7 +8,6 @@
 #include <random>
 #include <vector>
 
-#include "engine/footslam/footslam_model.h"
 #include "engine/footslam/hex_grid.h"
 #include "engine/footslam/htree_layout.h"
 #include "engine/footslam/htree_map.h"
@@ -51,7 +52,7 @@ TEST(FootSlamModelTest, WeightsMatchHandComputedValues) {
         {d, (1 + a) / (1 + 6 * a)},   // (0,0): c0 = 1, total 1
         {-d, (1 + a) / (1 + 6 * a)},  // (1,0): c3 = 1, total 1
         {d, (2 + a) / (2 + 6 * a)},
-        {0.2, 1.0},                   // stays inside (1,0): no crossing, no weight
+        {0.2, 1.0},  // stays inside (1,0): no crossing, no weight
     };
     for (size_t k = 0; k < std::size(steps); ++k) {
       double lw = 0;

@@ -373,7 +373,8 @@ inline std::string CheckResumeError(const Status& status) {
     return fmt::format("error code {} (expected DataLoss or FailedPrecondition): {}",
                        StatusCodeName(status.code()), shown);
   }
-  if (status.message().find('\n') != std::string::npos) return "error message spans lines: " + shown;
+  if (status.message().find('\n') != std::string::npos)
+    return "error message spans lines: " + shown;
   if (status.message().rfind("fuzz.ckpt: ", 0) != 0) {
     return "error message does not start with \"fuzz.ckpt: \": " + shown;
   }

@@ -35,10 +35,11 @@ TEST(FootSlamLongRunTest, LiveMemoryStaysBounded) {
     }
   }
   FootSlamSummary summary = (*slam)->Summary();
-  std::printf("peak live map nodes: %ld in the first %d steps, %ld in the next; live history "
-              "nodes at the end %ld\n",
-              static_cast<long>(first_half_peak), kSteps / 2, static_cast<long>(second_half_peak),
-              static_cast<long>(summary.trajectory_memory.live_nodes));
+  std::printf(
+      "peak live map nodes: %ld in the first %d steps, %ld in the next; live history "
+      "nodes at the end %ld\n",
+      static_cast<long>(first_half_peak), kSteps / 2, static_cast<long>(second_half_peak),
+      static_cast<long>(summary.trajectory_memory.live_nodes));
   EXPECT_LE(second_half_peak, first_half_peak * 3 / 2);
   const double n = static_cast<double>(config.particles);
   const double bound = kSteps + 10 * n * std::log2(n);

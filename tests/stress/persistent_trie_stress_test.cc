@@ -34,7 +34,8 @@ TEST(PersistentTrieStressTest, ParallelGenerationsMatchReference) {
       workers.ParallelFor(n, 4, [&](int slot, size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
           for (int j = 0; j < 4; ++j) {
-            roots[i] = trie.Update(roots[i], keys[i * 4 + j], slot, [&](Value& x, bool) { x.v += i; });
+            roots[i] =
+                trie.Update(roots[i], keys[i * 4 + j], slot, [&](Value& x, bool) { x.v += i; });
           }
         }
       });
@@ -72,7 +73,8 @@ TEST(PersistentTrieStressTest, ConcurrentShareUpdateReleaseKeepsBaseIntact) {
   constexpr int kThreads = 4;
   Trie trie(6, kThreads);
   Trie::Root base = nullptr;
-  for (uint64_t k = 0; k < 4096; k += 3) base = trie.Update(base, k, 0, [&](Value& x, bool) { x.v = k; });
+  for (uint64_t k = 0; k < 4096; k += 3)
+    base = trie.Update(base, k, 0, [&](Value& x, bool) { x.v = k; });
   std::vector<std::thread> threads;
   for (int t = 0; t < kThreads; ++t) {
     threads.emplace_back([&, t] {

@@ -157,12 +157,16 @@ TEST_F(CliTest, SimulateRunEvaluateAndRenderEndToEnd) {
 TEST_F(CliTest, FailedRunKeepsEarlierOutputs) {
   fs::path out = dir_ / "out";
   std::string good = Write("good.csv", "t,dx,dy\n1,0.7,0\n2,0.7,0\n");
-  ASSERT_EQ(Grove("footslam run --no-progress --particles 20 --steps " + good + " --out " +
-                  out.string()).exit_code, 0);
+  ASSERT_EQ(
+      Grove("footslam run --no-progress --particles 20 --steps " + good + " --out " + out.string())
+          .exit_code,
+      0);
   std::string before = Slurp(out / "map.csv");
   std::string bad = Write("bad.csv", "t,dx,dy\n1,0.7,0\n2,x,0\n");
-  EXPECT_EQ(Grove("footslam run --no-progress --particles 20 --steps " + bad + " --out " +
-                  out.string()).exit_code, 3);
+  EXPECT_EQ(
+      Grove("footslam run --no-progress --particles 20 --steps " + bad + " --out " + out.string())
+          .exit_code,
+      3);
   EXPECT_EQ(Slurp(out / "map.csv"), before);
 }
 
@@ -183,9 +187,9 @@ TEST_F(CliTest, RunOverTheMemoryBudgetIsRefusedBeforeItStarts) {
 }
 
 TEST_F(CliTest, HelpOnEveryLevel) {
-  for (const char* args : {"--help", "footslam --help", "footslam run --help",
-                           "footslam simulate --help", "footslam evaluate --help",
-                           "footslam render --help"}) {
+  for (const char* args :
+       {"--help", "footslam --help", "footslam run --help", "footslam simulate --help",
+        "footslam evaluate --help", "footslam render --help"}) {
     Outcome o = Grove(args);
     EXPECT_EQ(o.exit_code, 0) << args;
     EXPECT_NE(o.out.find("Usage"), std::string::npos) << args << ": " << o.out;
@@ -195,8 +199,8 @@ TEST_F(CliTest, HelpOnEveryLevel) {
 
 // The outputs that must not depend on interruptions (summary.json holds timings).
 void ExpectSameOutputs(const fs::path& a, const fs::path& b) {
-  for (const char* name : {"map.csv", "map_best.csv", "trajectory.csv", "mean_trajectory.csv",
-                           "map.png", "map.svg"}) {
+  for (const char* name :
+       {"map.csv", "map_best.csv", "trajectory.csv", "mean_trajectory.csv", "map.png", "map.svg"}) {
     EXPECT_TRUE(Slurp(a / name) == Slurp(b / name)) << name << " differs";
   }
 }
@@ -221,8 +225,10 @@ TEST_F(CliTest, BadCheckpointsAreRefused) {
   std::string steps = Write("steps.csv", "t,dx,dy\n1,0.7,0\n2,0.7,0\n3,0,0.7\n4,-0.7,0\n");
   const std::string run = "footslam run --no-progress --particles 30 --steps " + steps + " ";
   fs::path ckpt = dir_ / "c.grove";
-  ASSERT_EQ(Grove(run + "--checkpoint-every 2 --checkpoint " + ckpt.string() + " --out " +
-                  out.string()).exit_code, 0);
+  ASSERT_EQ(
+      Grove(run + "--checkpoint-every 2 --checkpoint " + ckpt.string() + " --out " + out.string())
+          .exit_code,
+      0);
   const std::string good = Slurp(ckpt);
   auto resume = [&](const std::string& extra, const std::string& bytes) {
     std::string path = Write("bad.grove", bytes);
@@ -281,8 +287,8 @@ TEST_F(CliTest, SigtermStopsAtAStepBoundaryWithACheckpoint) {
   std::string bg = "sh -c '" + cmd + "' &";
   ASSERT_EQ(std::system(bg.c_str()), 0);
   while (!fs::exists(ckpt) || !fs::exists(pid_file) || Slurp(pid_file).empty()) {
-    ASSERT_FALSE(fs::exists(dir_ / "rc")) << "the run ended before it was signalled: "
-                                          << Slurp(err);
+    ASSERT_FALSE(fs::exists(dir_ / "rc"))
+        << "the run ended before it was signalled: " << Slurp(err);
     std::system("sleep 0.01");
   }
   ASSERT_EQ(std::system(("kill -TERM " + Slurp(pid_file)).c_str()), 0);

@@ -36,7 +36,6 @@ Rgb8 ToRgb8(const PlotRgb& c) {
           static_cast<int>(std::lround(c.b * 255))};
 }
 
-
 // A data x midway between two neighbouring x ticks, so away from the vertical grid lines.
 double BetweenXTicks(const PlotLayout& layout, size_t i) {
   EXPECT_GT(layout.x_ticks.size(), i + 1);

@@ -1,7 +1,6 @@
 // grove: the command-line front end. Subcommands:
 //   grove footslam run|simulate|evaluate|render ...
 #include <CLI/CLI.hpp>
-
 #include <cstdio>
 #include <string>
 
@@ -43,8 +42,8 @@ int Main(int argc, char** argv) {
   auto* o_seed = run->add_option("--seed", flags.seed, "Seed of the random streams");
   auto* o_weighting =
       run->add_option("--weighting", weighting, "Weighting rule: paper or prior_ratio");
-  auto* o_resampling = run->add_option(
-      "--resampling", resampling, "systematic, stratified, residual or multinomial");
+  auto* o_resampling = run->add_option("--resampling", resampling,
+                                       "systematic, stratified, residual or multinomial");
   auto* o_threshold = run->add_option("--resample-threshold", flags.resample_threshold,
                                       "Resample when ESS/N is below this, in (0, 1]");
   run->add_option("--max-step", run_options.max_step_m,
@@ -105,8 +104,9 @@ int Main(int argc, char** argv) {
   paper->add_option("--particles", paper_options.particles)->capture_default_str();
   paper->add_option("--minutes", paper_options.minutes, "Walk length")->capture_default_str();
   paper->add_option("--threads", paper_options.threads, "0 = all cores")->capture_default_str();
-  paper->add_option("--naive-limit", paper_options.naive_limit_s,
-                    "Stop the naive run after this many seconds")
+  paper
+      ->add_option("--naive-limit", paper_options.naive_limit_s,
+                   "Stop the naive run after this many seconds")
       ->capture_default_str();
   paper->add_option("--only", paper_options.only, "Run one configuration, e.g. 'htree s=16 T=5'");
   CLI::App* scaling =
@@ -173,8 +173,8 @@ int Main(int argc, char** argv) {
   }
   if (*paper) return gt::PaperBenchCommand(paper_options);
   if (*scaling) return gt::ScalingBenchCommand(scaling_options);
-  if (*simulate) return gt::SimulateCommand(sim_out, minutes, sim_seed, scenario, heading_drift,
-                                         scale_error);
+  if (*simulate)
+    return gt::SimulateCommand(sim_out, minutes, sim_seed, scenario, heading_drift, scale_error);
   if (*evaluate) return gt::EvaluateCommand(truth_path, trajectory_path);
   if (*render) return gt::RenderCommand(render_dir, render_radius, odometry_path);
   return gt::kExitUsage;

@@ -109,7 +109,7 @@ struct FootSlamConfig {
   Status Validate() const;
 };
 
-const char* FootSlamMapKindName(FootSlamMapKind kind);          // "htree", "naive"
+const char* FootSlamMapKindName(FootSlamMapKind kind);  // "htree", "naive"
 bool ParseFootSlamMapKind(const std::string& name, FootSlamMapKind* kind);
 const char* FootSlamWeightingName(FootSlamWeighting weighting);  // "paper", "prior_ratio"
 bool ParseFootSlamWeighting(const std::string& name, FootSlamWeighting* weighting);
@@ -136,11 +136,11 @@ struct HexCounts {
 };
 
 struct MemoryUse {
-  int64_t live_nodes = 0;       // map and trajectory nodes in use now
+  int64_t live_nodes = 0;  // map and trajectory nodes in use now
   int64_t live_bytes = 0;
   int64_t peak_live_nodes = 0;  // highest seen (per node pool, summed)
   int64_t peak_live_bytes = 0;
-  int64_t reserved_bytes = 0;   // obtained from the system by the node pools
+  int64_t reserved_bytes = 0;  // obtained from the system by the node pools
 };
 
 // What a run asked for, what it used and what it cost (Ceres' Summary).

@@ -13,14 +13,14 @@ namespace grove {
 
 enum class StatusCode {
   kOk = 0,
-  kInvalidArgument,   // a configuration value or an input record breaks a rule
-  kNotFound,          // a file or a key that must exist does not
-  kOutOfRange,        // a position left the map grid, an index is past the end
-  kFailedPrecondition,// the call is not valid in the object's current state
-  kResourceExhausted, // memory budget, disk full
-  kDataLoss,          // a corrupt or truncated file
-  kIoError,           // the operating system refused a read or a write
-  kInternal,          // a broken invariant that was caught without aborting
+  kInvalidArgument,     // a configuration value or an input record breaks a rule
+  kNotFound,            // a file or a key that must exist does not
+  kOutOfRange,          // a position left the map grid, an index is past the end
+  kFailedPrecondition,  // the call is not valid in the object's current state
+  kResourceExhausted,   // memory budget, disk full
+  kDataLoss,            // a corrupt or truncated file
+  kIoError,             // the operating system refused a read or a write
+  kInternal,            // a broken invariant that was caught without aborting
 };
 
 class [[nodiscard]] Status {
@@ -85,9 +85,9 @@ class [[nodiscard]] StatusOr {
 }  // namespace grove
 
 // Returns early from the enclosing function when `expr` yields a non-ok Status.
-#define GROVE_RETURN_IF_ERROR(expr)           \
-  do {                                        \
-    ::grove::Status grove_status_ = (expr);   \
+#define GROVE_RETURN_IF_ERROR(expr)                \
+  do {                                             \
+    ::grove::Status grove_status_ = (expr);        \
     if (!grove_status_.ok()) return grove_status_; \
   } while (0)
 
