@@ -128,23 +128,6 @@ class ByteReader {
   size_t pos_ = 0;
 };
 
-// `text` (at most `max_bytes` of it) in double quotes, with every byte outside printable ASCII
-// as \xNN: a string read from a file can be shown in a one-line error.
-inline std::string Quoted(std::string_view text, size_t max_bytes = 40) {
-  static constexpr char kHex[] = "0123456789abcdef";
-  std::string out = "\"";
-  for (size_t i = 0; i < text.size() && i < max_bytes; ++i) {
-    const auto c = static_cast<unsigned char>(text[i]);
-    if (c >= 0x20 && c < 0x7f && c != '\\' && c != '"') {
-      out += static_cast<char>(c);
-    } else {
-      out += {'\\', 'x', kHex[c >> 4], kHex[c & 15]};
-    }
-  }
-  if (text.size() > max_bytes) out += "...";
-  return out + "\"";
-}
-
 // The last part of loading a graph of reference-counted nodes (PersistentTrie, PoseHistory):
 // reads `root_count` u32 root ids (0: none, k: nodes[k - 1]) into `roots`, counts a reference for
 // each, checks that every node is referenced (refs[k] counts the links found so far) and gives

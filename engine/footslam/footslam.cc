@@ -225,7 +225,7 @@ Status CheckCheckpointConfig(ByteReader* r, const FootSlamConfig& config) {
   std::string kind;
   GROVE_RETURN_IF_ERROR(r->GetString("kind", &kind));
   if (kind != kCheckpointKind) {
-    return r->Error("kind", Quoted(kind) + " is not a FootSLAM checkpoint");
+    return r->Error("kind", QuoteForMessage(kind, 40) + " is not a FootSLAM checkpoint");
   }
   uint32_t hash = 0;
   uint64_t count = 0;
@@ -244,7 +244,7 @@ Status CheckCheckpointConfig(ByteReader* r, const FootSlamConfig& config) {
     GROVE_RETURN_IF_ERROR(r->Get("configuration field type", &integer));
     GROVE_RETURN_IF_ERROR(r->Get("configuration field value", &bits));
     if (name != f.name || integer != (f.integer ? 1 : 0)) {
-      return r->Error("configuration field name", Quoted(name) + ", expected \"" + f.name + "\"");
+      return r->Error("configuration field name", QuoteForMessage(name, 40) + ", expected \"" + f.name + "\"");
     }
     if (bits != f.bits) {
       return FailedPreconditionError(fmt::format(

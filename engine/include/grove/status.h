@@ -5,8 +5,10 @@
 #ifndef GROVE_STATUS_H_
 #define GROVE_STATUS_H_
 
+#include <cstddef>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 
 namespace grove {
@@ -60,12 +62,20 @@ inline Status InternalError(std::string m) { return Status(StatusCode::kInternal
 
 const char* StatusCodeName(StatusCode code);
 
+// `text` for a one-line message: in double quotes, every byte outside printable ASCII (and the
+// quote and backslash) as \xNN, cut after `max_bytes` bytes with "..." so that one bad field or
+// key cannot flood a terminal. Every message that shows text from a file or a user uses it.
+std::string QuoteForMessage(std::string_view text, size_t max_bytes = 64);
+
 // A value or the Status saying why there is none. REQUIRES for value(): ok().
+// Built from an ok Status (a bug in the caller: there is no value) it holds an Internal error.
 template <typename T>
 class [[nodiscard]] StatusOr {
  public:
-  StatusOr(Status status) : status_(std::move(status)) {}  // NOLINT: implicit by design
-  StatusOr(T value) : value_(std::move(value)) {}          // NOLINT: implicit by design
+  StatusOr(Status status)  // NOLINT: implicit by design
+      : status_(status.ok() ? Status(StatusCode::kInternal, "StatusOr made from an ok Status")
+                            : std::move(status)) {}
+  StatusOr(T value) : value_(std::move(value)) {}  // NOLINT: implicit by design
 
   bool ok() const { return status_.ok(); }
   const Status& status() const { return status_; }
