@@ -3,6 +3,7 @@
 #include <sys/mman.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdlib>
 #include <new>
 
@@ -36,7 +37,27 @@ void* MapSlab() {
 }
 #endif  // GROVE_NODE_POOL
 
+// Successful allocations left before injected failures start; -1: off.
+std::atomic<int64_t> g_fail_countdown{-1};
+
+// True when an injected failure fires for this allocation: the countdown has reached 0 (and
+// stays there). Relaxed: the countdown orders nothing but itself; tests arm it from the thread
+// that then drives the engine, before the workers start.
+inline bool InjectedFailure() {
+  int64_t c = g_fail_countdown.load(std::memory_order_relaxed);
+  for (;;) {
+    if (c < 0) [[likely]]
+      return false;
+    if (c == 0) return true;
+    if (g_fail_countdown.compare_exchange_weak(c, c - 1, std::memory_order_relaxed)) return false;
+  }
+}
+
 }  // namespace
+
+void FailAllocationsAfter(int64_t allocations) {
+  g_fail_countdown.store(allocations < 0 ? -1 : allocations, std::memory_order_relaxed);
+}
 
 // A page's free nodes are a bitmap, not a list: allocation takes the lowest free node, so after
 // a generation dies in random order the next one is still laid out in address order (as
@@ -89,9 +110,13 @@ NodePool::~NodePool() {
 #ifdef GROVE_NODE_POOL
 
 void* NodePool::Allocate(int slot) {
+  if (InjectedFailure()) return nullptr;
   Heap* heap = heaps_[slot].get();
   Page* page = heap->current;
-  if (page == nullptr || page->free_count == 0) page = Refill(heap);
+  if (page == nullptr || page->free_count == 0) {
+    page = Refill(heap);
+    if (page == nullptr) return nullptr;
+  }
   uint32_t w = page->first_word;
   while (page->free[w] == 0) ++w;
   uint64_t bits = page->free[w];
@@ -167,8 +192,13 @@ NodePool::Page* NodePool::Refill(Heap* heap) {
   }
   if (heap->slab_cursor == heap->slab_end) {
     void* slab = MapSlab();
-    if (slab == nullptr) throw std::bad_alloc();
-    heap->slabs.push_back(slab);
+    if (slab == nullptr) return nullptr;
+    try {
+      heap->slabs.push_back(slab);
+    } catch (const std::bad_alloc&) {
+      munmap(slab, kSlabBytes);
+      return nullptr;
+    }
     heap->slab_cursor = static_cast<char*>(slab);
     heap->slab_end = heap->slab_cursor + kSlabBytes;
     reserved_bytes_.fetch_add(kSlabBytes, std::memory_order_relaxed);

@@ -23,6 +23,9 @@
 // With GROVE_NODE_POOL off, Allocate/Free are plain aligned new/delete with the same counters
 // (sanitizer and valgrind builds: pooled memory would hide use-after-free).
 //
+// Allocation never throws: when the system refuses memory (or an injected failure fires, see
+// FailAllocationsAfter) Allocate() returns nullptr and the caller reports ResourceExhausted.
+//
 // Thread safety: Allocate(slot) and Free(p, slot) may run concurrently for distinct slots;
 // Free(p, kForeignSlot) from any thread; Stats() from any thread at any time.
 #ifndef GROVE_ALLOC_NODE_POOL_H_
@@ -48,6 +51,12 @@ struct PoolStats {
   int64_t peak_live_bytes() const { return peak_live_nodes * node_bytes; }
 };
 
+// Fault injection for tests: after `allocations` more successful node allocations, in any
+// pool of the process, every further one fails (returns nullptr) until the countdown is reset
+// with a negative value (the default: never fail). A test-only switch: the one process-wide
+// state of the library, checked with a relaxed load that is almost always -1.
+void FailAllocationsAfter(int64_t allocations);
+
 class NodePool {
  public:
   // REQUIRES: 8 <= node_bytes <= 16 KiB, slots >= 1.
@@ -56,7 +65,8 @@ class NodePool {
   NodePool(const NodePool&) = delete;
   NodePool& operator=(const NodePool&) = delete;
 
-  // Returns uninitialised storage of node_bytes(), 16-byte aligned. REQUIRES: 0 <= slot < slots().
+  // Returns uninitialised storage of node_bytes(), 16-byte aligned, or nullptr when no memory
+  // can be had. REQUIRES: 0 <= slot < slots().
   void* Allocate(int slot);
   // REQUIRES: p came from Allocate on this pool; slot is the caller's slot or kForeignSlot.
   void Free(void* p, int slot);

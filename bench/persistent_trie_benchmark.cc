@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "engine/persistent_trie.h"
+#include "tests/engine/trie_testing.h"
 
 namespace grove {
 namespace {
@@ -24,7 +25,7 @@ struct Fixture {
   Fixture() {
     std::mt19937_64 rng(1);
     for (int i = 0; i < 20000; ++i) keys.push_back(rng() % 65536);
-    for (uint64_t k : keys) root = trie.Update(root, k, 0, [](Leaf& l, bool) { ++l.c[0]; });
+    for (uint64_t k : keys) root = TrieUpdated(trie, root, k, 0, [](Leaf& l, bool) { ++l.c[0]; });
   }
   ~Fixture() { trie.Release(root, 0); }
 };
@@ -48,7 +49,8 @@ void BM_TrieUpdateUnique(benchmark::State& state) {
   Fixture<kLog2> f;
   size_t i = 0;
   for (auto _ : state) {
-    f.root = f.trie.Update(f.root, f.keys[i++ % f.keys.size()], 0, [](Leaf& l, bool) { ++l.c[1]; });
+    f.root = TrieUpdated(f.trie, f.root, f.keys[i++ % f.keys.size()], 0,
+                         [](Leaf& l, bool) { ++l.c[1]; });
   }
   state.SetItemsProcessed(state.iterations());
 }
@@ -60,7 +62,8 @@ void BM_TrieUpdateShared(benchmark::State& state) {
   size_t i = 0;
   for (auto _ : state) {
     auto* copy = PersistentTrie<Leaf, kLog2>::Share(f.root);
-    copy = f.trie.Update(copy, f.keys[i++ % f.keys.size()], 0, [](Leaf& l, bool) { ++l.c[1]; });
+    copy =
+        TrieUpdated(f.trie, copy, f.keys[i++ % f.keys.size()], 0, [](Leaf& l, bool) { ++l.c[1]; });
     f.trie.Release(copy, 0);
   }
   state.SetItemsProcessed(state.iterations());

@@ -44,6 +44,15 @@ struct ZigguratTables {
   }
 };
 
+// Every use of the random streams, one value each, so that no two uses of one (step, particle)
+// ever draw the same numbers. Values are part of the results: never renumber one.
+enum StreamPurpose : uint32_t {
+  kTest = 0,           // tests and tools
+  kMotion = 1,         // a particle's motion noise in a step
+  kInit = 2,           // a particle's initial state
+  kResample = 0x5E5A,  // the resampling draws of a step
+};
+
 class RandomStream {
  public:
   // `purpose` separates independent uses within one (step, particle), e.g. motion noise and

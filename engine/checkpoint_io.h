@@ -3,11 +3,14 @@
 //
 // File layout (every integer little-endian):
 //   offset 0   8 bytes  magic: 0x89 'G' 'R' 'O' 'V' 'E' '\r' '\n' (catches text-mode mangling)
-//   offset 8   u32      format version (kCheckpointFormatVersion)
+//   offset 8   u32      format version of the model's body (each model numbers its own)
 //   offset 12  u32      CRC-32 (zlib) of the body
 //   offset 16  u64      body length in bytes
 //   offset 24  body
-// The body is a sequence of fields written by the engine (engine/footslam/footslam.cc).
+// Every body starts with the head written by WriteCheckpointHead(): the kind ("grove
+// footslam"), the configuration hash (CRC-32 of the field block), the field block (every
+// configuration field that changes results: name, type, value) and the embedder's user data.
+// The model's own state follows (engine/footslam/footslam.cc), then an end marker.
 //
 // A reader never reads past its end and never trusts a count: every error is a Status naming
 // the field and the byte offset, so a corrupt or hostile file cannot crash the process.
@@ -20,8 +23,10 @@
 #include <string>
 #include <string_view>
 #include <type_traits>
+#include <variant>
 #include <vector>
 
+#include "grove/config_fields.h"
 #include "grove/status.h"
 
 namespace grove {
@@ -29,8 +34,9 @@ namespace grove {
 static_assert(std::endian::native == std::endian::little,
               "checkpoints are written in the host's byte order, which must be little-endian");
 
-inline constexpr uint32_t kCheckpointFormatVersion = 1;
 inline constexpr size_t kCheckpointHeaderBytes = 24;
+// The last field of every body.
+inline constexpr uint32_t kCheckpointEndMarker = 0x21444E45;  // "END!"
 
 class ByteWriter {
  public:
@@ -105,6 +111,7 @@ class ByteReader {
   }
 
   size_t offset() const { return pos_; }
+  const std::string& name() const { return name_; }
   size_t remaining() const { return data_.size() - pos_; }
   bool at_end() const { return pos_ == data_.size(); }
 
@@ -160,13 +167,61 @@ Status LinkRoots(ByteReader* r, const char* field, size_t root_count,
   return Status::Ok();
 }
 
-// The whole file: header and `body`.
-std::string SealCheckpoint(std::string_view body);
+// One configuration field in a checkpoint's field block: integers (and choices) as the bits of
+// an int64, reals as the bits of a double.
+struct CheckpointField {
+  std::string name;
+  bool integer;
+  uint64_t bits;
+};
 
-// Checks the header and the checksum of a whole file and returns its body (a view into
-// `file`). DataLoss for a short file, a wrong magic, a length or checksum that does not match;
-// FailedPrecondition for a format version this build does not read. `name` starts each message.
-StatusOr<std::string_view> UnsealCheckpoint(std::string_view file, const std::string& name);
+// The fields of `config` that change results, in table order: the block a checkpoint stores.
+template <typename Config>
+std::vector<CheckpointField> CheckpointFieldsOf(const std::vector<ConfigField<Config>>& table,
+                                                const Config& config) {
+  std::vector<CheckpointField> out;
+  for (const ConfigField<Config>& f : table) {
+    if (f.info.effect != kChangesResults) continue;
+    FieldValue v = f.get(config);
+    uint64_t bits = 0;
+    if (const double* d = std::get_if<double>(&v)) {
+      std::memcpy(&bits, d, sizeof(bits));
+    } else if (const int64_t* i = std::get_if<int64_t>(&v)) {
+      bits = static_cast<uint64_t>(*i);
+    } else {
+      bits = std::get<uint64_t>(v);
+    }
+    out.push_back({f.info.name, f.info.type != FieldType::kReal, bits});
+  }
+  return out;
+}
+
+// Writes the head of a body: the kind, the configuration hash and block, the user data.
+void WriteCheckpointHead(ByteWriter* w, std::string_view kind,
+                         const std::vector<CheckpointField>& fields, std::string_view user_data);
+
+// Reads the head of a body made by WriteCheckpointHead() and checks it against this build and
+// configuration, before any engine is built: the kind (DataLoss when it is not `kind`), the
+// format version (FailedPrecondition unless `version` is `expected_version`), then every field
+// (FailedPrecondition naming the field and both values when a value differs; DataLoss when the
+// block does not have the expected fields). `model` names the model in messages ("FootSLAM").
+// Sets *user_data.
+Status ReadCheckpointHead(ByteReader* r, std::string_view kind, const char* model, uint32_t version,
+                          uint32_t expected_version, const std::vector<CheckpointField>& expected,
+                          std::string* user_data);
+
+// The whole file: header and `body`.
+std::string SealCheckpoint(std::string_view body, uint32_t format_version);
+
+struct UnsealedCheckpoint {
+  uint32_t format_version;
+  std::string_view body;  // a view into the file
+};
+
+// Checks the header and the checksum of a whole file and returns its body and format version
+// (which the model checks after the kind: ReadCheckpointHead). DataLoss for a short file, a
+// wrong magic, a length or checksum that does not match. `name` starts each message.
+StatusOr<UnsealedCheckpoint> UnsealCheckpoint(std::string_view file, const std::string& name);
 
 }  // namespace grove
 

@@ -1,30 +1,31 @@
 // ParticleFilter: the sequential importance resampling loop of a Rao-Blackwellized particle
 // filter, generic over a model that owns the particles' state (structure of arrays).
 //
-// One Step():
+// One Update():
 //   1. advance: the model propagates, weights and updates the map of every particle, in parallel
 //      over batches (log-domain weight increments);
-//   2. normalise: log-sum-exp over fixed blocks, then the effective sample size 1 / sum(w^2);
-//   3. resample when ESS / N < threshold (threshold 1 resamples every step): parents are drawn
+//   2. population (optional): a model that needs the whole population within a step (moving
+//      particles towards the best one, as differential evolution does) gets it here, before the
+//      weights are normalised;
+//   3. normalise: log-sum-exp over fixed blocks, then the effective sample size 1 / sum(w^2);
+//   4. resample when ESS / N < threshold (threshold 1 resamples every step): parents are drawn
 //      (systematic by default, in parallel), the model gathers the new generation (O(1) per
 //      particle: maps are shared) and releases the dead one, both in parallel.
+// One Predict() propagates every particle without weighting (a landmark filter predicts at the
+// control rate and weights only at scans). Both count as one step of the random streams.
 // Sums over particles are taken over fixed blocks and every draw comes from a counter-based
-// stream, so the same seed gives bit-identical weights at any thread count.
+// stream, so the same seed gives bit-identical weights at any thread count. A batch that fails
+// returns a Status; the step's result is the failure of the lowest failing batch, so the same
+// error is reported at any thread count.
 //
-// The Model provides:
-//   size_t size() const;
-//   void Advance(const Input&, uint64_t step, size_t begin, size_t end, int slot, double* log_w);
-//       adds each particle's log-likelihood increment to log_w[i], i in [begin, end)
-//   void Gather(std::span<const uint32_t> parents, WorkerPool&);  // next generation from parents
-//   void ReleaseDead(WorkerPool&);                                  // frees the previous one
-//
-// Thread safety: one thread drives a filter; the filter uses its WorkerPool inside Step().
+// Thread safety: one thread drives a filter; the filter uses its WorkerPool inside a step.
 #ifndef GROVE_ENGINE_PARTICLE_FILTER_H_
 #define GROVE_ENGINE_PARTICLE_FILTER_H_
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <concepts>
 #include <cstdint>
 #include <limits>
 #include <span>
@@ -57,7 +58,41 @@ struct PhaseTimes {
   double release_s = 0;    // freeing the dead generation
 };
 
-template <typename Model>
+// What a model provides (checked where a filter is instantiated).
+template <typename M>
+concept FilterModel = requires(M& m, const M& cm, std::span<const uint32_t> parents,
+                               WorkerPool& workers) {
+  { cm.size() } -> std::convertible_to<size_t>;
+  // The next generation: particle k copies parents[k] (nondecreasing); maps are shared.
+  { m.Gather(parents, workers) } -> std::same_as<void>;
+  // Frees what only the previous generation reached.
+  { m.ReleaseDead(workers) } -> std::same_as<void>;
+};
+
+// A model that weights `Input`: adds each particle's log-likelihood increment to log_w[i] for i
+// in [begin, end) after propagating it; returns the first particle's error (the batch stops).
+template <typename M, typename Input>
+concept WeightingModel = FilterModel<M> &&
+    requires(M& m, const Input& in, uint64_t step, size_t i, int slot, double* log_w) {
+  { m.Advance(in, step, i, i, slot, log_w) } -> std::same_as<Status>;
+};
+
+// A model that propagates on `Input` without weighting.
+template <typename M, typename Input>
+concept PredictingModel = FilterModel<M> &&
+    requires(M& m, const Input& in, uint64_t step, size_t i, int slot) {
+  { m.Predict(in, step, i, i, slot) } -> std::same_as<Status>;
+};
+
+// A model with a population phase for `Input`, run after Advance() over every particle:
+// Population(input, step, log_w, workers) may move particles and change their log weights.
+template <typename M, typename Input>
+concept PopulationModel = requires(M& m, const Input& in, uint64_t step, std::span<double> log_w,
+                                   WorkerPool& workers) {
+  { m.Population(in, step, log_w, workers) } -> std::same_as<Status>;
+};
+
+template <FilterModel Model>
 class ParticleFilter {
  public:
   ParticleFilter(Model* model, WorkerPool* workers, const FilterOptions& options)
@@ -67,32 +102,54 @@ class ParticleFilter {
         log_w_(model->size(), -std::log(static_cast<double>(model->size()))),
         parents_(model->size()) {}
 
-  // Runs one filter step on `input`. Returns FailedPrecondition when every particle weight is
-  // zero or non-finite after the update (the filter has degenerated; the particles keep the
-  // state of this step and the weights are left as computed).
+  // Runs one weighting step on `input`. Returns the model's error (the lowest failing batch's),
+  // or FailedPrecondition when every particle weight is zero or non-finite after the update
+  // (the filter has degenerated). After an error the particles are partly advanced: the
+  // caller must not step again.
   template <typename Input>
-  Status Step(const Input& input) {
+  requires WeightingModel<Model, Input> Status Update(const Input& input) {
     using Clock = std::chrono::steady_clock;
-    const size_t n = log_w_.size();
     auto t0 = Clock::now();
-    workers_->ParallelFor(n, options_.batch, [&](int slot, size_t begin, size_t end) {
-      model_->Advance(input, step_, begin, end, slot, log_w_.data());
+    Status status = ForBatches([&](int slot, size_t begin, size_t end) {
+      return model_->Advance(input, step_, begin, end, slot, log_w_.data());
     });
+    if constexpr (PopulationModel<Model, Input>) {
+      if (status.ok())
+        status = model_->Population(input, step_, std::span<double>(log_w_), *workers_);
+    }
     auto t1 = Clock::now();
-    Status status = Normalize();
-    auto t2 = Clock::now();
     times_.advance_s += Seconds(t1 - t0);
+    if (!status.ok()) {
+      ++step_;
+      return status;
+    }
+    status = Normalize();
+    auto t2 = Clock::now();
     times_.normalize_s += Seconds(t2 - t1);
+    ++weight_steps_;
     if (!status.ok()) {
       ++step_;
       return status;
     }
     ess_sum_ += ess_;
+    const size_t n = log_w_.size();
     if (options_.resample_threshold >= 1.0 || ess_ < options_.resample_threshold * n) {
-      Resample(input);
+      Resample();
     }
     ++step_;
     return Status::Ok();
+  }
+
+  // Runs one predict-only step: every particle is propagated on `input`, no weight changes.
+  template <typename Input>
+  requires PredictingModel<Model, Input> Status Predict(const Input& input) {
+    auto t0 = std::chrono::steady_clock::now();
+    Status status = ForBatches([&](int slot, size_t begin, size_t end) {
+      return model_->Predict(input, step_, begin, end, slot);
+    });
+    times_.advance_s += Seconds(std::chrono::steady_clock::now() - t0);
+    ++step_;
+    return status;
   }
 
   // The filter's state between steps: step and resampling counts, ESS statistics, phase
@@ -143,6 +200,7 @@ class ParticleFilter {
     heaviest_ = heaviest;
     ess_ = ess;
     ess_sum_ = ess_sum;
+    weight_steps_ = step;  // every step weights (no model checkpoints predict-only steps yet)
     times_ = times;
     log_w_.swap(log_w);
     return Status::Ok();
@@ -152,7 +210,10 @@ class ParticleFilter {
   std::span<const double> log_weights() const { return log_w_; }
   // Effective sample size after the last step's update, before any resampling.
   double ess() const { return ess_; }
-  double mean_ess() const { return step_ == 0 ? 0 : ess_sum_ / static_cast<double>(step_); }
+  // The mean ESS over the weighting steps.
+  double mean_ess() const {
+    return weight_steps_ == 0 ? 0 : ess_sum_ / static_cast<double>(weight_steps_);
+  }
   uint64_t steps() const { return step_; }
   uint64_t resamplings() const { return resamplings_; }
   const PhaseTimes& phase_times() const { return times_; }
@@ -165,6 +226,22 @@ class ParticleFilter {
   template <typename D>
   static double Seconds(D d) {
     return std::chrono::duration<double>(d).count();
+  }
+
+  // Runs body(slot, begin, end) -> Status over batches of options_.batch particles; returns the
+  // error of the lowest failing batch (the same at any thread count).
+  template <typename F>
+  Status ForBatches(F&& body) {
+    const size_t n = log_w_.size();
+    const size_t batch = std::max<size_t>(options_.batch, 1);
+    batch_status_.assign((n + batch - 1) / batch, Status::Ok());
+    workers_->ParallelFor(n, batch, [&](int slot, size_t begin, size_t end) {
+      batch_status_[begin / batch] = body(slot, begin, end);
+    });
+    for (Status& s : batch_status_) {
+      if (!s.ok()) return std::move(s);
+    }
+    return Status::Ok();
   }
 
   Status Normalize() {
@@ -223,13 +300,11 @@ class ParticleFilter {
     return Status::Ok();
   }
 
-  Status Degenerate(const char* what) {
-    return FailedPreconditionError("filter degenerated at step " + std::to_string(step_) + ": " +
-                                   what);
+  static Status Degenerate(const char* what) {
+    return FailedPreconditionError(std::string("the filter degenerated: ") + what);
   }
 
-  template <typename Input>
-  void Resample(const Input&) {
+  void Resample() {
     using Clock = std::chrono::steady_clock;
     auto t0 = Clock::now();
     const size_t n = log_w_.size();
@@ -256,9 +331,11 @@ class ParticleFilter {
   std::vector<double> log_w_;
   std::vector<double> weights_;  // exp(log_w_) after the last normalisation
   std::vector<uint32_t> parents_;
+  std::vector<Status> batch_status_;
   size_t heaviest_ = 0;
   uint64_t step_ = 0;
   uint64_t resamplings_ = 0;
+  uint64_t weight_steps_ = 0;
   double ess_ = 0;
   double ess_sum_ = 0;
   PhaseTimes times_;

@@ -1,32 +1,43 @@
-// PersistentTrie: a persistent, fixed-height trie over integer keys whose versions share nodes
-// (path copying: Thrun, Burgard and Fox, "Probabilistic Robotics" §13.8; the geographic H-tree of
-// Garcia Puyol et al., "Complexity-reduced FootSLAM", §IV).
+// PersistentTrie: a persistent trie over integer keys whose versions share nodes (path copying:
+// Thrun, Burgard and Fox, "Probabilistic Robotics" §13.8; the geographic H-tree of Garcia Puyol
+// et al., "Complexity-reduced FootSLAM", §IV).
 //
 // A version is a root pointer (nullptr: the empty map) that owns one reference. Copying a
 // version is one increment; Update() copies only the nodes on the key's path that other
 // versions share and mutates uniquely owned nodes in place (immer's `update() &&`).
 // Leaf payloads live inline in the bottom nodes: kDegree of them per node, with a presence mask.
 //
-// Node layout: inner nodes hold kDegree child pointers; bottom nodes (level height - 1) hold the
-// leaves. Key digit `level` (base kDegree, most significant first) picks the child at that level.
+// Node layout: every node records its level, counted from the bottom (0: a bottom node holding
+// leaves; k > 0: an inner node of kDegree children at level k - 1). Key digit k (base kDegree,
+// digit 0 the least significant) picks the child of a level-k node. A version is at least
+// min_height() levels high (a fixed-height map: FootSLAM's grid, whose keys all fit) and grows
+// by new roots on top when a key does not fit (a landmark map with no preset size): every old
+// key has digit 0 at the new levels, so the old root becomes child 0. Versions of different
+// heights share their common subtrees.
 //
 // Invariants:
 //   1. A node's reference count equals the number of parent links plus version roots pointing
-//      at it.
+//      at it (CheckCounts() walks it).
 //   2. A node reachable from a version is never changed unless its count is 1 and every node on
 //      the path to it is uniquely owned by that version.
-//   3. A node lives at one position (key prefix) only.
+//   3. A node lives at one position (level and key prefix) only.
+//
+// Memory: nodes come from NodePools and allocation never throws. An Update() that cannot get a
+// node returns false and leaves a version with the same contents (the map is unchanged).
 //
 // Thread safety: distinct versions may be updated, read and released concurrently from distinct
 // worker slots, even when they share nodes. One version must not be used by two threads at once.
 #ifndef GROVE_ENGINE_PERSISTENT_TRIE_H_
 #define GROVE_ENGINE_PERSISTENT_TRIE_H_
 
+#include <algorithm>
 #include <array>
+#include <bit>
 #include <cstdint>
 #include <cstring>
 #include <new>
 #include <span>
+#include <string>
 #include <type_traits>
 #include <unordered_map>
 #include <vector>
@@ -46,39 +57,50 @@ class PersistentTrie {
 
  public:
   static constexpr int kDegree = 1 << kLog2Degree;
-  static constexpr int kMaxHeight = 64 / kLog2Degree;
+  // Levels that hold every 64-bit key.
+  static constexpr int kMaxHeight = (64 + kLog2Degree - 1) / kLog2Degree;
 
   struct Node {
     RefCount rc;
+    uint8_t level;  // 0: bottom; in the padding after the count
   };
   using Root = Node*;
 
-  // REQUIRES: 1 <= height <= kMaxHeight, slots >= 1 (the worker slots that will use it).
-  PersistentTrie(int height, int slots)
-      : height_(height),
+  // REQUIRES: 1 <= min_height <= kMaxHeight, slots >= 1 (the worker slots that will use it).
+  PersistentTrie(int min_height, int slots)
+      : height_(min_height),
         inner_pool_(sizeof(Inner), slots),
         bottom_pool_(sizeof(Bottom), slots),
         release_scratch_(slots) {
-    GROVE_CHECK(height >= 1 && height <= kMaxHeight);
+    GROVE_CHECK(min_height >= 1 && min_height <= kMaxHeight);
   }
   PersistentTrie(const PersistentTrie&) = delete;
   PersistentTrie& operator=(const PersistentTrie&) = delete;
 
-  int height() const { return height_; }
-  // Number of distinct keys, kDegree^height (0 when it does not fit in 64 bits: all keys valid).
+  // The height of every new version; a version grows above it only for a key that needs it.
+  int min_height() const { return height_; }
+  // Levels of a version: 0 for the empty one.
+  static int Height(const Node* root) { return root == nullptr ? 0 : root->level + 1; }
+  // Levels a version needs to hold `key`: at least 1.
+  static int HeightFor(uint64_t key) {
+    return key == 0 ? 1 : (std::bit_width(key) + kLog2Degree - 1) / kLog2Degree;
+  }
+  // Keys a version of min_height() holds without growing, kDegree^min_height (0 when that does
+  // not fit in 64 bits: every key).
   uint64_t key_count() const {
     return height_ * kLog2Degree >= 64 ? 0 : uint64_t{1} << (height_ * kLog2Degree);
   }
 
   // Returns the leaf stored under `key`, or nullptr. The pointer is valid while the version is.
   const Leaf* Find(const Node* root, uint64_t key) const {
+    if (root == nullptr || HeightFor(key) > Height(root)) return nullptr;
     const Node* cur = root;
-    for (int level = 0; cur != nullptr && level < height_ - 1; ++level) {
-      cur = static_cast<const Inner*>(cur)->child[Digit(key, level)];
+    while (cur != nullptr && cur->level > 0) {
+      cur = static_cast<const Inner*>(cur)->child[Digit(key, cur->level)];
     }
     if (cur == nullptr) return nullptr;
     const Bottom* b = static_cast<const Bottom*>(cur);
-    int d = Digit(key, height_ - 1);
+    int d = Digit(key, 0);
     return b->Has(d) ? &b->leaf[d] : nullptr;
   }
 
@@ -90,15 +112,15 @@ class PersistentTrie {
   // count) and would delete the call.
   [[gnu::always_inline]] void PrefetchPath(const Node* root, uint64_t key, int depth) const {
     const Node* cur = root;
-    for (int level = 0; cur != nullptr && level < depth; ++level) {
-      cur = static_cast<const Inner*>(cur)->child[Digit(key, level)];
+    for (int level = 0; cur != nullptr && level < depth && cur->level > 0; ++level) {
+      cur = static_cast<const Inner*>(cur)->child[Digit(key, cur->level)];
     }
     if (cur == nullptr) return;
     __builtin_prefetch(cur);
-    if (depth < height_ - 1) {
-      __builtin_prefetch(&static_cast<const Inner*>(cur)->child[Digit(key, depth)]);
+    if (cur->level > 0) {
+      __builtin_prefetch(&static_cast<const Inner*>(cur)->child[Digit(key, cur->level)]);
     } else {
-      __builtin_prefetch(&static_cast<const Bottom*>(cur)->leaf[Digit(key, depth)]);
+      __builtin_prefetch(&static_cast<const Bottom*>(cur)->leaf[Digit(key, 0)]);
     }
   }
 
@@ -109,18 +131,31 @@ class PersistentTrie {
   }
 
   // Applies f(Leaf& leaf, bool existed) to the leaf under `key` (value-initialised if it did not
-  // exist) and returns the updated version. Consumes the caller's reference to `root`: use the
-  // returned root instead. Copies only shared nodes on the path; O(height).
+  // exist) in the version *root, which it replaces (the caller's reference moves to the new
+  // root). Copies only shared nodes on the path and grows the version when `key` does not fit;
+  // O(height). Returns false, without calling f, when a node could not be allocated: *root is
+  // then a valid version with the same contents.
   template <typename F>
-  Node* Update(Node* root, uint64_t key, int slot, F&& f) {
-    Node* new_root = nullptr;
-    Node** link = &new_root;
-    Node* cur = root;
-    for (int level = 0; level < height_ - 1; ++level) {
+  [[nodiscard]] bool Update(Node** root, uint64_t key, int slot, F&& f) {
+    const int need = std::max(height_, HeightFor(key));
+    if (*root == nullptr) {
+      // An empty version starts at the height the key needs.
+    } else {
+      while (Height(*root) < need) {  // grow: the old root is child 0 of a new one
+        Inner* top = NewInner(slot, Height(*root));
+        if (top == nullptr) return false;
+        top->child[0] = *root;
+        *root = top;
+      }
+    }
+    Node* cur = *root;
+    Node** link = root;
+    for (int level = cur == nullptr ? need - 1 : cur->level; level > 0; --level) {
       int d = Digit(key, level);
       Inner* n;
       if (cur == nullptr) {
-        n = NewInner(slot);
+        n = NewInner(slot, level);
+        if (n == nullptr) return false;  // *link is still nullptr: the contents are unchanged
       } else if (cur->rc.unique()) {
         n = static_cast<Inner*>(cur);
       } else {
@@ -128,7 +163,8 @@ class PersistentTrie {
         // too: once `cur` loses our reference another version may own it alone and change it
         // in place, so the copy must not lean on `cur`'s link.
         Inner* old = static_cast<Inner*>(cur);
-        n = NewInner(slot);
+        n = NewInner(slot, level);
+        if (n == nullptr) return false;  // *link still holds our reference to `old`
         std::memcpy(n->child, old->child, sizeof(n->child));
         for (Node* c : old->child) {
           if (c != nullptr) c->rc.Acquire();
@@ -138,25 +174,27 @@ class PersistentTrie {
           for (Node* c : old->child) {
             if (c != nullptr) c->rc.Release();
           }
-          FreeNode(old, /*bottom=*/false, slot);
+          FreeNode(old, slot);
         }
       }
       *link = n;
       link = &n->child[d];
       cur = n->child[d];
     }
-    int d = Digit(key, height_ - 1);
+    int d = Digit(key, 0);
     Bottom* b;
     if (cur == nullptr) {
       b = NewBottom(slot);
+      if (b == nullptr) return false;
     } else if (cur->rc.unique()) {
       b = static_cast<Bottom*>(cur);
     } else {
       Bottom* old = static_cast<Bottom*>(cur);
       b = NewBottom(slot);
+      if (b == nullptr) return false;
       std::memcpy(b->present, old->present, sizeof(b->present));
       std::memcpy(static_cast<void*>(b->leaf), old->leaf, sizeof(b->leaf));
-      if (old->rc.Release()) FreeNode(old, /*bottom=*/true, slot);
+      if (old->rc.Release()) FreeNode(old, slot);
     }
     bool existed = b->Has(d);
     if (!existed) {
@@ -165,85 +203,72 @@ class PersistentTrie {
     }
     f(b->leaf[d], existed);
     *link = b;
-    return new_root;
+    return true;
   }
 
   // Drops one reference to a version, freeing every node no other version reaches. Iterative
   // with an explicit stack: a chain of any length cannot overflow the call stack.
   void Release(Node* root, int slot) {
-    if (root == nullptr || !root->rc.Release()) return;
-    struct Item {
-      Node* node;
-      int level;
-    };
-    std::array<Item, (kDegree - 1) * kMaxHeight + 1> stack;
-    int top = 0;
-    stack[top++] = {root, 0};
-    while (top > 0) {
-      Item item = stack[--top];
-      if (item.level < height_ - 1) {
-        Inner* n = static_cast<Inner*>(item.node);
-        for (int i = 0; i < kDegree; ++i) {
-          Node* c = n->child[i];
-          if (c != nullptr && c->rc.Release()) stack[top++] = {c, item.level + 1};
-        }
-        FreeNode(n, /*bottom=*/false, slot);
-      } else {
-        FreeNode(item.node, /*bottom=*/true, slot);
-      }
-    }
+    if (root != nullptr && root->rc.Release()) FreeDead(root, slot);
   }
 
   // Release() of every version in `roots` (nullptr entries skipped), with the cache misses of
   // many nodes overlapped: a node's count is dropped kInFlight drops after it was queued and
   // prefetched, and a dead inner node's links are read kInFlight dead nodes after its lines
-  // were prefetched. Frees the same nodes as Release() one by one; only the order differs.
+  // were prefetched. Frees the same nodes as Release() one by one; only the order differs. If
+  // its queues cannot grow (out of memory) it finishes the work with Release()'s stack.
   void ReleaseMany(std::span<Node* const> roots, int slot) {
     constexpr size_t kInFlight = 16;
-    using Item = ReleaseItem;
     // FIFOs: nodes whose count is to be dropped, and dead inner nodes to expand and free.
-    std::vector<Item>& drop = release_scratch_[slot].drop;
-    std::vector<Item>& dead = release_scratch_[slot].dead;
+    std::vector<Node*>& drop = release_scratch_[slot].drop;
+    std::vector<Node*>& dead = release_scratch_[slot].dead;
     drop.clear();
     dead.clear();
     size_t drop_head = 0, dead_head = 0, next = 0;
-    auto queue = [&](Node* n, int level) {
+    auto queue = [&](Node* n) {
       __builtin_prefetch(n, 1);
-      drop.push_back({n, level});
+      try {
+        drop.push_back(n);
+      } catch (const std::bad_alloc&) {
+        Release(n, slot);
+      }
     };
     for (;;) {
       while (drop.size() - drop_head < kInFlight && next < roots.size()) {
-        if (roots[next] != nullptr) queue(roots[next], 0);
+        if (roots[next] != nullptr) queue(roots[next]);
         ++next;
       }
       if (drop_head < drop.size()) {
-        Item item = drop[drop_head++];
+        Node* node = drop[drop_head++];
         if (drop_head == drop.size()) {
           drop.clear();
           drop_head = 0;
         }
-        if (item.node->rc.Release()) {
-          if (item.level < height_ - 1) {
-            const char* p = reinterpret_cast<const char*>(item.node);
+        if (node->rc.Release()) {
+          if (node->level > 0) {
+            const char* p = reinterpret_cast<const char*>(node);
             for (size_t off = 0; off < sizeof(Inner); off += 64) __builtin_prefetch(p + off);
-            dead.push_back(item);
+            try {
+              dead.push_back(node);
+            } catch (const std::bad_alloc&) {
+              FreeDead(node, slot);
+            }
           } else {
-            FreeNode(item.node, /*bottom=*/true, slot);
+            FreeNode(node, slot);
           }
         }
       }
       if (dead_head < dead.size() &&
           (dead.size() - dead_head >= kInFlight || drop_head == drop.size())) {
-        Item item = dead[dead_head++];
+        Inner* n = static_cast<Inner*>(dead[dead_head++]);
         if (dead_head == dead.size()) {
           dead.clear();
           dead_head = 0;
         }
-        Inner* n = static_cast<Inner*>(item.node);
         for (int i = 0; i < kDegree; ++i) {
-          if (n->child[i] != nullptr) queue(n->child[i], item.level + 1);
+          if (n->child[i] != nullptr) queue(n->child[i]);
         }
-        FreeNode(n, /*bottom=*/false, slot);
+        FreeNode(n, slot);
       }
       if (drop_head == drop.size() && dead_head == dead.size() && next == roots.size()) return;
     }
@@ -255,19 +280,18 @@ class PersistentTrie {
     if (root == nullptr) return;
     struct Item {
       const Node* node;
-      int level;
       uint64_t prefix;
     };
     std::vector<Item> stack;
-    stack.push_back({root, 0, 0});
+    stack.push_back({root, 0});
     while (!stack.empty()) {
       Item item = stack.back();
       stack.pop_back();
-      if (item.level < height_ - 1) {
+      if (item.node->level > 0) {
         const Inner* n = static_cast<const Inner*>(item.node);
         for (int i = kDegree - 1; i >= 0; --i) {  // pushed in reverse: popped in key order
           if (n->child[i] != nullptr) {
-            stack.push_back({n->child[i], item.level + 1, (item.prefix << kLog2Degree) | i});
+            stack.push_back({n->child[i], (item.prefix << kLog2Degree) | i});
           }
         }
       } else {
@@ -289,6 +313,9 @@ class PersistentTrie {
   size_t VisitDistinct(std::span<Node* const> roots, std::span<const W> weights,
                        F&& on_leaf) const {
     GROVE_CHECK(roots.size() == weights.size());
+    // Level by level from the highest root down; a root joins at its own level.
+    int top = 0;
+    for (const Node* r : roots) top = std::max(top, Height(r));
     std::vector<const Node*> level_nodes;
     std::vector<uint64_t> level_prefix;
     std::vector<W> level_weight;
@@ -303,11 +330,8 @@ class PersistentTrie {
         level_weight[it->second] += w;
       }
     };
-    for (size_t i = 0; i < roots.size(); ++i) {
-      if (roots[i] != nullptr) add(roots[i], 0, weights[i]);
-    }
-    size_t distinct = level_nodes.size();
-    for (int level = 0; level < height_ - 1; ++level) {
+    size_t distinct = 0;
+    for (int level = top - 1; level >= 0; --level) {
       std::vector<const Node*> parents;
       std::vector<uint64_t> parent_prefix;
       std::vector<W> parent_weight;
@@ -322,6 +346,9 @@ class PersistentTrie {
             add(n->child[i], (parent_prefix[k] << kLog2Degree) | i, parent_weight[k]);
           }
         }
+      }
+      for (size_t i = 0; i < roots.size(); ++i) {
+        if (Height(roots[i]) == level + 1) add(roots[i], 0, weights[i]);
       }
       distinct += level_nodes.size();
     }
@@ -338,55 +365,92 @@ class PersistentTrie {
   size_t CountNodes(const Node* root) const {
     size_t count = 0;
     if (root == nullptr) return 0;
-    std::vector<std::pair<const Node*, int>> stack{{root, 0}};
+    std::vector<const Node*> stack{root};
     while (!stack.empty()) {
-      auto [n, level] = stack.back();
+      const Node* n = stack.back();
       stack.pop_back();
       ++count;
-      if (level < height_ - 1) {
+      if (n->level > 0) {
         for (const Node* c : static_cast<const Inner*>(n)->child) {
-          if (c != nullptr) stack.push_back({c, level + 1});
+          if (c != nullptr) stack.push_back(c);
         }
       }
     }
     return count;
   }
 
+  // The expensive check of invariants 1 and 3 over every version: `roots` must be every root
+  // reference into this trie (one entry per reference). Walks each distinct node once and
+  // compares its count with its parent links plus roots, each child's level with its parent's,
+  // and the distinct nodes with the pools' live count (so nothing leaked). For tests and
+  // GROVE_EXPENSIVE_CHECKS builds; returns Internal naming the first broken rule.
+  Status CheckCounts(std::span<Node* const> roots) const {
+    std::unordered_map<const Node*, uint32_t> links;
+    std::vector<const Node*> stack;
+    for (const Node* r : roots) {
+      if (r == nullptr) continue;
+      if (links[r]++ == 0) stack.push_back(r);
+    }
+    while (!stack.empty()) {
+      const Node* n = stack.back();
+      stack.pop_back();
+      if (n->level == 0) continue;
+      for (const Node* c : static_cast<const Inner*>(n)->child) {
+        if (c == nullptr) continue;
+        if (c->level + 1 != n->level) return InternalError("trie: a child is not one level down");
+        if (links[c]++ == 0) stack.push_back(c);
+      }
+    }
+    for (const auto& [node, count] : links) {
+      if (node->rc.count() != count) {
+        return InternalError("trie: a node's count " + std::to_string(node->rc.count()) +
+                             " is not its " + std::to_string(count) + " links and roots");
+      }
+    }
+    if (static_cast<int64_t>(links.size()) != live_nodes()) {
+      return InternalError("trie: " + std::to_string(live_nodes()) + " live nodes, " +
+                           std::to_string(links.size()) + " reachable");
+    }
+    return Status::Ok();
+  }
+
   // Writes the distinct nodes reachable from `roots`, each once and children before parents,
   // then the roots as node indices: Load() rebuilds the same sharing, so the size follows the
-  // distinct nodes, not roots x map size. Record of a node: u8 level, the presence words, then
-  // a u32 child index (inner) or the leaf bytes (bottom) for each present digit.
+  // distinct nodes, not roots x map size. Levels are written from the top of the highest root
+  // H: u32 H, then per node u8 (H - 1 - level), the presence words, then a u32 child index
+  // (inner) or the leaf bytes (bottom) for each present digit.
   void Save(std::span<Node* const> roots, ByteWriter* w) const {
     std::unordered_map<const Node*, uint32_t> index;
-    w->Put<uint32_t>(static_cast<uint32_t>(height_));
+    int top = height_;
+    for (const Node* r : roots) top = std::max(top, Height(r));
+    w->Put<uint32_t>(static_cast<uint32_t>(top));
     const size_t count_at = w->Reserve<uint64_t>();
     struct Frame {
       const Node* node;
-      int level;
       int next;  // the next child digit to visit
     };
     std::vector<Frame> stack;
     for (const Node* root : roots) {
       if (root == nullptr || index.count(root) != 0) continue;
-      stack.push_back({root, 0, 0});
+      stack.push_back({root, 0});
       while (!stack.empty()) {
         Frame& f = stack.back();
-        if (f.level < height_ - 1) {
+        if (f.node->level > 0) {
           const Inner* n = static_cast<const Inner*>(f.node);
           while (f.next < kDegree &&
                  (n->child[f.next] == nullptr || index.count(n->child[f.next]) != 0)) {
             ++f.next;
           }
           if (f.next < kDegree) {
-            stack.push_back({n->child[f.next], f.level + 1, 0});  // invalidates f
+            stack.push_back({n->child[f.next], 0});  // invalidates f
             continue;
           }
         }
         Frame done = f;
         stack.pop_back();
         index.emplace(done.node, static_cast<uint32_t>(index.size()));
-        w->Put<uint8_t>(static_cast<uint8_t>(done.level));
-        if (done.level < height_ - 1) {
+        w->Put<uint8_t>(static_cast<uint8_t>(top - 1 - done.node->level));
+        if (done.node->level > 0) {
           const Inner* n = static_cast<const Inner*>(done.node);
           uint64_t present[kWords] = {};
           for (int d = 0; d < kDegree; ++d) {
@@ -412,57 +476,56 @@ class PersistentTrie {
 
   // Rebuilds versions written by Save(): appends `root_count` roots to `roots`, each owning
   // one reference. valid_leaf(const Leaf&) rejects leaves the caller's model cannot hold.
-  // Every structural rule is checked (levels, child indices before parents, every node
-  // referenced, presence bits within the degree); on error nothing stays allocated and
-  // `roots` is unchanged. Nodes come from `slot`'s pools.
+  // Every structural rule is checked (levels, child indices before parents and one level down,
+  // every node referenced, roots at least min_height() high, presence bits within the degree);
+  // on error nothing stays allocated and `roots` is unchanged. Nodes come from `slot`'s pools.
   template <typename V>
   Status Load(ByteReader* r, size_t root_count, int slot, V&& valid_leaf,
               std::vector<Node*>* roots) {
-    uint32_t height = 0;
-    GROVE_RETURN_IF_ERROR(r->Get("trie height", &height));
-    if (height != static_cast<uint32_t>(height_)) {
-      return r->Error("trie height", std::to_string(height) + " does not match the " +
-                                         std::to_string(height_) + " of this configuration");
+    uint32_t top = 0;
+    GROVE_RETURN_IF_ERROR(r->Get("trie height", &top));
+    if (top < static_cast<uint32_t>(height_) || top > static_cast<uint32_t>(kMaxHeight)) {
+      return r->Error("trie height", std::to_string(top) + " is not in " + std::to_string(height_) +
+                                         ".." + std::to_string(kMaxHeight) +
+                                         " (this configuration's height " +
+                                         std::to_string(height_) + ")");
     }
     uint64_t count = 0;
     GROVE_RETURN_IF_ERROR(r->GetCount("trie node count", 1 + sizeof(uint64_t) * kWords, &count));
     if (count >= UINT32_MAX) return r->Error("trie node count", "too large");
     std::vector<Node*> nodes;
-    std::vector<uint8_t> levels;
     std::vector<uint32_t> refs;
     nodes.reserve(count);
-    levels.reserve(count);
     refs.reserve(count);
     auto fail = [&](Status s) {
-      for (size_t k = 0; k < nodes.size(); ++k) {
-        FreeNode(nodes[k], levels[k] == height_ - 1, slot);
-      }
+      for (Node* n : nodes) FreeNode(n, slot);
       return s;
     };
     for (uint64_t k = 0; k < count; ++k) {
-      uint8_t level = 0;
+      uint8_t depth = 0;
       uint64_t present[kWords];
-      Status s = r->Get("trie node level", &level);
-      if (s.ok() && level >= height_) {
+      Status s = r->Get("trie node level", &depth);
+      if (s.ok() && depth >= top) {
         s = r->Error("trie node level",
-                     std::to_string(level) + " is not below the height " + std::to_string(height_));
+                     std::to_string(depth) + " is not below the height " + std::to_string(top));
       }
       if (s.ok()) s = r->GetBytes("trie node presence", present, sizeof(present));
       if (s.ok() && kDegree % 64 != 0 && (present[kWords - 1] >> (kDegree % 64)) != 0) {
         s = r->Error("trie node presence", "a digit beyond the degree is marked present");
       }
       if (!s.ok()) return fail(s);
+      const int level = static_cast<int>(top) - 1 - depth;
       auto has = [&](int d) { return (present[d >> 6] >> (d & 63)) & 1; };
-      if (level < height_ - 1) {
-        Inner* n = NewInner(slot);
+      if (level > 0) {
+        Inner* n = NewInner(slot, level);
+        if (n == nullptr) return fail(ResourceExhaustedError("out of memory loading a trie"));
         nodes.push_back(n);
-        levels.push_back(level);
         refs.push_back(0);
         for (int d = 0; d < kDegree; ++d) {
           if (!has(d)) continue;
           uint32_t c = 0;
           s = r->Get("trie child index", &c);
-          if (s.ok() && (c >= k || levels[c] != level + 1)) {
+          if (s.ok() && (c >= k || nodes[c]->level + 1 != level)) {
             s = r->Error("trie child index",
                          std::to_string(c) + " is not an earlier node one level down");
           }
@@ -472,8 +535,8 @@ class PersistentTrie {
         }
       } else {
         Bottom* b = NewBottom(slot);
+        if (b == nullptr) return fail(ResourceExhaustedError("out of memory loading a trie"));
         nodes.push_back(b);
-        levels.push_back(level);
         refs.push_back(0);
         std::memcpy(b->present, present, sizeof(present));
         for (int d = 0; d < kDegree; ++d) {
@@ -493,7 +556,8 @@ class PersistentTrie {
     if (!s.ok()) return fail(s);
     // Invariant 1: a node's count is its parent links plus the roots reaching it.
     s = LinkRoots(
-        r, "trie root", root_count, nodes, &refs, [&](size_t k) { return levels[k] == 0; }, roots);
+        r, "trie root", root_count, nodes, &refs,
+        [&](size_t k) { return nodes[k]->level + 1 >= height_; }, roots);
     return s.ok() ? s : fail(s);
   }
 
@@ -516,23 +580,31 @@ class PersistentTrie {
     bool Has(int d) const { return (present[d >> 6] >> (d & 63)) & 1; }
   };
 
-  int Digit(uint64_t key, int level) const {
-    return static_cast<int>((key >> (kLog2Degree * (height_ - 1 - level))) & (kDegree - 1));
+  // Digit `level` of `key` (0: the least significant): the child of a level-`level` node.
+  static int Digit(uint64_t key, int level) {
+    return static_cast<int>((key >> (kLog2Degree * level)) & (kDegree - 1));
   }
 
-  Inner* NewInner(int slot) {
-    Inner* n = new (inner_pool_.Allocate(slot)) Inner;
+  // A new node, or nullptr when the pool has no memory.
+  Inner* NewInner(int slot, int level) {
+    void* p = inner_pool_.Allocate(slot);
+    if (p == nullptr) return nullptr;
+    Inner* n = new (p) Inner;
+    n->level = static_cast<uint8_t>(level);
     std::memset(n->child, 0, sizeof(n->child));
     return n;
   }
   Bottom* NewBottom(int slot) {
-    Bottom* b = new (bottom_pool_.Allocate(slot)) Bottom;
+    void* p = bottom_pool_.Allocate(slot);
+    if (p == nullptr) return nullptr;
+    Bottom* b = new (p) Bottom;
+    b->level = 0;
     std::memset(b->present, 0, sizeof(b->present));
     std::memset(static_cast<void*>(b->leaf), 0, sizeof(b->leaf));
     return b;
   }
-  void FreeNode(Node* n, bool bottom, int slot) {
-    if (bottom) {
+  void FreeNode(Node* n, int slot) {
+    if (n->level == 0) {
       static_cast<Bottom*>(n)->~Bottom();
       bottom_pool_.Free(n, slot);
     } else {
@@ -540,18 +612,30 @@ class PersistentTrie {
       inner_pool_.Free(n, slot);
     }
   }
+  // Frees `dead` (its count has reached zero) and every node only it reached. Iterative, with a
+  // fixed stack: allocates nothing.
+  void FreeDead(Node* dead, int slot) {
+    std::array<Node*, (kDegree - 1) * kMaxHeight + 1> stack;
+    int top = 0;
+    stack[top++] = dead;
+    while (top > 0) {
+      Node* n = stack[--top];
+      if (n->level > 0) {
+        for (Node* c : static_cast<Inner*>(n)->child) {
+          if (c != nullptr && c->rc.Release()) stack[top++] = c;
+        }
+      }
+      FreeNode(n, slot);
+    }
+  }
 
   int height_;
   NodePool inner_pool_;
   NodePool bottom_pool_;
   // ReleaseMany's queues, per worker slot (reused: no allocation per call once grown).
-  struct ReleaseItem {
-    Node* node;
-    int level;
-  };
-  struct alignas(64) ReleaseScratch {
-    std::vector<ReleaseItem> drop;
-    std::vector<ReleaseItem> dead;
+  struct alignas(128) ReleaseScratch {
+    std::vector<Node*> drop;
+    std::vector<Node*> dead;
   };
   std::vector<ReleaseScratch> release_scratch_;
 };

@@ -11,7 +11,6 @@ namespace {
 
 // Stream keys for the resampler: one (step, particle) pair no particle uses.
 constexpr uint32_t kResampleParticle = 0xFFFFFFFFu;
-constexpr uint32_t kResamplePurpose = 0x5E5A;
 
 void SystematicResample(std::span<const double> weights, double u, WorkerPool& workers,
                         std::span<uint32_t> parents) {
@@ -96,7 +95,7 @@ bool ParseResamplingScheme(std::string_view name, ResamplingScheme* scheme) {
 
 void Resample(ResamplingScheme scheme, std::span<const double> weights, uint64_t seed,
               uint64_t step, WorkerPool& workers, std::span<uint32_t> parents) {
-  RandomStream stream(seed, step, kResampleParticle, kResamplePurpose);
+  RandomStream stream(seed, step, kResampleParticle, StreamPurpose::kResample);
   const size_t n = parents.size();
   if (scheme == ResamplingScheme::kSystematic) {
     SystematicResample(weights, stream.NextUniform(), workers, parents);

@@ -21,8 +21,8 @@
 #include <vector>
 
 #include "tools/atomic_file.h"
+#include "tools/config_json.h"
 #include "tools/csv_reader.h"
-#include "tools/footslam_config_json.h"
 #include "tools/map_render.h"
 #include "tools/output_readers.h"
 #include "tools/progress_reporter.h"
@@ -394,9 +394,16 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
   if (options.progress) progress.Finish();
 
   // Every output is built in memory and written under a temporary name, then renamed.
-  std::vector<HexCounts> cumulative = slam.CumulativeMap();
-  std::vector<HexCounts> best_map = slam.HeaviestMap();
-  std::vector<StampedPose> trajectory = slam.HeaviestTrajectory();
+  StatusOr<std::vector<HexCounts>> cumulative_or = slam.CumulativeMap();
+  StatusOr<std::vector<HexCounts>> best_map_or = slam.HeaviestMap();
+  StatusOr<std::vector<StampedPose>> trajectory_or = slam.HeaviestTrajectory();
+  for (const Status* st :
+       {&cumulative_or.status(), &best_map_or.status(), &trajectory_or.status()}) {
+    if (!st->ok()) return Fail(ExitCodeOf(*st), st->message());
+  }
+  const std::vector<HexCounts>& cumulative = *cumulative_or;
+  const std::vector<HexCounts>& best_map = *best_map_or;
+  const std::vector<StampedPose>& trajectory = *trajectory_or;
   FootSlamSummary summary = slam.Summary();
   double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
@@ -404,7 +411,7 @@ int RunFootSlamCommand(const FootSlamConfig& config, const RunOptions& options) 
                     summary.release_s + summary.bookkeeping_s;
   nlohmann::json report = {
       {"inputs", {{"steps", steps_name}, {"steps_read", slam.steps()}}},
-      {"config", FootSlamConfigToJson(config)},
+      {"config", ConfigToJson(FootSlamConfigFields(), config)},
       {"particles", config.particles},
       {"steps", slam.steps()},
       {"threads_requested", summary.threads_requested},

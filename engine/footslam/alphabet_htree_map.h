@@ -12,8 +12,8 @@
 #include "concurrency/worker_pool.h"
 #include "engine/footslam/alphabet.h"
 #include "engine/footslam/htc.h"
-#include "engine/generation.h"
 #include "engine/persistent_trie.h"
+#include "engine/version_set.h"
 
 namespace grove::footslam {
 
@@ -29,21 +29,17 @@ class AlphabetHTreeMap {
       : alphabet_(alphabet),
         symbols_(height, slots),
         full_(height, slots),
-        symbol_roots_(particles),
-        full_roots_(particles) {}
-  ~AlphabetHTreeMap() {
-    for (auto* r : symbol_roots_) symbols_.Release(r, 0);
-    for (auto* r : full_roots_) full_.Release(r, 0);
-    for (auto* r : dead_symbol_roots_) symbols_.Release(r, 0);
-    for (auto* r : dead_full_roots_) full_.Release(r, 0);
-  }
+        symbol_roots_(&symbols_, particles),
+        full_roots_(&full_, particles) {}
 
-  EdgeCounts Cross(size_t i, uint64_t key, int edge, int slot) {
+  // Returns false when out of memory; the engine is then stopped, and the two trees may
+  // disagree on the hexagon (its symbol escaped, its counters not yet moved).
+  bool Cross(size_t i, uint64_t key, int edge, int slot, EdgeCounts* out) {
     EdgeCounts before{0, 0};
     bool escaped = false;
     uint16_t last_symbol = 0;
     bool escapes_now = false;
-    symbol_roots_[i] = symbols_.Update(symbol_roots_[i], key, slot, [&](uint16_t& s, bool) {
+    bool ok = symbols_.Update(&symbol_roots_[i], key, slot, [&](uint16_t& s, bool) {
       if (s == kEscaped) {
         escaped = true;
         return;
@@ -58,18 +54,19 @@ class AlphabetHTreeMap {
         s = next;
       }
     });
-    if (escaped) {
-      full_roots_[i] = full_.Update(full_roots_[i], key, slot, [&](Htc& h, bool) {
+    if (ok && escaped) {
+      ok = full_.Update(&full_roots_[i], key, slot, [&](Htc& h, bool) {
         before = {h.c[edge], h.Total()};
         ++h.c[edge];
       });
-    } else if (escapes_now) {
-      full_roots_[i] = full_.Update(full_roots_[i], key, slot, [&](Htc& h, bool) {
+    } else if (ok && escapes_now) {
+      ok = full_.Update(&full_roots_[i], key, slot, [&](Htc& h, bool) {
         alphabet_->Decode(last_symbol, h.c);
         ++h.c[edge];
       });
     }
-    return before;
+    *out = before;
+    return ok;
   }
 
   // Starts loading particle i's root node into the cache.
@@ -78,28 +75,16 @@ class AlphabetHTreeMap {
   [[gnu::always_inline]] void PrefetchPath(size_t i, uint64_t key, int depth) const {
     symbols_.PrefetchPath(symbol_roots_[i], key, depth);
   }
-  int height() const { return symbols_.height(); }
+  int height() const { return symbols_.min_height(); }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
-    std::vector<typename SymbolTrie::Root> next_symbols =
-        GatherShared(parents, &symbol_roots_, workers, &SymbolTrie::Share);
-    std::vector<typename FullTrie::Root> next_full =
-        GatherShared(parents, &full_roots_, workers, &FullTrie::Share);
-    dead_symbol_roots_.swap(symbol_roots_);
-    dead_full_roots_.swap(full_roots_);
-    symbol_roots_.swap(next_symbols);
-    full_roots_.swap(next_full);
+    symbol_roots_.Gather(parents, workers);
+    full_roots_.Gather(parents, workers);
   }
 
   void ReleaseDead(WorkerPool& workers) {
-    workers.ParallelFor(dead_symbol_roots_.size(), 1024, [&](int slot, size_t b, size_t e) {
-      symbols_.ReleaseMany(
-          std::span<typename SymbolTrie::Root const>(dead_symbol_roots_).subspan(b, e - b), slot);
-      full_.ReleaseMany(
-          std::span<typename FullTrie::Root const>(dead_full_roots_).subspan(b, e - b), slot);
-    });
-    dead_symbol_roots_.clear();
-    dead_full_roots_.clear();
+    symbol_roots_.ReleaseDead(workers);
+    full_roots_.ReleaseDead(workers);
   }
 
   template <typename F>
@@ -122,19 +107,19 @@ class AlphabetHTreeMap {
 
   template <typename F>
   void Cumulative(std::span<const uint64_t> weights, F&& f) const {
-    symbols_.template VisitDistinct<uint64_t>(symbol_roots_, weights,
+    symbols_.template VisitDistinct<uint64_t>(symbol_roots_.roots(), weights,
                                               [&](uint64_t key, const uint16_t& s, uint64_t w) {
                                                 if (s == kEscaped) return;
                                                 Htc h;
                                                 alphabet_->Decode(s, h.c);
                                                 f(key, h, w);
                                               });
-    full_.template VisitDistinct<uint64_t>(full_roots_, weights, f);
+    full_.template VisitDistinct<uint64_t>(full_roots_.roots(), weights, f);
   }
 
   void Save(ByteWriter* w) const {
-    symbols_.Save(symbol_roots_, w);
-    full_.Save(full_roots_, w);
+    symbols_.Save(symbol_roots_.roots(), w);
+    full_.Save(full_roots_.roots(), w);
   }
 
   Status Load(ByteReader* r, uint64_t /*key_limit: every trie key is a grid hexagon*/) {
@@ -148,11 +133,14 @@ class AlphabetHTreeMap {
       for (auto* root : symbols) symbols_.Release(root, 0);
       return s;
     }
-    for (auto* root : symbol_roots_) symbols_.Release(root, 0);
-    for (auto* root : full_roots_) full_.Release(root, 0);
-    symbol_roots_.swap(symbols);
-    full_roots_.swap(full);
+    symbol_roots_.Replace(std::move(symbols));
+    full_roots_.Replace(std::move(full));
     return Status::Ok();
+  }
+
+  Status CheckCounts() const {
+    GROVE_RETURN_IF_ERROR(symbols_.CheckCounts(symbol_roots_.AllReferences()));
+    return full_.CheckCounts(full_roots_.AllReferences());
   }
 
   MemoryUse memory() const {
@@ -168,10 +156,8 @@ class AlphabetHTreeMap {
   const Alphabet* alphabet_;
   SymbolTrie symbols_;
   FullTrie full_;
-  std::vector<typename SymbolTrie::Root> symbol_roots_;
-  std::vector<typename FullTrie::Root> full_roots_;
-  std::vector<typename SymbolTrie::Root> dead_symbol_roots_;
-  std::vector<typename FullTrie::Root> dead_full_roots_;
+  VersionSet<SymbolTrie> symbol_roots_;
+  VersionSet<FullTrie> full_roots_;
 };
 
 }  // namespace grove::footslam

@@ -10,8 +10,9 @@
 #ifndef GROVE_ENGINE_FOOTSLAM_FOOTSLAM_MODEL_H_
 #define GROVE_ENGINE_FOOTSLAM_FOOTSLAM_MODEL_H_
 
+#include <fmt/format.h>
+
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -20,12 +21,12 @@
 
 #include "concurrency/random_stream.h"
 #include "concurrency/worker_pool.h"
+#include "engine/ancestry.h"
 #include "engine/checkpoint_io.h"
 #include "engine/footslam/hex_grid.h"
 #include "engine/footslam/htc.h"
 #include "engine/footslam/htree_layout.h"
-#include "engine/footslam/pose_history.h"
-#include "engine/generation.h"
+#include "engine/version_set.h"
 #include "grove/footslam.h"
 
 namespace grove::footslam {
@@ -35,13 +36,20 @@ struct StepInput {
   double dy_m;
 };
 
-// Stream purposes: independent draws for the same (step, particle).
-inline constexpr uint32_t kMotionPurpose = 1;
-inline constexpr uint32_t kInitPurpose = 2;
+// A pose of a particle's path as its history keeps it.
+struct PathPose {
+  float x_m, y_m, heading_rad;
+};
+using PoseHistory = Ancestry<PathPose>;
+
+inline bool FinitePathPose(const PathPose& p) {
+  return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.heading_rad);
+}
 
 template <typename Map>
 class FootSlamModel {
  public:
+  // REQUIRES: config.Validate() is ok. Call Init() before the first step.
   FootSlamModel(const FootSlamConfig& config, const HexGrid* grid, const HTreeLayout* layout,
                 Map* map, int slots)
       : config_(config),
@@ -49,7 +57,8 @@ class FootSlamModel {
         layout_(layout),
         map_(map),
         history_(slots),
-        n_(static_cast<size_t>(config.particles)) {
+        n_(static_cast<size_t>(config.particles)),
+        history_roots_(&history_, n_) {
     x_.assign(n_, config.start_x_m);
     y_.assign(n_, config.start_y_m);
     heading_.assign(n_, config.start_heading_rad);
@@ -61,29 +70,30 @@ class FootSlamModel {
     start_hex_ = start;
     hex_.assign(n_, start);
     for (size_t i = 0; i < n_; ++i) {
-      RandomStream rs(config.seed, 0, static_cast<uint32_t>(i), kInitPurpose);
+      RandomStream rs(config.seed, 0, static_cast<uint32_t>(i), StreamPurpose::kInit);
       heading_error_[i] = config.initial_heading_sigma_rad * rs.NextNormal();
       scale_[i] = 1.0 + config.scale_sigma * rs.NextNormal();
     }
-    PoseHistory::Node* root = history_.Append(nullptr, 0, config.start_x_m, config.start_y_m,
-                                              config.start_heading_rad, 0);
-    history_roots_.assign(n_, root);
-    for (size_t i = 1; i < n_; ++i) PoseHistory::Share(root);
     if (config.weighting == FootSlamWeighting::kPriorRatio) log_edge_bias_ = std::log(6.0);
     for (uint32_t c = 0; c < kLogTable; ++c) {
       log_edge_[c] = std::log(c + config.prior_count) + log_edge_bias_;
       log_total_[c] = std::log(c + 6 * config.prior_count);
     }
   }
-  ~FootSlamModel() {
-    for (auto* h : history_roots_) history_.Release(h, 0);
-    for (auto* h : dead_history_) history_.Release(h, 0);
+
+  // Gives every particle the shared start pose; false when out of memory.
+  bool Init() {
+    PoseHistory::Node* root = history_.Append(
+        nullptr, 0, PathPoseOf(config_.start_x_m, config_.start_y_m, config_.start_heading_rad), 0);
+    if (root == nullptr) return false;
+    history_roots_.ShareAll(root);
+    return true;
   }
 
   size_t size() const { return n_; }
 
-  void Advance(const StepInput& in, uint64_t step, size_t begin, size_t end, int slot,
-               double* log_w) {
+  Status Advance(const StepInput& in, uint64_t step, size_t begin, size_t end, int slot,
+                 double* log_w) {
     const double odo_length = std::hypot(in.dx_m, in.dy_m);
     const double odo_heading = std::atan2(in.dy_m, in.dx_m) + config_.start_heading_rad;
     // Particles are independent: start the cache misses of later ones while this one runs. A
@@ -102,7 +112,7 @@ class FootSlamModel {
         uint64_t key;
         if (j < end && KeyOf(hex_[j], &key)) map_->PrefetchPath(j, key, depth);
       }
-      RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), kMotionPurpose);
+      RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), StreamPurpose::kMotion);
       if (config_.heading_drift_sigma_rad > 0) {
         heading_error_[i] += config_.heading_drift_sigma_rad * rs.NextNormal();
       }
@@ -120,7 +130,7 @@ class FootSlamModel {
         ny += config_.position_sigma_m * rs.NextNormal();
       }
       double lw = 0;
-      bool outside = false;
+      bool outside = false, no_memory = false;
       // A particle that leaves the grid ends the run: stop walking there, so a step of any
       // length costs at most the grid's width.
       Hex end_hex = grid_->Traverse(hex_[i], x_[i], y_[i], nx, ny, [&](const Crossing& c) {
@@ -129,29 +139,34 @@ class FootSlamModel {
           outside = true;
           return false;
         }
-        EdgeCounts before = map_->Cross(i, key, c.edge, slot);
+        EdgeCounts before;
+        if (!map_->Cross(i, key, c.edge, slot, &before)) {
+          no_memory = true;
+          return false;
+        }
         lw += LogEdge(before.edge) - LogTotal(before.total);
         return true;
       });
+      if (no_memory) return NoMemory(i, "map");
       uint64_t end_key;
       if (outside || !KeyOf(end_hex, &end_key)) {
-        lw = -std::numeric_limits<double>::infinity();
-        int64_t expected = first_outside_.load(std::memory_order_relaxed);
-        // Relaxed: the value is read after the parallel loop has joined.
-        while (static_cast<int64_t>(i) < expected &&
-               !first_outside_.compare_exchange_weak(expected, static_cast<int64_t>(i),
-                                                     std::memory_order_relaxed)) {
-        }
+        return OutOfRangeError(fmt::format(
+            "particle {} at ({:.7g}, {:.7g}) m left the {} x {} hexagon grid centred on the "
+            "start; raise grid_size",
+            i, nx, ny, layout_->grid_size(), layout_->grid_size()));
       }
+      PoseHistory::Node* pose = history_.Append(history_roots_[i], static_cast<uint32_t>(step + 1),
+                                                PathPoseOf(nx, ny, heading), slot);
+      if (pose == nullptr) return NoMemory(i, "path");
+      history_roots_[i] = pose;
       log_w[i] += lw;
       x_[i] = nx;
       y_[i] = ny;
       heading_[i] = heading;
       heading_unit_[i] = {cos_heading, sin_heading};
       hex_[i] = end_hex;
-      history_roots_[i] = history_.Append(history_roots_[i], static_cast<uint32_t>(step + 1), nx,
-                                          ny, heading, slot);
     }
+    return Status::Ok();
   }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
@@ -162,20 +177,19 @@ class FootSlamModel {
     GatherVector(parents, workers, &heading_error_);
     GatherVector(parents, workers, &scale_);
     GatherVector(parents, workers, &hex_);
-    std::vector<PoseHistory::Node*> next =
-        GatherShared(parents, &history_roots_, workers, &PoseHistory::Share);
-    dead_history_.swap(history_roots_);
-    history_roots_.swap(next);
+    history_roots_.Gather(parents, workers);
     map_->Gather(parents, workers);
   }
 
   void ReleaseDead(WorkerPool& workers) {
-    workers.ParallelFor(dead_history_.size(), 1024, [&](int slot, size_t b, size_t e) {
-      history_.ReleaseMany(std::span<PoseHistory::Node* const>(dead_history_).subspan(b, e - b),
-                           slot);
-    });
-    dead_history_.clear();
+    history_roots_.ReleaseDead(workers);
     map_->ReleaseDead(workers);
+  }
+
+  // The expensive invariant walk of every shared node: histories and maps (tests).
+  Status CheckCounts() const {
+    GROVE_RETURN_IF_ERROR(history_.CheckCounts(history_roots_.AllReferences()));
+    return map_->CheckCounts();
   }
 
   // log(C_h^e + a) (+ log 6 for the prior-ratio weighting) and log(C_h + 6a), from tables for
@@ -196,12 +210,6 @@ class FootSlamModel {
     return Hex{h.q + start_hex_.q, h.r + start_hex_.r};
   }
 
-  // The lowest particle index that left the grid in the last step, or -1.
-  int64_t TakeFirstOutside() {
-    int64_t i = first_outside_.exchange(std::numeric_limits<int64_t>::max());
-    return i == std::numeric_limits<int64_t>::max() ? -1 : i;
-  }
-
   // The particles' state after a step: pose, error states, hexagon and path history.
   void Save(ByteWriter* w) const {
     w->Put<uint64_t>(n_);
@@ -209,7 +217,7 @@ class FootSlamModel {
       w->PutBytes(v->data(), n_ * sizeof(double));
     }
     w->PutBytes(hex_.data(), n_ * sizeof(Hex));
-    PoseHistory::Save(history_roots_, w);
+    PoseHistory::Save(history_roots_.roots(), w);
   }
 
   // Replaces the state of a new model with a saved one taken after step `steps`.
@@ -251,7 +259,8 @@ class FootSlamModel {
     }
     if (steps >= UINT32_MAX) return r->Error("step", "too many steps");
     std::vector<PoseHistory::Node*> heads;
-    GROVE_RETURN_IF_ERROR(history_.Load(r, n_, static_cast<uint32_t>(steps), 0, &heads));
+    GROVE_RETURN_IF_ERROR(
+        history_.Load(r, n_, static_cast<uint32_t>(steps), 0, &FinitePathPose, &heads));
     for (size_t i = 0; i < n_; ++i) {
       if (heads[i] == nullptr || heads[i]->step != steps) {
         for (auto* h : heads) history_.Release(h, 0);
@@ -259,8 +268,7 @@ class FootSlamModel {
                                          "'s path does not end at the checkpoint's step");
       }
     }
-    for (auto* h : history_roots_) history_.Release(h, 0);
-    history_roots_.swap(heads);
+    history_roots_.Replace(std::move(heads));
     return Status::Ok();
   }
 
@@ -277,6 +285,13 @@ class FootSlamModel {
   const Map& map() const { return *map_; }
 
  private:
+  static PathPose PathPoseOf(double x, double y, double heading) {
+    return PathPose{static_cast<float>(x), static_cast<float>(y), static_cast<float>(heading)};
+  }
+  static Status NoMemory(size_t i, const char* what) {
+    return ResourceExhaustedError(fmt::format("out of memory for particle {}'s {}", i, what));
+  }
+
   template <typename T>
   static void GatherVector(std::span<const uint32_t> parents, WorkerPool& workers,
                            std::vector<T>* v) {
@@ -307,9 +322,7 @@ class FootSlamModel {
   std::vector<Unit> heading_unit_;
   Hex start_hex_;
   std::vector<Hex> hex_;
-  std::vector<PoseHistory::Node*> history_roots_;
-  std::vector<PoseHistory::Node*> dead_history_;
-  std::atomic<int64_t> first_outside_{std::numeric_limits<int64_t>::max()};
+  VersionSet<PoseHistory> history_roots_;
 };
 
 }  // namespace grove::footslam

@@ -1,9 +1,9 @@
 // Hexagon transition counters (the paper's HTC) and what every FootSLAM map provides.
 //
 // A map policy (HTreeMap, AlphabetHTreeMap, NaiveMap) holds the maps of all particles:
-//   EdgeCounts Cross(size_t i, uint64_t key, int edge, int slot);
-//       particle i leaves hexagon `key` across `edge`: returns the counters before the crossing
-//       and adds one
+//   bool Cross(size_t i, uint64_t key, int edge, int slot, EdgeCounts* before);
+//       particle i leaves hexagon `key` across `edge`: sets the counters before the crossing
+//       and adds one; false when out of memory (the engine then stops)
 //   void Prefetch(size_t i) const;  // a hint: particle i's map will be used soon
 //   void PrefetchPath(size_t i, uint64_t key, int depth) const;
 //       a hint: load the node at `depth` (< height()) on particle i's path to `key`; the nodes
@@ -18,13 +18,14 @@
 //   MemoryUse memory() const;
 //   void Save(ByteWriter*) const;                      // every particle's map, sharing kept
 //   Status Load(ByteReader*, uint64_t key_limit);      // replaces the maps of a new engine
+//   Status CheckCounts() const;  // the expensive invariant walk of the shared nodes (tests)
 #ifndef GROVE_ENGINE_FOOTSLAM_HTC_H_
 #define GROVE_ENGINE_FOOTSLAM_HTC_H_
 
 #include <cstdint>
 
 #include "alloc/node_pool.h"
-#include "grove/footslam.h"
+#include "grove/types.h"
 
 namespace grove::footslam {
 

@@ -10,8 +10,8 @@
 #include "concurrency/worker_pool.h"
 #include "engine/footslam/alphabet.h"
 #include "engine/footslam/htc.h"
-#include "engine/generation.h"
 #include "engine/persistent_trie.h"
+#include "engine/version_set.h"
 
 namespace grove::footslam {
 
@@ -21,19 +21,14 @@ class HTreeMap {
   using Trie = PersistentTrie<Htc, kLog2Degree>;
 
   HTreeMap(int height, int slots, size_t particles, const Alphabet* /*unused*/)
-      : trie_(height, slots), roots_(particles) {}
-  ~HTreeMap() {
-    for (auto* r : roots_) trie_.Release(r, 0);
-    for (auto* r : dead_) trie_.Release(r, 0);
-  }
+      : trie_(height, slots), roots_(&trie_, particles) {}
 
-  EdgeCounts Cross(size_t i, uint64_t key, int edge, int slot) {
-    EdgeCounts before;
-    roots_[i] = trie_.Update(roots_[i], key, slot, [&](Htc& h, bool) {
-      before = {h.c[edge], h.Total()};
+  // Returns false when out of memory (the map is unchanged).
+  bool Cross(size_t i, uint64_t key, int edge, int slot, EdgeCounts* before) {
+    return trie_.Update(&roots_[i], key, slot, [&](Htc& h, bool) {
+      *before = {h.c[edge], h.Total()};
       ++h.c[edge];
     });
-    return before;
   }
 
   // Starts loading particle i's root node into the cache.
@@ -42,20 +37,12 @@ class HTreeMap {
   [[gnu::always_inline]] void PrefetchPath(size_t i, uint64_t key, int depth) const {
     trie_.PrefetchPath(roots_[i], key, depth);
   }
-  int height() const { return trie_.height(); }
+  int height() const { return trie_.min_height(); }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
-    std::vector<typename Trie::Root> next = GatherShared(parents, &roots_, workers, &Trie::Share);
-    dead_.swap(roots_);
-    roots_.swap(next);
+    roots_.Gather(parents, workers);
   }
-
-  void ReleaseDead(WorkerPool& workers) {
-    workers.ParallelFor(dead_.size(), 1024, [&](int slot, size_t b, size_t e) {
-      trie_.ReleaseMany(std::span<typename Trie::Root const>(dead_).subspan(b, e - b), slot);
-    });
-    dead_.clear();
-  }
+  void ReleaseDead(WorkerPool& workers) { roots_.ReleaseDead(workers); }
 
   template <typename F>
   void ForEachHex(size_t i, F&& f) const {
@@ -64,18 +51,19 @@ class HTreeMap {
 
   template <typename F>
   void Cumulative(std::span<const uint64_t> weights, F&& f) const {
-    trie_.template VisitDistinct<uint64_t>(roots_, weights, f);
+    trie_.template VisitDistinct<uint64_t>(roots_.roots(), weights, f);
   }
 
-  void Save(ByteWriter* w) const { trie_.Save(roots_, w); }
+  void Save(ByteWriter* w) const { trie_.Save(roots_.roots(), w); }
 
   Status Load(ByteReader* r, uint64_t /*key_limit: every trie key is a grid hexagon*/) {
     std::vector<typename Trie::Root> loaded;
     GROVE_RETURN_IF_ERROR(trie_.Load(r, roots_.size(), 0, &PlausibleHtc, &loaded));
-    for (auto* root : roots_) trie_.Release(root, 0);
-    roots_.swap(loaded);
+    roots_.Replace(std::move(loaded));
     return Status::Ok();
   }
+
+  Status CheckCounts() const { return trie_.CheckCounts(roots_.AllReferences()); }
 
   MemoryUse memory() const {
     MemoryUse m;
@@ -86,8 +74,7 @@ class HTreeMap {
 
  private:
   Trie trie_;
-  std::vector<typename Trie::Root> roots_;
-  std::vector<typename Trie::Root> dead_;
+  VersionSet<Trie> roots_;
 };
 
 }  // namespace grove::footslam

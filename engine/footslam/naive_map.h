@@ -76,11 +76,13 @@ class NaiveMap {
   NaiveMap(int /*height*/, int /*slots*/, size_t particles, const Alphabet* /*unused*/)
       : tables_(particles) {}
 
-  EdgeCounts Cross(size_t i, uint64_t key, int edge, int) {
+  // Never fails for want of a node; a table that cannot grow throws std::bad_alloc, which the
+  // engine turns into ResourceExhausted.
+  bool Cross(size_t i, uint64_t key, int edge, int, EdgeCounts* before) {
     Htc& h = tables_[i].FindOrInsert(key);
-    EdgeCounts before{h.c[edge], h.Total()};
+    *before = {h.c[edge], h.Total()};
     ++h.c[edge];
-    return before;
+    return true;
   }
 
   void Prefetch(size_t) const {}
@@ -158,6 +160,9 @@ class NaiveMap {
     tables_.swap(loaded);
     return Status::Ok();
   }
+
+  // Tables are owned, not shared: there are no counts to check.
+  Status CheckCounts() const { return Status::Ok(); }
 
   MemoryUse memory() const {
     MemoryUse m;

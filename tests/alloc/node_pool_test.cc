@@ -134,3 +134,33 @@ TEST(NodePoolTest, ConcurrentSlotsWithRemoteFreesBalance) {
 
 }  // namespace
 }  // namespace grove
+
+namespace grove {
+namespace {
+
+TEST(NodePoolFaultTest, TheKthAllocationFailsAndStaysFailingUntilReset) {
+  for (int64_t k : {0, 1, 5, 1000, 5000}) {
+    NodePool pool(48, 2);
+    std::vector<void*> nodes;
+    FailAllocationsAfter(k);
+    for (int i = 0; i < 6000; ++i) {
+      void* p = pool.Allocate(i % 2);
+      if (i < k) {
+        ASSERT_NE(p, nullptr) << "allocation " << i << " of " << k;
+        nodes.push_back(p);
+      } else {
+        ASSERT_EQ(p, nullptr) << "allocation " << i << " should fail after " << k;
+      }
+    }
+    FailAllocationsAfter(-1);
+    EXPECT_EQ(pool.Stats().live_nodes, static_cast<int64_t>(nodes.size()));
+    void* again = pool.Allocate(0);
+    ASSERT_NE(again, nullptr);
+    nodes.push_back(again);
+    for (size_t i = 0; i < nodes.size(); ++i) pool.Free(nodes[i], static_cast<int>(i % 2));
+    EXPECT_EQ(pool.Stats().live_nodes, 0);
+  }
+}
+
+}  // namespace
+}  // namespace grove

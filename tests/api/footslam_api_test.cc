@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "grove/footslam.h"
+#include "tests/api/status_testing.h"
 #include "tests/api/test_walk.h"
 
 namespace grove {
@@ -30,8 +31,9 @@ Result RunWith(FootSlamConfig config, const std::vector<Step>& steps) {
     Status st = (*slam)->Step(s.t, s.dx, s.dy);
     EXPECT_TRUE(st.ok()) << st.ToString();
   }
-  return {(*slam)->HeaviestTrajectory(), (*slam)->MeanTrajectory(), (*slam)->CumulativeMap(),
-          (*slam)->HeaviestMap(), (*slam)->Summary().resamplings};
+  return {ValueOf((*slam)->HeaviestTrajectory()), (*slam)->MeanTrajectory(),
+          ValueOf((*slam)->CumulativeMap()), ValueOf((*slam)->HeaviestMap()),
+          (*slam)->Summary().resamplings};
 }
 
 FootSlamConfig Small() {
@@ -146,7 +148,7 @@ TEST(FootSlamApiTest, ConfigErrorsNameFieldValueAndRule) {
   const Case cases[] = {
       {[](FootSlamConfig* c) { c->particles = 0; }, "particles = 0: must be in 1.."},
       {[](FootSlamConfig* c) { c->heading_sigma_rad = -1; },
-       "heading_sigma_rad = -1: must be >= 0"},
+       "heading_sigma_rad = -1: must be in [0, 10]"},
       {[](FootSlamConfig* c) { c->resample_threshold = 1.5; },
        "resample_threshold = 1.5: must be in (0, 1]"},
       {[](FootSlamConfig* c) { c->resample_threshold = 0; },
@@ -154,9 +156,10 @@ TEST(FootSlamApiTest, ConfigErrorsNameFieldValueAndRule) {
       {[](FootSlamConfig* c) { c->degree = 8; }, "degree = 8"},
       {[](FootSlamConfig* c) { c->grid_size = 100; }, "grid_size = 100"},
       {[](FootSlamConfig* c) { c->alphabet = 6; }, "alphabet = 6: must be in 0..5"},
-      {[](FootSlamConfig* c) { c->threads = -1; }, "threads = -1: must be >= 0"},
-      {[](FootSlamConfig* c) { c->hex_radius_m = 0; }, "hex_radius_m = 0: must be > 0"},
-      {[](FootSlamConfig* c) { c->prior_count = std::nan(""); }, "prior_count = nan: must be > 0"},
+      {[](FootSlamConfig* c) { c->threads = -1; }, "threads = -1: must be in 0..256"},
+      {[](FootSlamConfig* c) { c->hex_radius_m = 0; }, "hex_radius_m = 0: must be in (0, 1000]"},
+      {[](FootSlamConfig* c) { c->prior_count = std::nan(""); },
+       "prior_count = nan: must be in (0, 1000000]"},
   };
   for (const Case& k : cases) {
     FootSlamConfig c;
@@ -211,7 +214,7 @@ TEST(FootSlamApiTest, TrajectoryHasTheStartAndOnePosePerStep) {
   EXPECT_EQ((*slam)->SetStartTime(std::nan("")).code(), StatusCode::kInvalidArgument);
   for (const Step& s : steps) ASSERT_TRUE((*slam)->Step(s.t, s.dx, s.dy).ok());
   EXPECT_EQ((*slam)->SetStartTime(0.0).code(), StatusCode::kFailedPrecondition);
-  auto path = (*slam)->HeaviestTrajectory();
+  auto path = ValueOf((*slam)->HeaviestTrajectory());
   ASSERT_EQ(path.size(), steps.size() + 1);
   EXPECT_EQ(path[0].t_s, 0.0);
   EXPECT_EQ(path[0].pose.x_m, 0.0);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "grove/footslam.h"
+#include "tests/api/status_testing.h"
 #include "tests/api/test_walk.h"
 
 namespace grove {
@@ -40,7 +41,7 @@ std::unique_ptr<FootSlam> ResumeOrDie(const FootSlamConfig& config, const std::s
 // Every output of the engine, compared field by field with exact equality.
 void ExpectSameResults(const FootSlam& a, const FootSlam& b) {
   ASSERT_EQ(a.steps(), b.steps());
-  auto ta = a.HeaviestTrajectory(), tb = b.HeaviestTrajectory();
+  auto ta = ValueOf(a.HeaviestTrajectory()), tb = ValueOf(b.HeaviestTrajectory());
   ASSERT_EQ(ta.size(), tb.size());
   for (size_t k = 0; k < ta.size(); ++k) {
     ASSERT_EQ(ta[k].t_s, tb[k].t_s) << k;
@@ -56,8 +57,8 @@ void ExpectSameResults(const FootSlam& a, const FootSlam& b) {
     ASSERT_EQ(ma[k].pose.x_m, mb[k].pose.x_m) << k;
     ASSERT_EQ(ma[k].pose.heading_rad, mb[k].pose.heading_rad) << k;
   }
-  for (auto [ca, cb] : {std::pair{a.CumulativeMap(), b.CumulativeMap()},
-                        std::pair{a.HeaviestMap(), b.HeaviestMap()}}) {
+  for (auto [ca, cb] : {std::pair{ValueOf(a.CumulativeMap()), ValueOf(b.CumulativeMap())},
+                        std::pair{ValueOf(a.HeaviestMap()), ValueOf(b.HeaviestMap())}}) {
     ASSERT_EQ(ca.size(), cb.size());
     for (size_t k = 0; k < ca.size(); ++k) {
       ASSERT_EQ(ca[k].q, cb[k].q);
@@ -163,7 +164,8 @@ TEST(FootSlamCheckpointTest, SizeFollowsTheDistinctNodes) {
   ASSERT_TRUE(bytes.ok());
   // Without sharing every particle would store its whole map: at least 24 bytes of counters
   // per hexagon it visited.
-  const double unshared = static_cast<double>(config.particles) * slam->HeaviestMap().size() * 24;
+  const double unshared =
+      static_cast<double>(config.particles) * ValueOf(slam->HeaviestMap()).size() * 24;
   EXPECT_LT(static_cast<double>(bytes->size()), unshared / 4)
       << bytes->size() << " bytes; unshared maps alone would take " << unshared;
 }

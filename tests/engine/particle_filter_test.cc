@@ -8,6 +8,7 @@
 
 #include "concurrency/random_stream.h"
 #include "engine/persistent_trie.h"
+#include "engine/version_set.h"
 
 namespace grove {
 namespace {
@@ -16,48 +17,48 @@ struct Count {
   uint32_t n;
 };
 using Trie = PersistentTrie<Count, 4>;
+struct Shift {
+  double dx;
+};
 
 // A toy model: a 1-D random walk whose map counts visits per cell; revisits are rewarded, so
 // weights, resampling and map sharing all matter.
 class ToyModel {
  public:
-  ToyModel(size_t n, int slots) : trie_(4, slots), x_(n, 0.0), roots_(n, nullptr) {}
-  ~ToyModel() {
-    for (auto r : roots_) trie_.Release(r, 0);
-    for (auto r : dead_) trie_.Release(r, 0);
-  }
+  ToyModel(size_t n, int slots) : trie_(4, slots), x_(n, 0.0), roots_(&trie_, n) {}
   size_t size() const { return x_.size(); }
 
-  void Advance(const double& drift, uint64_t step, size_t begin, size_t end, int slot,
-               double* log_w) {
+  Status Advance(const double& drift, uint64_t step, size_t begin, size_t end, int slot,
+                 double* log_w) {
     for (size_t i = begin; i < end; ++i) {
       RandomStream rs(123, step, static_cast<uint32_t>(i));
       x_[i] += drift + rs.NextNormal();
       uint64_t cell = static_cast<uint64_t>(std::floor(x_[i]) + 30000) & 0xFFFF;
       uint32_t seen = 0;
-      roots_[i] = trie_.Update(roots_[i], cell, slot, [&](Count& c, bool) { seen = c.n++; });
+      if (!trie_.Update(&roots_[i], cell, slot, [&](Count& c, bool) { seen = c.n++; })) {
+        return ResourceExhaustedError("out of memory");
+      }
       log_w[i] += std::log((seen + 1.0) / (step + 2.0));
     }
+    return Status::Ok();
+  }
+  // A prediction moves without weighting or mapping.
+  Status Predict(const Shift& shift, uint64_t step, size_t begin, size_t end, int) {
+    for (size_t i = begin; i < end; ++i) {
+      RandomStream rs(123, step, static_cast<uint32_t>(i));
+      x_[i] += shift.dx + 0.1 * rs.NextNormal();
+    }
+    return Status::Ok();
   }
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     std::vector<double> x(parents.size());
-    std::vector<Trie::Root> roots(parents.size());
     workers.ParallelFor(parents.size(), 64, [&](int, size_t b, size_t e) {
-      for (size_t k = b; k < e; ++k) {
-        x[k] = x_[parents[k]];
-        roots[k] = Trie::Share(roots_[parents[k]]);
-      }
+      for (size_t k = b; k < e; ++k) x[k] = x_[parents[k]];
     });
     x_.swap(x);
-    dead_.swap(roots_);
-    roots_.swap(roots);
+    roots_.Gather(parents, workers);
   }
-  void ReleaseDead(WorkerPool& workers) {
-    workers.ParallelFor(dead_.size(), 64, [&](int slot, size_t b, size_t e) {
-      for (size_t k = b; k < e; ++k) trie_.Release(dead_[k], slot);
-    });
-    dead_.clear();
-  }
+  void ReleaseDead(WorkerPool& workers) { roots_.ReleaseDead(workers); }
 
   std::vector<std::map<uint64_t, uint32_t>> Maps() const {
     std::vector<std::map<uint64_t, uint32_t>> maps(roots_.size());
@@ -67,14 +68,14 @@ class ToyModel {
     return maps;
   }
   const std::vector<double>& x() const { return x_; }
-  const std::vector<Trie::Root>& roots() const { return roots_; }
+  std::span<Trie::Root const> roots() const { return roots_.roots(); }
   Trie& trie() { return trie_; }
+  Status CheckCounts() const { return trie_.CheckCounts(roots_.AllReferences()); }
 
  private:
   Trie trie_;
   std::vector<double> x_;
-  std::vector<Trie::Root> roots_;
-  std::vector<Trie::Root> dead_;
+  VersionSet<Trie> roots_;
 };
 
 struct RunResult {
@@ -95,7 +96,7 @@ RunResult RunToy(int threads, ResamplingScheme scheme, double threshold) {
   ParticleFilter<ToyModel> filter(&model, &workers, options);
   for (int step = 0; step < 60; ++step) {
     double drift = step % 20 < 10 ? 0.7 : -0.7;  // back and forth: revisits
-    EXPECT_TRUE(filter.Step(drift).ok());
+    EXPECT_TRUE(filter.Update(drift).ok());
   }
   auto lw = filter.log_weights();
   return {std::vector<double>(lw.begin(), lw.end()), model.x(), model.Maps(), filter.resamplings()};
@@ -129,8 +130,9 @@ TEST(ParticleFilterTest, WeightsAreNormalisedAndThresholdOneResamplesEveryStep) 
 class DegenerateModel {
  public:
   size_t size() const { return 10; }
-  void Advance(const int&, uint64_t, size_t b, size_t e, int, double* log_w) {
+  Status Advance(const int&, uint64_t, size_t b, size_t e, int, double* log_w) {
     for (size_t i = b; i < e; ++i) log_w[i] = -INFINITY;
+    return Status::Ok();
   }
   void Gather(std::span<const uint32_t>, WorkerPool&) {}
   void ReleaseDead(WorkerPool&) {}
@@ -140,9 +142,90 @@ TEST(ParticleFilterTest, AllZeroWeightsReportDegeneracyWithStep) {
   WorkerPool workers(1);
   DegenerateModel model;
   ParticleFilter<DegenerateModel> filter(&model, &workers, FilterOptions{});
-  Status s = filter.Step(0);
+  Status s = filter.Update(0);
   EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(s.message().find("step 0"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("degenerated"), std::string::npos) << s.message();
+}
+
+// Predict-only steps move particles, leave weights alone and count as steps of the streams.
+TEST(ParticleFilterTest, PredictMovesWithoutWeightingOrResampling) {
+  WorkerPool workers(2);
+  ToyModel model(1000, workers.num_slots());
+  FilterOptions options;
+  options.resample_threshold = 1.0;
+  ParticleFilter<ToyModel> filter(&model, &workers, options);
+  ASSERT_TRUE(filter.Update(0.5).ok());
+  const std::vector<double> weights(filter.log_weights().begin(), filter.log_weights().end());
+  const std::vector<double> before = model.x();
+  ASSERT_TRUE(filter.Predict(Shift{2.0}).ok());
+  EXPECT_EQ(filter.steps(), 2u);
+  EXPECT_EQ(filter.resamplings(), 1u);
+  EXPECT_EQ(std::vector<double>(filter.log_weights().begin(), filter.log_weights().end()), weights);
+  double moved = 0;
+  for (size_t i = 0; i < before.size(); ++i) moved += model.x()[i] - before[i];
+  EXPECT_NEAR(moved / before.size(), 2.0, 0.05);
+  EXPECT_TRUE(model.CheckCounts().ok()) << model.CheckCounts().ToString();
+}
+
+// A model whose particles fail in several batches: the step reports the lowest failing
+// particle's error, whatever the thread count and batch size.
+class FailingModel {
+ public:
+  size_t size() const { return 5000; }
+  Status Advance(const int&, uint64_t, size_t b, size_t e, int, double*) {
+    for (size_t i = b; i < e; ++i) {
+      if (i % 1777 == 1234) return OutOfRangeError("particle " + std::to_string(i));
+    }
+    return Status::Ok();
+  }
+  void Gather(std::span<const uint32_t>, WorkerPool&) {}
+  void ReleaseDead(WorkerPool&) {}
+};
+
+TEST(ParticleFilterTest, ReportsTheLowestFailingBatchAtAnyThreadCount) {
+  for (int threads : {1, 2, 4}) {
+    for (size_t batch : {1, 7, 512, 100000}) {
+      WorkerPool workers(threads);
+      FailingModel model;
+      FilterOptions options;
+      options.batch = batch;
+      ParticleFilter<FailingModel> filter(&model, &workers, options);
+      Status s = filter.Update(0);
+      EXPECT_EQ(s.code(), StatusCode::kOutOfRange);
+      EXPECT_EQ(s.message(), "particle 1234") << threads << " threads, batch " << batch;
+    }
+  }
+}
+
+// The population phase sees every particle's weight after Advance and before normalising.
+class BestOnlyModel {
+ public:
+  size_t size() const { return 100; }
+  Status Advance(const int&, uint64_t, size_t b, size_t e, int, double* log_w) {
+    for (size_t i = b; i < e; ++i) log_w[i] += static_cast<double>(i % 3);
+    return Status::Ok();
+  }
+  Status Population(const int&, uint64_t, std::span<double> log_w, WorkerPool&) {
+    // Only particle 0 keeps weight: everything else is moved to zero.
+    for (size_t i = 1; i < log_w.size(); ++i) log_w[i] = -INFINITY;
+    ++calls;
+    return Status::Ok();
+  }
+  void Gather(std::span<const uint32_t>, WorkerPool&) {}
+  void ReleaseDead(WorkerPool&) {}
+  int calls = 0;
+};
+
+TEST(ParticleFilterTest, PopulationPhaseRunsBeforeNormalising) {
+  WorkerPool workers(2);
+  BestOnlyModel model;
+  FilterOptions options;
+  options.resample_threshold = 0.01;
+  ParticleFilter<BestOnlyModel> filter(&model, &workers, options);
+  ASSERT_TRUE(filter.Update(0).ok());
+  EXPECT_EQ(model.calls, 1);
+  EXPECT_DOUBLE_EQ(filter.log_weights()[0], 0.0);
+  EXPECT_NEAR(filter.ess(), 1.0, 1e-12);
 }
 
 TEST(ParticleFilterTest, MapsOfResampledParticlesAreSharedNotCopied) {
@@ -151,11 +234,12 @@ TEST(ParticleFilterTest, MapsOfResampledParticlesAreSharedNotCopied) {
   FilterOptions options;
   options.resample_threshold = 1.0;
   ParticleFilter<ToyModel> filter(&model, &workers, options);
-  for (int step = 0; step < 40; ++step) ASSERT_TRUE(filter.Step(0.5).ok());
+  for (int step = 0; step < 40; ++step) ASSERT_TRUE(filter.Update(0.5).ok());
   // Each particle owns the path it updated last; the rest of its map is shared with relatives.
   int64_t owned_or_shared = 0;
   for (const auto& r : model.roots()) owned_or_shared += model.trie().CountNodes(r);
   EXPECT_LT(model.trie().live_nodes() * 2, owned_or_shared);
+  EXPECT_TRUE(model.CheckCounts().ok()) << model.CheckCounts().ToString();
 }
 
 }  // namespace

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "tests/engine/trie_testing.h"
+
 namespace grove {
 namespace {
 
@@ -68,7 +70,7 @@ void RunModelCheck(int height, uint64_t seed, int ops, uint64_t key_space) {
         uint64_t add = rng() % 1000 + 1;
         bool expect_existed = models[v].count(k) > 0;
         bool existed = false;
-        roots[v] = trie.Update(roots[v], k, 0, [&](Value& x, bool e) {
+        roots[v] = TrieUpdated(trie, roots[v], k, 0, [&](Value& x, bool e) {
           existed = e;
           x.v += add;
         });
@@ -104,10 +106,10 @@ TEST(PersistentTrieTest, MatchesReferenceMapFullWidthKeys) {
 
 TEST(PersistentTrieTest, UpdateDoesNotChangeOtherVersions) {
   PersistentTrie<Value, 4> trie(4, 1);
-  auto* a = trie.Update(nullptr, 1234, 0, [](Value& x, bool) { x.v = 1; });
+  auto* a = TrieUpdated(trie, nullptr, 1234, 0, [](Value& x, bool) { x.v = 1; });
   auto* b = decltype(trie)::Share(a);
-  b = trie.Update(b, 1234, 0, [](Value& x, bool) { x.v = 2; });
-  b = trie.Update(b, 999, 0, [](Value& x, bool) { x.v = 3; });
+  b = TrieUpdated(trie, b, 1234, 0, [](Value& x, bool) { x.v = 2; });
+  b = TrieUpdated(trie, b, 999, 0, [](Value& x, bool) { x.v = 3; });
   EXPECT_EQ(trie.Find(a, 1234)->v, 1u);
   EXPECT_EQ(trie.Find(a, 999), nullptr);
   EXPECT_EQ(trie.Find(b, 1234)->v, 2u);
@@ -119,15 +121,15 @@ TEST(PersistentTrieTest, UpdateDoesNotChangeOtherVersions) {
 
 TEST(PersistentTrieTest, UniqueVersionIsUpdatedInPlace) {
   PersistentTrie<Value, 4> trie(4, 1);
-  auto* root = trie.Update(nullptr, 77, 0, [](Value& x, bool) { x.v = 1; });
+  auto* root = TrieUpdated(trie, nullptr, 77, 0, [](Value& x, bool) { x.v = 1; });
   EXPECT_EQ(trie.live_nodes(), 4);
-  auto* again = trie.Update(root, 77, 0, [](Value& x, bool) { x.v++; });
+  auto* again = TrieUpdated(trie, root, 77, 0, [](Value& x, bool) { x.v++; });
   EXPECT_EQ(again, root);
   EXPECT_EQ(trie.live_nodes(), 4);
   // A key in the same bottom node adds nothing; one in another subtree adds only its path.
-  root = trie.Update(root, 78, 0, [](Value& x, bool) { x.v = 5; });
+  root = TrieUpdated(trie, root, 78, 0, [](Value& x, bool) { x.v = 5; });
   EXPECT_EQ(trie.live_nodes(), 4);
-  root = trie.Update(root, 77 + (1 << 12), 0, [](Value& x, bool) { x.v = 5; });
+  root = TrieUpdated(trie, root, 77 + (1 << 12), 0, [](Value& x, bool) { x.v = 5; });
   EXPECT_EQ(trie.live_nodes(), 7);
   trie.Release(root, 0);
   EXPECT_EQ(trie.live_nodes(), 0);
@@ -137,12 +139,12 @@ TEST(PersistentTrieTest, SharedVersionCopiesOnlyThePath) {
   PersistentTrie<Value, 4> trie(4, 1);
   decltype(trie)::Root root = nullptr;
   for (uint64_t k = 0; k < 65536; k += 97) {
-    root = trie.Update(root, k, 0, [&](Value& x, bool) { x.v = k; });
+    root = TrieUpdated(trie, root, k, 0, [&](Value& x, bool) { x.v = k; });
   }
   int64_t before = trie.live_nodes();
   auto* copy = decltype(trie)::Share(root);
   EXPECT_EQ(trie.live_nodes(), before);  // O(1) copy: no node allocated
-  copy = trie.Update(copy, 97 * 5, 0, [](Value& x, bool) { x.v = 0; });
+  copy = TrieUpdated(trie, copy, 97 * 5, 0, [](Value& x, bool) { x.v = 0; });
   EXPECT_EQ(trie.live_nodes(), before + 4);  // one path of height 4
   EXPECT_EQ(trie.CountNodes(copy), trie.CountNodes(root));
   trie.Release(root, 0);
@@ -172,8 +174,8 @@ TEST(PersistentTrieTest, ReleaseManyFreesWhatReleaseFrees) {
       } else {
         uint64_t key = rng() % 65536;
         uint64_t val = rng();
-        a[v] = one.Update(a[v], key, 0, [&](Value& x, bool) { x.v = val; });
-        b[v] = many.Update(b[v], key, 0, [&](Value& x, bool) { x.v = val; });
+        a[v] = TrieUpdated(one, a[v], key, 0, [&](Value& x, bool) { x.v = val; });
+        b[v] = TrieUpdated(many, b[v], key, 0, [&](Value& x, bool) { x.v = val; });
       }
     }
     // Release a random half (and some nullptr entries), in two spans, from slot 1.
@@ -209,13 +211,14 @@ TEST(PersistentTrieTest, DistinctVisitSumsEqualBruteForce) {
   std::mt19937_64 rng(5);
   std::vector<Trie::Root> roots(200, nullptr);
   for (uint64_t k = 0; k < 4096; k += 2) {
-    roots[0] = trie.Update(roots[0], k, 0, [](Value& x, bool) { x.v = 1; });
+    roots[0] = TrieUpdated(trie, roots[0], k, 0, [](Value& x, bool) { x.v = 1; });
   }
   // A family of versions: each copies an earlier one and changes a few keys.
   for (size_t i = 1; i < roots.size(); ++i) {
     roots[i] = Trie::Share(roots[rng() % i]);
     for (int j = 0; j < 3; ++j) {
-      roots[i] = trie.Update(roots[i], rng() % 4096, 0, [&](Value& x, bool) { x.v += rng() % 9; });
+      roots[i] =
+          TrieUpdated(trie, roots[i], rng() % 4096, 0, [&](Value& x, bool) { x.v += rng() % 9; });
     }
   }
   std::vector<uint64_t> weights(roots.size());
@@ -248,7 +251,7 @@ std::vector<typename Trie::Root> SharedVersions(Trie* trie, int versions, uint64
       roots[v] = copy;
     } else {
       uint64_t key = rng() % std::min<uint64_t>(trie->key_count(), 300);
-      roots[v] = trie->Update(roots[v], key, 0, [&](Value& x, bool) { x.v = rng(); });
+      roots[v] = TrieUpdated(*trie, roots[v], key, 0, [&](Value& x, bool) { x.v = rng(); });
     }
   }
   roots.push_back(nullptr);  // the empty version too
@@ -285,7 +288,7 @@ TEST(PersistentTrieSaveTest, LoadRebuildsEveryVersionWithItsSharing) {
   // and updating one loaded version leaves the others as they were.
   EXPECT_EQ(copy.live_nodes(), trie.live_nodes());
   auto before = Contents(copy, loaded[1]);
-  loaded[0] = copy.Update(loaded[0], 7, 0, [](Value& x, bool) { x.v = 42; });
+  loaded[0] = TrieUpdated(copy, loaded[0], 7, 0, [](Value& x, bool) { x.v = 42; });
   EXPECT_EQ(Contents(copy, loaded[1]), before);
   for (auto* root : loaded) copy.Release(root, 0);
   EXPECT_EQ(copy.live_nodes(), 0);
@@ -337,10 +340,13 @@ TEST(PersistentTrieSaveTest, EveryTruncationAndBadStructureIsRefusedWithoutLeaks
   bad = good;
   bad[13] |= 0x10;
   EXPECT_NE(load(bad, any).message().find("beyond the degree"), std::string::npos);
-  // Wrong height and wrong root count.
+  // A height below the trie's minimum, a taller one whose levels then do not fit, and a
+  // wrong root count.
   bad = good;
-  bad[0] = 5;
+  bad[0] = 3;
   EXPECT_NE(load(bad, any).message().find("trie height"), std::string::npos);
+  bad[0] = 5;
+  EXPECT_EQ(load(bad, any).code(), StatusCode::kDataLoss);
   Trie other(4, 1);
   std::vector<Trie::Root> loaded;
   ByteReader r(good, "t");
@@ -383,6 +389,123 @@ TEST(PersistentTrieSaveTest, UnreachedAndForwardNodesAreRefused) {
   EXPECT_NE(load(bytes(0, 1)).message().find("not a node that can start a version"),
             std::string::npos);
   EXPECT_NE(load(bytes(0, 0)).message().find("reached from nothing"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace grove
+
+namespace grove {
+namespace {
+
+// A trie without a preset size: versions grow in height as keys need, share subtrees across
+// heights, and match std::map over full 64-bit keys.
+TEST(PersistentTrieGrowthTest, VersionsGrowPastAnyPresetHeightAndStayShared) {
+  using Trie = PersistentTrie<Value, 4>;
+  Trie trie(1, 1);
+  std::mt19937_64 rng(21);
+  constexpr int kVersions = 6;
+  std::vector<Trie::Root> roots(kVersions, nullptr);
+  std::vector<std::map<uint64_t, uint64_t>> models(kVersions);
+  for (int op = 0; op < 20000; ++op) {
+    const int v = static_cast<int>(rng() % kVersions);
+    if (rng() % 8 == 0) {
+      const int from = static_cast<int>(rng() % kVersions);
+      Trie::Root copy = Trie::Share(roots[from]);
+      trie.Release(roots[v], 0);
+      roots[v] = copy;
+      models[v] = models[from];
+      continue;
+    }
+    // Keys of every size: small ones keep low versions low, large ones grow them.
+    const uint64_t key = rng() >> (rng() % 64);
+    ASSERT_TRUE(trie.Update(&roots[v], key, 0, [&](Value& x, bool) { x.v = key ^ op; }));
+    models[v][key] = key ^ op;
+    ASSERT_GE(Trie::Height(roots[v]), Trie::HeightFor(key));
+    ASSERT_EQ(trie.Find(roots[v], key)->v, key ^ op);
+  }
+  for (int v = 0; v < kVersions; ++v) {
+    std::map<uint64_t, uint64_t> seen;
+    trie.ForEach(roots[v], [&](uint64_t k, const Value& x) { seen[k] = x.v; });
+    EXPECT_EQ(seen, models[v]) << "version " << v;
+  }
+  EXPECT_TRUE(trie.CheckCounts(roots).ok()) << trie.CheckCounts(roots).ToString();
+  // Save and load keep every version and its sharing.
+  ByteWriter w;
+  trie.Save(roots, &w);
+  const std::string bytes = w.Take();
+  Trie copy(1, 1);
+  std::vector<Trie::Root> loaded;
+  ByteReader r(bytes, "t");
+  ASSERT_TRUE(copy.Load(
+                      &r, roots.size(), 0, [](const Value&) { return true; }, &loaded)
+                  .ok());
+  for (int v = 0; v < kVersions; ++v) {
+    std::map<uint64_t, uint64_t> seen;
+    copy.ForEach(loaded[v], [&](uint64_t k, const Value& x) { seen[k] = x.v; });
+    EXPECT_EQ(seen, models[v]) << "loaded version " << v;
+  }
+  EXPECT_EQ(copy.live_nodes(), trie.live_nodes());
+  EXPECT_TRUE(copy.CheckCounts(loaded).ok());
+  for (auto* root : loaded) copy.Release(root, 0);
+  for (auto* root : roots) trie.Release(root, 0);
+  EXPECT_EQ(trie.live_nodes(), 0);
+  EXPECT_EQ(copy.live_nodes(), 0);
+}
+
+TEST(PersistentTrieGrowthTest, SmallKeysOfATallVersionAreFoundAndLargeKeysOfALowOneAreNot) {
+  using Trie = PersistentTrie<Value, 2>;
+  Trie trie(1, 1);
+  Trie::Root root = nullptr;
+  ASSERT_TRUE(trie.Update(&root, 3, 0, [](Value& x, bool) { x.v = 3; }));
+  EXPECT_EQ(Trie::Height(root), 1);
+  EXPECT_EQ(trie.Find(root, 1u << 20), nullptr);
+  ASSERT_TRUE(trie.Update(&root, 1u << 20, 0, [](Value& x, bool) { x.v = 7; }));
+  EXPECT_EQ(Trie::Height(root), 11);
+  EXPECT_EQ(trie.Find(root, 3)->v, 3u);
+  EXPECT_EQ(trie.Find(root, 1u << 20)->v, 7u);
+  EXPECT_EQ(trie.Find(root, ~uint64_t{0}), nullptr);
+  trie.Release(root, 0);
+  EXPECT_EQ(trie.live_nodes(), 0);
+}
+
+// Every allocation of a run of updates fails in turn: the update reports it, the version keeps
+// its contents, no count is wrong and nothing leaks.
+TEST(PersistentTrieFaultTest, AFailedAllocationLeavesEveryVersionIntactAndLeaksNothing) {
+  using Trie = PersistentTrie<Value, 2>;
+  for (int64_t fail_after = 0; fail_after < 400; fail_after += 3) {
+    SCOPED_TRACE(testing::Message() << "fail after " << fail_after);
+    Trie trie(1, 1);
+    std::vector<Trie::Root> roots(3, nullptr);
+    std::vector<std::map<uint64_t, uint64_t>> models(3);
+    std::mt19937_64 rng(fail_after);
+    // Shared versions first, so failures hit copies as well as new nodes and growth.
+    for (int k = 0; k < 50; ++k) {
+      ASSERT_TRUE(trie.Update(&roots[0], k * 37, 0, [&](Value& x, bool) { x.v = k; }));
+      models[0][k * 37] = k;
+    }
+    roots[1] = Trie::Share(roots[0]);
+    models[1] = models[0];
+    FailAllocationsAfter(fail_after);
+    bool failed = false;
+    for (int op = 0; op < 300 && !failed; ++op) {
+      const int v = static_cast<int>(rng() % 3);
+      const uint64_t key = rng() >> (rng() % 50);
+      if (trie.Update(&roots[v], key, 0, [&](Value& x, bool) { x.v = op; })) {
+        models[v][key] = op;
+      } else {
+        failed = true;
+      }
+    }
+    FailAllocationsAfter(-1);
+    for (int v = 0; v < 3; ++v) {
+      std::map<uint64_t, uint64_t> seen;
+      trie.ForEach(roots[v], [&](uint64_t k, const Value& x) { seen[k] = x.v; });
+      EXPECT_EQ(seen, models[v]) << "version " << v;
+    }
+    EXPECT_TRUE(trie.CheckCounts(roots).ok()) << trie.CheckCounts(roots).ToString();
+    for (auto* root : roots) trie.Release(root, 0);
+    EXPECT_EQ(trie.live_nodes(), 0);
+  }
 }
 
 }  // namespace

@@ -11,7 +11,6 @@
 #include "engine/footslam/hex_grid.h"
 #include "engine/footslam/htree_layout.h"
 #include "engine/footslam/htree_map.h"
-#include "engine/footslam/pose_history.h"
 #include "grove/footslam.h"
 
 namespace grove::footslam {
@@ -38,6 +37,7 @@ TEST(FootSlamModelTest, WeightsMatchHandComputedValues) {
     HTreeLayout layout = *HTreeLayout::Create(64, 16);
     HTreeMap<4> map(layout.height(), 1, 1, nullptr);
     FootSlamModel<HTreeMap<4>> model(config, &grid, &layout, &map, 1);
+    ASSERT_TRUE(model.Init());
     const double a = 0.5;
     const double bias = weighting == FootSlamWeighting::kPriorRatio ? std::log(6.0) : 0.0;
     const double d = std::sqrt(3.0) * config.hex_radius_m;  // centre to centre
@@ -56,7 +56,7 @@ TEST(FootSlamModelTest, WeightsMatchHandComputedValues) {
     };
     for (size_t k = 0; k < std::size(steps); ++k) {
       double lw = 0;
-      model.Advance(StepInput{steps[k].dx, 0}, k, 0, 1, 0, &lw);
+      ASSERT_TRUE(model.Advance(StepInput{steps[k].dx, 0}, k, 0, 1, 0, &lw).ok());
       double expected = steps[k].factor == 1.0 ? 0.0 : std::log(steps[k].factor) + bias;
       EXPECT_NEAR(lw, expected, 1e-12) << "step " << k;
     }
@@ -93,7 +93,9 @@ TEST(FootSlamModelTest, ZeroNoiseMapEqualsOdometryTransitions) {
     y += dy;
   }
   std::map<std::pair<int, int>, std::array<double, 6>> got;
-  for (const HexCounts& h : (*slam)->HeaviestMap()) {
+  StatusOr<std::vector<HexCounts>> map = (*slam)->HeaviestMap();
+  ASSERT_TRUE(map.ok());
+  for (const HexCounts& h : *map) {
     for (int e = 0; e < 6; ++e) got[{h.q, h.r}][e] = h.counts[e];
   }
   EXPECT_EQ(got, expected);
@@ -104,7 +106,7 @@ TEST(FootSlamModelTest, ZeroNoiseMapEqualsOdometryTransitions) {
 }
 
 // ReleaseMany frees exactly what Release one by one frees, and leaves the other paths intact.
-TEST(PoseHistoryTest, ReleaseManyFreesWhatReleaseFrees) {
+TEST(AncestryTest, ReleaseManyFreesWhatReleaseFrees) {
   PoseHistory one(2), many(2);
   std::mt19937_64 rng(3);
   constexpr int kPaths = 500;
@@ -123,8 +125,9 @@ TEST(PoseHistoryTest, ReleaseManyFreesWhatReleaseFrees) {
     b.swap(next_b);
     ASSERT_EQ(one.stats().live_nodes, many.stats().live_nodes) << "step " << step;
     for (int k = 0; k < kPaths; ++k) {
-      a[k] = one.Append(a[k], step, k, step, 0, 0);
-      b[k] = many.Append(b[k], step, k, step, 0, 0);
+      const PathPose pose{static_cast<float>(k), static_cast<float>(step), 0};
+      a[k] = one.Append(a[k], step, pose, 0);
+      b[k] = many.Append(b[k], step, pose, 0);
     }
   }
   for (int k = 0; k < kPaths; ++k) {
@@ -133,13 +136,14 @@ TEST(PoseHistoryTest, ReleaseManyFreesWhatReleaseFrees) {
     ASSERT_EQ(pa.size(), pb.size());
     for (size_t j = 0; j < pa.size(); ++j) {
       ASSERT_EQ(pa[j]->step, pb[j]->step);
-      ASSERT_EQ(pa[j]->x_m, pb[j]->x_m);
+      ASSERT_EQ(pa[j]->value.x_m, pb[j]->value.x_m);
     }
   }
   for (PoseHistory::Node* n : a) one.Release(n, 0);
   many.ReleaseMany(b, 0);
   EXPECT_EQ(one.stats().live_nodes, 0);
   EXPECT_EQ(many.stats().live_nodes, 0);
+  EXPECT_TRUE(one.CheckCounts({}).ok());
 }
 
 }  // namespace

@@ -42,7 +42,7 @@
 #include "engine/checkpoint_io.h"
 #include "grove/footslam.h"
 #include "grove/status.h"
-#include "tools/footslam_config_json.h"
+#include "tools/config_json.h"
 #include "tools/output_readers.h"
 #include "tools/step_reader.h"
 #include "tools/trajectory_metrics.h"
@@ -243,9 +243,9 @@ inline std::string CheckConfigJsonUnguarded(const uint8_t* data, size_t size) {
   constexpr char kName[] = "fuzz_config.json";
   const std::string text(reinterpret_cast<const char*>(data), size);
   FootSlamConfig config;
-  const nlohmann::json before = tools::FootSlamConfigToJson(config);
-  const Status applied = tools::ApplyFootSlamConfigJson(kName, text, &config);
-  const nlohmann::json after = tools::FootSlamConfigToJson(config);
+  const nlohmann::json before = tools::ConfigToJson(FootSlamConfigFields(), config);
+  const Status applied = tools::ApplyConfigJson(FootSlamConfigFields(), kName, text, &config);
+  const nlohmann::json after = tools::ConfigToJson(FootSlamConfigFields(), config);
   if (!applied.ok()) {
     std::string failure = CheckError(applied, kName, text);
     if (!failure.empty()) return failure;
@@ -382,9 +382,10 @@ inline std::string CheckResumeError(const Status& status) {
 }
 
 inline std::string CheckResumedEngine(const FootSlamConfig& config, FootSlam* slam) {
-  (void)slam->CumulativeMap();
-  (void)slam->HeaviestMap();
-  (void)slam->HeaviestTrajectory();
+  for (const Status& s : {slam->CumulativeMap().status(), slam->HeaviestMap().status(),
+                          slam->HeaviestTrajectory().status(), slam->CheckInvariants()}) {
+    if (!s.ok()) return "a resumed engine's read-out failed: " + s.ToString();
+  }
   (void)slam->Summary();
   StatusOr<std::string> again = slam->Checkpoint("u");
   if (!again.ok()) return "a resumed engine has no checkpoint: " + again.status().ToString();
@@ -411,7 +412,7 @@ inline std::string CheckCheckpointUnguarded(const uint8_t* data, size_t size) {
   std::vector<std::string> inputs{raw};
   if (raw.size() >= kCheckpointHeaderBytes) {
     // Same magic and version, matching length and checksum.
-    std::string sealed = SealCheckpoint(std::string_view(raw).substr(kCheckpointHeaderBytes));
+    std::string sealed = SealCheckpoint(std::string_view(raw).substr(kCheckpointHeaderBytes), 0);
     std::memcpy(sealed.data(), raw.data(), 12);
     inputs.push_back(sealed);
   }
@@ -448,7 +449,7 @@ inline std::string CheckStepReader(const uint8_t* data, size_t size) {
       [&] { return fuzz_internal::CheckStepReaderUnguarded(data, size); });
 }
 
-// ApplyFootSlamConfigJson on the input over the default configuration, then Validate().
+// ApplyConfigJson on the input over the default configuration, then Validate().
 inline std::string CheckConfigJson(const uint8_t* data, size_t size) {
   return fuzz_internal::Guarded(
       [&] { return fuzz_internal::CheckConfigJsonUnguarded(data, size); });

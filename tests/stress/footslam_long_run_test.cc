@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "grove/footslam.h"
+#include "tests/api/status_testing.h"
 
 namespace grove {
 namespace {
@@ -46,7 +47,7 @@ TEST(FootSlamLongRunTest, LiveMemoryStaysBounded) {
   EXPECT_LE(static_cast<double>(summary.trajectory_memory.live_nodes), bound);
   // Without freeing dead branches there would be one node per particle per step.
   EXPECT_LT(static_cast<double>(summary.trajectory_memory.live_nodes), 0.02 * n * kSteps);
-  EXPECT_EQ((*slam)->HeaviestTrajectory().size(), static_cast<size_t>(kSteps) + 1);
+  EXPECT_EQ(ValueOf((*slam)->HeaviestTrajectory()).size(), static_cast<size_t>(kSteps) + 1);
 }
 
 }  // namespace

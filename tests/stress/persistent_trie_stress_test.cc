@@ -8,6 +8,7 @@
 
 #include "concurrency/worker_pool.h"
 #include "engine/persistent_trie.h"
+#include "tests/engine/trie_testing.h"
 
 namespace grove {
 namespace {
@@ -34,8 +35,8 @@ TEST(PersistentTrieStressTest, ParallelGenerationsMatchReference) {
       workers.ParallelFor(n, 4, [&](int slot, size_t b, size_t e) {
         for (size_t i = b; i < e; ++i) {
           for (int j = 0; j < 4; ++j) {
-            roots[i] =
-                trie.Update(roots[i], keys[i * 4 + j], slot, [&](Value& x, bool) { x.v += i; });
+            roots[i] = TrieUpdated(trie, roots[i], keys[i * 4 + j], slot,
+                                   [&](Value& x, bool) { x.v += i; });
           }
         }
       });
@@ -74,7 +75,7 @@ TEST(PersistentTrieStressTest, ConcurrentShareUpdateReleaseKeepsBaseIntact) {
   Trie trie(6, kThreads);
   Trie::Root base = nullptr;
   for (uint64_t k = 0; k < 4096; k += 3)
-    base = trie.Update(base, k, 0, [&](Value& x, bool) { x.v = k; });
+    base = TrieUpdated(trie, base, k, 0, [&](Value& x, bool) { x.v = k; });
   std::vector<std::thread> threads;
   for (int t = 0; t < kThreads; ++t) {
     threads.emplace_back([&, t] {
@@ -90,7 +91,8 @@ TEST(PersistentTrieStressTest, ConcurrentShareUpdateReleaseKeepsBaseIntact) {
           mine.pop_back();
         } else {
           size_t j = rng() % mine.size();
-          mine[j] = trie.Update(mine[j], rng() % 4096, t, [](Value& x, bool) { x.v += 1000000; });
+          mine[j] =
+              TrieUpdated(trie, mine[j], rng() % 4096, t, [](Value& x, bool) { x.v += 1000000; });
           if (rng() % 5 == 0) mine.push_back(Trie::Share(mine[j]));
         }
       }

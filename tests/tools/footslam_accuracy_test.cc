@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "grove/footslam.h"
+#include "tests/api/status_testing.h"
 #include "tools/trajectory_metrics.h"
 #include "tools/walk_simulator.h"
 
@@ -36,7 +37,7 @@ Errors RunBuildingWalk(uint64_t seed) {
     odometry.push_back({s.t_s, odometry.back().x_m + s.dx_m, odometry.back().y_m + s.dy_m});
   }
   std::vector<TimedPoint> estimate;
-  for (const StampedPose& p : (*slam)->HeaviestTrajectory()) {
+  for (const StampedPose& p : ValueOf((*slam)->HeaviestTrajectory())) {
     estimate.push_back({p.t_s, p.pose.x_m, p.pose.y_m});
   }
   return {CompareTrajectories(truth, odometry)->aligned_rmse_m,

@@ -15,7 +15,7 @@
 #include "grove/footslam.h"
 #include "grove/status.h"
 #include "tests/fuzz/fuzz_checks.h"
-#include "tools/footslam_config_json.h"
+#include "tools/config_json.h"
 #include "tools/step_reader.h"
 
 #ifndef GROVE_FUZZ_CORPUS
@@ -80,14 +80,16 @@ TEST(FuzzChecksTest, ReportBrokenProperties) {
   EXPECT_NE(fuzz_internal::CheckError(NotFoundError("f: missing"), "f", text), "");
 }
 
-// Bug: ApplyFootSlamConfigJson catches only json::parse_error, but nlohmann::json::parse throws
+// Bug: ApplyConfigJson catches only json::parse_error, but nlohmann::json::parse throws
 // json::out_of_range (406) for a number literal that overflows a double, so the exception left
 // the function (config_json_fuzzer, first seconds).
 TEST(ConfigJsonRegressionTest, NumberOverflowIsAnErrorNotAnException) {
   for (const std::string text : {"{\"hex_radius_m\": 1e400}", "-1e999"}) {
     FootSlamConfig config;
     Status status;
-    EXPECT_NO_THROW(status = tools::ApplyFootSlamConfigJson("c.json", text, &config)) << text;
+    EXPECT_NO_THROW(status =
+                        tools::ApplyConfigJson(FootSlamConfigFields(), "c.json", text, &config))
+        << text;
     EXPECT_EQ(status.code(), StatusCode::kInvalidArgument) << text;
     EXPECT_TRUE(status.message().starts_with("c.json:")) << status.message();
     EXPECT_EQ(config.hex_radius_m, FootSlamConfig().hex_radius_m);
@@ -98,7 +100,8 @@ TEST(ConfigJsonRegressionTest, NumberOverflowIsAnErrorNotAnException) {
 // a line break (any control character, in fact) into the one-line error message.
 TEST(ConfigJsonRegressionTest, UnknownKeyWithEscapedNewlineGivesOneLineMessage) {
   FootSlamConfig config;
-  const Status status = tools::ApplyFootSlamConfigJson("c.json", "{\"a\\nb\": 1}", &config);
+  const Status status =
+      tools::ApplyConfigJson(FootSlamConfigFields(), "c.json", "{\"a\\nb\": 1}", &config);
   EXPECT_EQ(status.code(), StatusCode::kInvalidArgument);
   EXPECT_EQ(status.message().find('\n'), std::string::npos) << status.message();
 }
@@ -110,7 +113,7 @@ TEST(ConfigJsonRegressionTest, IntegerAboveInt64MaxIsRejectedNotWrapped) {
        {"{\"particles\": 18446744073709551615}", "{\"batch\": 9223372036854775808}",
         "{\"degree\": 18446744073709551600}"}) {
     FootSlamConfig config;
-    const Status status = tools::ApplyFootSlamConfigJson("c.json", text, &config);
+    const Status status = tools::ApplyConfigJson(FootSlamConfigFields(), "c.json", text, &config);
     EXPECT_EQ(status.code(), StatusCode::kInvalidArgument) << text;
     EXPECT_EQ(config.particles, FootSlamConfig().particles) << text;
     EXPECT_EQ(config.batch, FootSlamConfig().batch) << text;

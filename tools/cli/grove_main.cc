@@ -6,7 +6,8 @@
 
 #include "grove/footslam.h"
 #include "tools/bench_commands.h"
-#include "tools/footslam_config_json.h"
+#include "tools/cli/config_flags.h"
+#include "tools/config_json.h"
 #include "tools/footslam_run.h"
 
 namespace {
@@ -26,26 +27,12 @@ int Main(int argc, char** argv) {
   std::string config_path;
   bool print_config = false;
   bool no_progress = false;
-  FootSlamConfig flags;
-  std::string map_kind = "htree";
-  std::string weighting, resampling;
   run->add_option("--steps", run_options.steps_path,
                   "Step file: CSV 't,dx,dy' or 't,x,y' (default: the bundled building walk)");
   run->add_option("--out", run_options.out_dir, "Output directory");
-  run->add_option("--config", config_path, "JSON file setting any FootSLAM parameter");
-  auto* o_particles = run->add_option("--particles", flags.particles, "Number of particles");
-  auto* o_map = run->add_option("--map", map_kind, "Map representation: htree or naive");
-  auto* o_degree = run->add_option("--degree", flags.degree, "H-tree degree: 4, 16, 64 or 256");
-  auto* o_alphabet = run->add_option("--alphabet", flags.alphabet, "Alphabet bound T, 0 = off");
-  auto* o_grid = run->add_option("--grid-size", flags.grid_size, "Hexagons per grid side");
-  auto* o_threads = run->add_option("--threads", flags.threads, "Worker threads, 0 = all cores");
-  auto* o_seed = run->add_option("--seed", flags.seed, "Seed of the random streams");
-  auto* o_weighting =
-      run->add_option("--weighting", weighting, "Weighting rule: paper or prior_ratio");
-  auto* o_resampling = run->add_option("--resampling", resampling,
-                                       "systematic, stratified, residual or multinomial");
-  auto* o_threshold = run->add_option("--resample-threshold", flags.resample_threshold,
-                                      "Resample when ESS/N is below this, in (0, 1]");
+  CLI::Option* config_option =
+      run->add_option("--config", config_path, "JSON file setting any FootSLAM parameter");
+  gt::ConfigFlags<FootSlamConfig> config_flags(run, grove::FootSlamConfigFields());
   run->add_option("--max-step", run_options.max_step_m,
                   "Reject input steps longer than this many metres (default 5)");
   std::string memory_budget;
@@ -125,39 +112,22 @@ int Main(int argc, char** argv) {
 
   if (*run) {
     FootSlamConfig config;
-    if (!config_path.empty()) {
-      grove::Status s = gt::LoadFootSlamConfigFile(config_path, &config);
+    if (*config_option) {
+      grove::Status s = gt::LoadConfigFile(grove::FootSlamConfigFields(), config_path, &config);
       if (!s.ok()) {
         std::fprintf(stderr, "grove: error: %s\n", s.message().c_str());
-        return s.code() == grove::StatusCode::kNotFound ? gt::kExitInput : gt::kExitUsage;
+        return s.code() == grove::StatusCode::kNotFound || s.code() == grove::StatusCode::kIoError
+                   ? gt::kExitInput
+                   : gt::kExitUsage;
       }
     }
     // Flags given on the command line override the file.
-    if (*o_particles) config.particles = flags.particles;
-    if (*o_degree) config.degree = flags.degree;
-    if (*o_alphabet) config.alphabet = flags.alphabet;
-    if (*o_grid) config.grid_size = flags.grid_size;
-    if (*o_threads) config.threads = flags.threads;
-    if (*o_seed) config.seed = flags.seed;
-    if (*o_threshold) config.resample_threshold = flags.resample_threshold;
-    if (*o_map && !grove::ParseFootSlamMapKind(map_kind, &config.map)) {
-      std::fprintf(stderr, "grove: error: --map = %s: must be htree or naive\n", map_kind.c_str());
-      return gt::kExitUsage;
-    }
-    if (*o_weighting && !grove::ParseFootSlamWeighting(weighting, &config.weighting)) {
-      std::fprintf(stderr, "grove: error: --weighting = %s: must be paper or prior_ratio\n",
-                   weighting.c_str());
-      return gt::kExitUsage;
-    }
-    if (*o_resampling && !grove::ParseResamplingScheme(resampling, &config.resampling)) {
-      std::fprintf(stderr,
-                   "grove: error: --resampling = %s: must be systematic, stratified, residual "
-                   "or multinomial\n",
-                   resampling.c_str());
+    if (grove::Status s = config_flags.Apply(&config); !s.ok()) {
+      std::fprintf(stderr, "grove: error: %s\n", s.message().c_str());
       return gt::kExitUsage;
     }
     if (print_config) {
-      std::printf("%s\n", gt::FootSlamConfigToJson(config).dump(2).c_str());
+      std::printf("%s\n", gt::ConfigToJson(grove::FootSlamConfigFields(), config).dump(2).c_str());
       return gt::kExitOk;
     }
     run_options.progress = !no_progress;

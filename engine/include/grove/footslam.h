@@ -23,8 +23,10 @@
 #include <string_view>
 #include <vector>
 
+#include "grove/config_fields.h"
 #include "grove/resampling.h"
 #include "grove/status.h"
+#include "grove/types.h"
 
 namespace grove {
 
@@ -48,38 +50,41 @@ enum class FootSlamWeighting {
 struct FootSlamConfig {
   // ---- Options that change results ----
 
-  // Number of particles. Range: >= 1. Default: 30000.
+  // Number of particles. Range: 1..2^31. Default: 30000.
   int64_t particles = 30000;
   // Seed of every random stream. Same seed, same result at any thread count. Default: 1.
   uint64_t seed = 1;
-  // Circumradius of the pointy-top hexagons, metres. Range: > 0. Default: 0.5.
+  // Circumradius of the pointy-top hexagons, metres. Range: (0, 1000]. Default: 0.5.
   double hex_radius_m = 0.5;
-  // Prior count a added to every edge counter (Dirichlet prior). Range: > 0. Default: 0.8.
+  // Prior count a added to every edge counter (Dirichlet prior). Range: (0, 1e6]. Default: 0.8.
   double prior_count = 0.8;
   // Weighting rule, see FootSlamWeighting. Default: kPaper.
   FootSlamWeighting weighting = FootSlamWeighting::kPaper;
 
-  // Start pose in the map frame. Default: origin, heading 0.
+  // Start pose in the map frame. Range: |start_x_m|, |start_y_m| <= 1e9 hexagon radii (the
+  // grid's integer coordinates); |start_heading_rad| <= 1000. Default: origin, heading 0.
   double start_x_m = 0;
   double start_y_m = 0;
   double start_heading_rad = 0;
 
   // Motion model. Each particle rotates and scales the odometry step by its own error states
   // and adds white noise (the paper's P, U, E). All zero: every particle follows the odometry.
-  // Initial spread of the heading error, radians. Range: >= 0. Default: 0 (start heading known).
+  // Sigmas are bounded so that no finite configuration can make a pose non-finite.
+  // Initial spread of the heading error, radians. Range: [0, 10]. Default: 0 (start heading
+  // known).
   double initial_heading_sigma_rad = 0;
-  // Random-walk increment of the heading error per step, radians. Range: >= 0. Default: 0.01.
+  // Random-walk increment of the heading error per step, radians. Range: [0, 10]. Default: 0.01.
   double heading_drift_sigma_rad = 0.01;
-  // White noise on each step's heading, radians. Range: >= 0. Default: 0.03.
+  // White noise on each step's heading, radians. Range: [0, 10]. Default: 0.03.
   double heading_sigma_rad = 0.03;
-  // Initial spread of the step-length scale error (scale = 1 + N(0, sigma)). Range: >= 0.
+  // Initial spread of the step-length scale error (scale = 1 + N(0, sigma)). Range: [0, 10].
   // Default: 0 (scale fixed: see the README on the short-step trap).
   double scale_sigma = 0;
-  // Random-walk increment of the scale error per step. Range: >= 0. Default: 0.
+  // Random-walk increment of the scale error per step. Range: [0, 10]. Default: 0.
   double scale_drift_sigma = 0;
-  // White noise on each step's length, metres. Range: >= 0. Default: 0.04.
+  // White noise on each step's length, metres. Range: [0, 100]. Default: 0.04.
   double step_length_sigma_m = 0.04;
-  // White noise on each step's end position, per axis, metres. Range: >= 0. Default: 0.
+  // White noise on each step's end position, per axis, metres. Range: [0, 100]. Default: 0.
   double position_sigma_m = 0;
 
   // Resampling scheme. Default: systematic.
@@ -100,7 +105,8 @@ struct FootSlamConfig {
 
   // ---- Options that change only speed ----
 
-  // Worker threads. 0 means one per hardware thread. Range: >= 0. Default: 0.
+  // Worker threads. 0 means one per hardware thread. Range: 0..256 (more threads than cores
+  // only add overhead; oneTBB runs at most as many as the process may use). Default: 0.
   int threads = 0;
   // Particles per parallel batch. Range: >= 1. Default: 512.
   int64_t batch = 512;
@@ -114,17 +120,6 @@ bool ParseFootSlamMapKind(const std::string& name, FootSlamMapKind* kind);
 const char* FootSlamWeightingName(FootSlamWeighting weighting);  // "paper", "prior_ratio"
 bool ParseFootSlamWeighting(const std::string& name, FootSlamWeighting* weighting);
 
-struct Pose2 {
-  double x_m = 0;
-  double y_m = 0;
-  double heading_rad = 0;
-};
-
-struct StampedPose {
-  double t_s = 0;
-  Pose2 pose;
-};
-
 // One hexagon of a map: axial coordinates, centre and the six edge counters (weighted for a
 // cumulative map, whole numbers for one particle's map).
 struct HexCounts {
@@ -135,27 +130,8 @@ struct HexCounts {
   double counts[6] = {0, 0, 0, 0, 0, 0};
 };
 
-struct MemoryUse {
-  int64_t live_nodes = 0;  // map and trajectory nodes in use now
-  int64_t live_bytes = 0;
-  int64_t peak_live_nodes = 0;  // highest seen (per node pool, summed)
-  int64_t peak_live_bytes = 0;
-  int64_t reserved_bytes = 0;  // obtained from the system by the node pools
-};
-
-// What a run asked for, what it used and what it cost (Ceres' Summary).
-struct FootSlamSummary {
-  int64_t particles = 0;
-  int threads_requested = 0;
-  int threads_used = 0;
-  int64_t steps = 0;
-  int64_t resamplings = 0;
-  double mean_ess = 0;
-  double advance_s = 0;      // propagate, weight and update maps
-  double normalize_s = 0;    // log-sum-exp and effective sample size
-  double resample_s = 0;     // drawing parents and gathering the new generation
-  double release_s = 0;      // freeing the dead generation
-  double bookkeeping_s = 0;  // weighted-mean pose per step
+// What a run asked for, what it used and what it cost.
+struct FootSlamSummary : FilterSummary {
   // Weighted means over the particles after the last step: the step-length scale error state
   // (1 = the odometry's length) and the heading error state (radians).
   double mean_scale = 1;
@@ -165,6 +141,11 @@ struct FootSlamSummary {
   // One paragraph for a terminal.
   std::string BriefReport() const;
 };
+
+// Every field of FootSlamConfig: name, type, range, effect and meaning, in the struct's order.
+// Validate() checks these ranges; the grove command's JSON keys, flags and --print-config and
+// the checkpoint's field block come from this table.
+const std::vector<ConfigField<FootSlamConfig>>& FootSlamConfigFields();
 
 class FootSlam {
  public:
@@ -195,16 +176,21 @@ class FootSlam {
   // The current pose of the heaviest particle and the weighted mean pose.
   Pose2 HeaviestPose() const;
   Pose2 MeanPose() const;
-  // The heaviest particle's whole path: the start, then one pose per step.
-  std::vector<StampedPose> HeaviestTrajectory() const;
+  // The heaviest particle's whole path: the start, then one pose per step. The read-outs that
+  // build a container return ResourceExhausted when there is no memory for it.
+  StatusOr<std::vector<StampedPose>> HeaviestTrajectory() const;
   // The weighted mean pose after each step (the start first).
   const std::vector<StampedPose>& MeanTrajectory() const;
   // Eq. 5-6 of the paper: sum over particles of w_i * C_i, hexagons in key order. Visits each
   // distinct map node once.
-  std::vector<HexCounts> CumulativeMap() const;
+  StatusOr<std::vector<HexCounts>> CumulativeMap() const;
   // The heaviest particle's own map.
-  std::vector<HexCounts> HeaviestMap() const;
+  StatusOr<std::vector<HexCounts>> HeaviestMap() const;
   FootSlamSummary Summary() const;
+  // Walks every shared map node and path pose and checks its reference count against its links
+  // (and that every live node is reached): Internal naming the broken rule. Slow (the whole
+  // state); for tests and debugging.
+  Status CheckInvariants() const;
 
   // ---- Checkpoints ----
 

@@ -1,0 +1,124 @@
+// FootSlamConfig's field table, its validation, the names of its enums and the summary's report.
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "engine/footslam/htree_layout.h"
+#include "grove/footslam.h"
+
+namespace grove {
+
+const std::vector<ConfigField<FootSlamConfig>>& FootSlamConfigFields() {
+  using C = FootSlamConfig;
+  using I = Interval;
+  // Never destroyed: read-outs of it may run during static destruction.
+  static const auto* fields = new std::vector<ConfigField<C>>{
+      IntegerField("particles", &C::particles, 1, int64_t{1} << 31, kChangesResults,
+                   "Number of particles"),
+      UnsignedField("seed", &C::seed, kChangesResults, "Seed of every random stream"),
+      RealField("hex_radius_m", &C::hex_radius_m, I::LeftOpen(0, 1000), kChangesResults,
+                "Circumradius of the hexagons, metres"),
+      RealField("prior_count", &C::prior_count, I::LeftOpen(0, 1e6), kChangesResults,
+                "Prior count added to every edge counter"),
+      ChoiceField("weighting", &C::weighting, {"paper", "prior_ratio"}, kChangesResults,
+                  "Weighting rule: paper or prior_ratio"),
+      RealField("start_x_m", &C::start_x_m, I::Closed(-1e12, 1e12), kChangesResults,
+                "Start position x in the map frame, metres"),
+      RealField("start_y_m", &C::start_y_m, I::Closed(-1e12, 1e12), kChangesResults,
+                "Start position y in the map frame, metres"),
+      RealField("start_heading_rad", &C::start_heading_rad, I::Closed(-1000, 1000), kChangesResults,
+                "Start heading in the map frame, radians"),
+      RealField("initial_heading_sigma_rad", &C::initial_heading_sigma_rad, I::Closed(0, 10),
+                kChangesResults, "Initial spread of the heading error, radians"),
+      RealField("heading_drift_sigma_rad", &C::heading_drift_sigma_rad, I::Closed(0, 10),
+                kChangesResults, "Random-walk step of the heading error per step, radians"),
+      RealField("heading_sigma_rad", &C::heading_sigma_rad, I::Closed(0, 10), kChangesResults,
+                "White noise on each step's heading, radians"),
+      RealField("scale_sigma", &C::scale_sigma, I::Closed(0, 10), kChangesResults,
+                "Initial spread of the step-length scale error"),
+      RealField("scale_drift_sigma", &C::scale_drift_sigma, I::Closed(0, 10), kChangesResults,
+                "Random-walk step of the scale error per step"),
+      RealField("step_length_sigma_m", &C::step_length_sigma_m, I::Closed(0, 100), kChangesResults,
+                "White noise on each step's length, metres"),
+      RealField("position_sigma_m", &C::position_sigma_m, I::Closed(0, 100), kChangesResults,
+                "White noise on each step's end position, per axis, metres"),
+      ChoiceField("resampling", &C::resampling,
+                  {"systematic", "stratified", "residual", "multinomial"}, kChangesResults,
+                  "Resampling scheme"),
+      RealField("resample_threshold", &C::resample_threshold, I::LeftOpen(0, 1), kChangesResults,
+                "Resample when ESS/N is below this; 1 resamples every step"),
+      ChoiceField("map", &C::map, {"htree", "naive"}, kChangesResults,
+                  "Map representation: htree or naive"),
+      IntegerField("degree", &C::degree, 1, 256, kChangesResults,
+                   "H-tree degree: 4, 16, 64 or 256"),
+      IntegerField("grid_size", &C::grid_size, 1, 65536, kChangesResults,
+                   "Hexagons per grid side, a power of sqrt(degree)"),
+      IntegerField("alphabet", &C::alphabet, 0, 5, kChangesResults,
+                   "Alphabet bound T; 0 switches the alphabet off"),
+      IntegerField("threads", &C::threads, 0, 256, kChangesSpeedOnly,
+                   "Worker threads; 0: one per hardware thread"),
+      IntegerField("batch", &C::batch, 1, int64_t{1} << 31, kChangesSpeedOnly,
+                   "Particles per parallel batch"),
+  };
+  return *fields;
+}
+
+Status FootSlamConfig::Validate() const {
+  GROVE_RETURN_IF_ERROR(CheckFieldRanges(FootSlamConfigFields(), *this));
+  // The hexagon grid's coordinates are 32-bit integers.
+  for (auto [name, v] : {std::pair{"start_x_m", start_x_m}, std::pair{"start_y_m", start_y_m}}) {
+    if (std::fabs(v) > 1e9 * hex_radius_m) {
+      return InvalidArgumentError(
+          fmt::format("{} = {}: must be within 1e9 hexagon radii of the origin (hex_radius_m = "
+                      "{}: |{}| <= {})",
+                      name, v, hex_radius_m, name, 1e9 * hex_radius_m));
+    }
+  }
+  StatusOr<footslam::HTreeLayout> layout = footslam::HTreeLayout::Create(grid_size, degree);
+  if (!layout.ok()) return layout.status();
+  return Status::Ok();
+}
+
+const char* FootSlamMapKindName(FootSlamMapKind kind) {
+  return kind == FootSlamMapKind::kNaive ? "naive" : "htree";
+}
+bool ParseFootSlamMapKind(const std::string& name, FootSlamMapKind* kind) {
+  if (name == "htree") {
+    *kind = FootSlamMapKind::kHTree;
+  } else if (name == "naive") {
+    *kind = FootSlamMapKind::kNaive;
+  } else {
+    return false;
+  }
+  return true;
+}
+const char* FootSlamWeightingName(FootSlamWeighting w) {
+  return w == FootSlamWeighting::kPaper ? "paper" : "prior_ratio";
+}
+bool ParseFootSlamWeighting(const std::string& name, FootSlamWeighting* w) {
+  if (name == "paper") {
+    *w = FootSlamWeighting::kPaper;
+  } else if (name == "prior_ratio") {
+    *w = FootSlamWeighting::kPriorRatio;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+std::string FootSlamSummary::BriefReport() const {
+  double total = filter_s();
+  double rate = total > 0 ? static_cast<double>(particles) * steps / total : 0;
+  return fmt::format(
+      "FootSLAM: {} particles x {} steps on {} thread(s) in {:.2f} s ({:.2f} M particle-steps/s, "
+      "{:.0f} ns per particle-step); {} resamplings, mean ESS {:.0f} ({:.1f} %); phases: advance "
+      "{:.2f} s, normalise {:.2f} s, resample {:.2f} s, release {:.2f} s, bookkeeping {:.2f} s; "
+      "map {} live nodes ({:.1f} MiB, peak {:.1f} MiB), trajectory {} live nodes ({:.1f} MiB).",
+      particles, steps, threads_used, total, rate / 1e6, rate > 0 ? 1e9 / rate : 0.0, resamplings,
+      mean_ess, particles > 0 ? 100.0 * mean_ess / particles : 0.0, advance_s, normalize_s,
+      resample_s, release_s, bookkeeping_s, map_memory.live_nodes,
+      map_memory.live_bytes / 1048576.0, map_memory.peak_live_bytes / 1048576.0,
+      trajectory_memory.live_nodes, trajectory_memory.live_bytes / 1048576.0);
+}
+
+}  // namespace grove

@@ -1,0 +1,99 @@
+// VersionSet: one persistent version per particle (a map root, a path history) plus the dead
+// generation that resampling leaves, for any store whose versions are reference-counted roots
+// (PersistentTrie, Ancestry): what every model needs from a store to follow the filter's
+// generations.
+//
+// The Store provides:
+//   using Root = Node*;                                // nullptr: the empty version
+//   static Root Share(Root);                           // one more reference, O(1)
+//   void Release(Root, int slot);                      // drops one
+//   void ReleaseMany(std::span<Root const>, int slot); // drops many, misses overlapped
+//
+// Thread safety: as the store's; Gather and ReleaseDead run on the driving thread and use the
+// workers inside.
+#ifndef GROVE_ENGINE_VERSION_SET_H_
+#define GROVE_ENGINE_VERSION_SET_H_
+
+#include <cstdint>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "alloc/check.h"
+#include "concurrency/worker_pool.h"
+#include "engine/generation.h"
+
+namespace grove {
+
+template <typename Store>
+class VersionSet {
+ public:
+  using Root = typename Store::Root;
+
+  // `particles` empty versions of `store`, which must outlive the set.
+  VersionSet(Store* store, size_t particles) : store_(store), roots_(particles, nullptr) {}
+  VersionSet(const VersionSet&) = delete;
+  VersionSet& operator=(const VersionSet&) = delete;
+  ~VersionSet() {
+    for (Root r : roots_) store_->Release(r, 0);
+    for (Root r : dead_) store_->Release(r, 0);
+  }
+
+  size_t size() const { return roots_.size(); }
+  // Particle i's version; the set owns the reference (replace it by assigning a new root whose
+  // reference moves in, as the stores' updates do).
+  Root& operator[](size_t i) { return roots_[i]; }
+  Root operator[](size_t i) const { return roots_[i]; }
+  std::span<Root const> roots() const { return roots_; }
+
+  // Every particle's version becomes a reference to `root`, whose reference the set takes over;
+  // REQUIRES: every version is empty (a new set).
+  void ShareAll(Root root) {
+    for (size_t i = 0; i < roots_.size(); ++i) {
+      GROVE_DCHECK(roots_[i] == nullptr);
+      roots_[i] = i == 0 ? root : Store::Share(root);
+    }
+  }
+
+  // The next generation: version k becomes a reference to parents[k]'s; the old versions are
+  // kept as the dead generation until ReleaseDead(). REQUIRES: parents nondecreasing.
+  void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
+    GROVE_DCHECK(dead_.empty());
+    std::vector<Root> next = GatherShared(parents, &roots_, workers, &Store::Share);
+    dead_.swap(roots_);
+    roots_.swap(next);
+  }
+
+  // Frees the dead generation's references (what no live version shares), in parallel.
+  void ReleaseDead(WorkerPool& workers) {
+    workers.ParallelFor(dead_.size(), 1024, [&](int slot, size_t b, size_t e) {
+      store_->ReleaseMany(std::span<Root const>(dead_).subspan(b, e - b), slot);
+    });
+    dead_.clear();
+  }
+
+  // Replaces every version by `loaded` (one reference each, as a store's Load() gives them).
+  // REQUIRES: loaded.size() == size().
+  void Replace(std::vector<Root> loaded) {
+    GROVE_CHECK(loaded.size() == roots_.size());
+    for (Root r : roots_) store_->Release(r, 0);
+    roots_.swap(loaded);
+  }
+
+  // Every root reference the set holds, the dead generation's included: what a store's
+  // invariant check must be given.
+  std::vector<Root> AllReferences() const {
+    std::vector<Root> all(roots_);
+    all.insert(all.end(), dead_.begin(), dead_.end());
+    return all;
+  }
+
+ private:
+  Store* store_;
+  std::vector<Root> roots_;
+  std::vector<Root> dead_;
+};
+
+}  // namespace grove
+
+#endif  // GROVE_ENGINE_VERSION_SET_H_
