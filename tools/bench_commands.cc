@@ -15,8 +15,9 @@
 
 #include "grove/footslam.h"
 #include "tools/atomic_file.h"
+#include "tools/chart.h"
 #include "tools/footslam_run.h"
-#include "tools/line_plot.h"
+#include "tools/report_tables.h"
 #include "tools/walk_simulator.h"
 
 namespace grove::tools {
@@ -184,29 +185,21 @@ int PaperBenchCommand(const PaperBenchOptions& options) {
     results.push_back(std::move(r));
   }
 
-  // CSV, plots and a markdown table.
+  // CSV, charts and a markdown table.
   std::vector<std::vector<std::string>> rows;
   // Log scale: grove runs orders of magnitude below the real-time line.
-  LinePlot runtime{"Run time against walk time (Fig. 9)",
-                   "walk time (s)",
-                   "cumulative run time (s, log scale)",
-                   {},
-                   false,
-                   true};
-  LinePlot memory{"Resident memory against walk time (Fig. 10)",
-                  "walk time (s)",
-                  "RSS (MiB)",
-                  {},
-                  false,
-                  false};
-  LinePlot map_memory{"Live map memory against walk time",
-                      "walk time (s)",
-                      "live map nodes (MiB)",
-                      {},
-                      false,
-                      false};
+  Chart runtime{.title = "Run time against walk time (Fig. 9)",
+                .x_label = "walk time (s)",
+                .y_label = "cumulative run time (s, log scale)",
+                .log_y = true};
+  Chart memory{.title = "Resident memory against walk time (Fig. 10)",
+               .x_label = "walk time (s)",
+               .y_label = "RSS (MiB)"};
+  Chart map_memory{.title = "Live map memory against walk time",
+                   .x_label = "walk time (s)",
+                   .y_label = "live map nodes (MiB)"};
   double walk_end = walk->back().t_s;
-  PlotSeries real_time{"real time", {}, {}, true};
+  ChartSeries real_time{.label = "real time", .style = ChartStyle::kDashed};
   for (double t = 1; t < walk_end + 5; t += 5) {
     real_time.x.push_back(std::min(t, walk_end));
     real_time.y.push_back(std::min(t, walk_end));
@@ -214,9 +207,10 @@ int PaperBenchCommand(const PaperBenchOptions& options) {
   runtime.series.push_back(real_time);
   std::vector<std::vector<std::string>> table;
   for (const Result& r : results) {
-    PlotSeries time_series{r.config->name, {}, {}, false};
-    PlotSeries rss_series{r.config->name, {}, {}, false};
-    PlotSeries map_series{r.config->name, {}, {}, false};
+    // A sample every 5 s of walk: too dense for markers.
+    ChartSeries time_series{.label = r.config->name, .style = ChartStyle::kLine};
+    ChartSeries rss_series = time_series;
+    ChartSeries map_series = time_series;
     for (const Sample& s : r.samples) {
       rows.push_back({r.config->name, fmt::format("{:.2f}", s.walk_s),
                       fmt::format("{:.3f}", s.run_s), fmt::format("{:.1f}", s.rss_mib),
@@ -273,10 +267,13 @@ int PaperBenchCommand(const PaperBenchOptions& options) {
   s = WriteFileAtomically(
       dir + "/paper.csv",
       CsvTable({"configuration", "walk_s", "run_s", "rss_mib", "live_map_mib"}, rows));
-  if (s.ok()) s = WriteLinePlotPng(dir + "/paper_runtime.png", runtime);
-  if (s.ok()) s = WriteLinePlotPng(dir + "/paper_memory.png", memory);
-  if (s.ok()) s = WriteLinePlotPng(dir + "/paper_map_memory.png", map_memory);
+  // The tables before the charts: without gnuplot the numbers are still kept.
   if (s.ok()) s = WriteFileAtomically(dir + "/paper.md", md);
+  if (s.ok()) s = WriteChart(runtime, dir + "/paper_runtime.png", dir + "/paper_runtime.svg");
+  if (s.ok()) s = WriteChart(memory, dir + "/paper_memory.png", dir + "/paper_memory.svg");
+  if (s.ok()) {
+    s = WriteChart(map_memory, dir + "/paper_map_memory.png", dir + "/paper_map_memory.svg");
+  }
   if (!s.ok()) return Fail(kExitOutput, s.message());
   std::printf("%s", md.c_str());
   return kExitOk;
@@ -319,16 +316,19 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
     points.push_back({n, cores, *r});
   }
   std::vector<std::vector<std::string>> rows;
-  LinePlot threads_plot{
-      "Throughput against threads", "threads", "M particle-steps / s", {}, false, false};
-  LinePlot particles_plot{
-      "Cost against particles", "particles", "ns per particle-step", {}, true, false};
-  PlotSeries tp{fmt::format("{} particles", options.thread_sweep_particles), {}, {}, false};
-  PlotSeries pp{fmt::format("{} threads", cores), {}, {}, false};
-  std::vector<PlotSeries> phase_series = {{"advance", {}, {}, true},
-                                          {"resample", {}, {}, true},
-                                          {"release", {}, {}, true},
-                                          {"normalise", {}, {}, true}};
+  Chart threads_chart{.title = "Throughput against threads",
+                      .x_label = "threads",
+                      .y_label = "M particle-steps / s"};
+  Chart particles_chart{.title = "Cost against particles",
+                        .x_label = "particles",
+                        .y_label = "ns per particle-step",
+                        .log_x = true};
+  ChartSeries tp{.label = fmt::format("{} particles", options.thread_sweep_particles)};
+  ChartSeries pp{.label = fmt::format("{} threads", cores)};
+  std::vector<ChartSeries> phase_series;
+  for (const char* phase : {"advance", "resample", "release", "normalise"}) {
+    phase_series.push_back({.label = phase, .style = ChartStyle::kDashed});
+  }
   for (size_t i = 0; i < points.size(); ++i) {
     const Point& p = points[i];
     const FootSlamSummary& m = p.summary;
@@ -358,9 +358,9 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
       }
     }
   }
-  threads_plot.series.push_back(tp);
-  particles_plot.series.push_back(pp);
-  for (auto& ps : phase_series) particles_plot.series.push_back(ps);
+  threads_chart.series.push_back(tp);
+  particles_chart.series.push_back(pp);
+  for (auto& ps : phase_series) particles_chart.series.push_back(ps);
   std::vector<std::string> header = {"sweep",
                                      "particles",
                                      "threads",
@@ -381,9 +381,13 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
   md += MarkdownTable(header, rows);
   const std::string& dir = options.out_dir;
   s = WriteFileAtomically(dir + "/scaling.csv", CsvTable(header, rows));
-  if (s.ok()) s = WriteLinePlotPng(dir + "/scaling_threads.png", threads_plot);
-  if (s.ok()) s = WriteLinePlotPng(dir + "/scaling_particles.png", particles_plot);
   if (s.ok()) s = WriteFileAtomically(dir + "/scaling.md", md);
+  if (s.ok()) {
+    s = WriteChart(threads_chart, dir + "/scaling_threads.png", dir + "/scaling_threads.svg");
+  }
+  if (s.ok()) {
+    s = WriteChart(particles_chart, dir + "/scaling_particles.png", dir + "/scaling_particles.svg");
+  }
   if (!s.ok()) return Fail(kExitOutput, s.message());
   std::printf("%s", md.c_str());
   return kExitOk;

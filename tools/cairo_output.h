@@ -1,4 +1,4 @@
-// Small pieces shared by the cairo drawings (map images, line plots).
+// Small pieces shared by the cairo drawings of the map images.
 #ifndef GROVE_TOOLS_CAIRO_OUTPUT_H_
 #define GROVE_TOOLS_CAIRO_OUTPUT_H_
 

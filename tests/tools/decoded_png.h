@@ -1,4 +1,4 @@
-// Reading pixels back from a rendered PNG, for the image tests (map_render_test, line_plot_test).
+// Reading pixels back from a rendered PNG, for the image tests (map_render_test, chart_test).
 #ifndef GROVE_TESTS_TOOLS_DECODED_PNG_H_
 #define GROVE_TESTS_TOOLS_DECODED_PNG_H_
 
