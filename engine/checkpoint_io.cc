@@ -40,8 +40,15 @@ std::string FieldBlock(const std::vector<CheckpointField>& fields) {
   return w.Take();
 }
 
-std::string FieldText(bool integer, uint64_t bits) {
-  if (integer) return std::to_string(static_cast<int64_t>(bits));
+// A stored value as the configuration writes it (a choice by its name).
+std::string FieldText(const CheckpointField& f, uint64_t bits) {
+  if (f.integer) {
+    if (f.info != nullptr && f.info->type == FieldType::kChoice) {
+      return FormatFieldValue(*f.info, FieldValue(static_cast<int64_t>(bits)));
+    }
+    if (f.info != nullptr && f.info->type == FieldType::kUnsigned) return std::to_string(bits);
+    return std::to_string(static_cast<int64_t>(bits));
+  }
   double v;
   std::memcpy(&v, &bits, sizeof(v));
   return fmt::format("{}", v);
@@ -96,7 +103,7 @@ Status ReadCheckpointHead(ByteReader* r, std::string_view kind, const char* mode
       return FailedPreconditionError(fmt::format(
           "{}: the checkpoint was made with {} = {}, this configuration has {} = {}: resume with "
           "the configuration of the interrupted run (only threads and batch may change)",
-          r->name(), f.name, FieldText(f.integer, bits), f.name, FieldText(f.integer, f.bits)));
+          r->name(), f.name, FieldText(f, bits), f.name, FieldText(f, f.bits)));
     }
   }
   if (hash != Crc32(FieldBlock(expected))) {

@@ -173,6 +173,7 @@ struct CheckpointField {
   std::string name;
   bool integer;
   uint64_t bits;
+  const FieldInfo* info = nullptr;  // the table's row, for messages (choices by name)
 };
 
 // The fields of `config` that change results, in table order: the block a checkpoint stores.
@@ -191,7 +192,7 @@ std::vector<CheckpointField> CheckpointFieldsOf(const std::vector<ConfigField<Co
     } else {
       bits = std::get<uint64_t>(v);
     }
-    out.push_back({f.info.name, f.info.type != FieldType::kReal, bits});
+    out.push_back({f.info.name, f.info.type != FieldType::kReal, bits, &f.info});
   }
   return out;
 }

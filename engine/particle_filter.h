@@ -157,6 +157,7 @@ class ParticleFilter {
   // by (seed, step, particle), so the step is their whole position.
   void Save(ByteWriter* w) const {
     w->Put<uint64_t>(step_);
+    w->Put<uint64_t>(weight_steps_);
     w->Put<uint64_t>(resamplings_);
     w->Put<uint64_t>(heaviest_);
     w->Put<double>(ess_);
@@ -168,17 +169,19 @@ class ParticleFilter {
 
   Status Load(ByteReader* r) {
     const size_t n = log_w_.size();
-    uint64_t step = 0, resamplings = 0, heaviest = 0, count = 0;
+    uint64_t step = 0, weight_steps = 0, resamplings = 0, heaviest = 0, count = 0;
     double ess = 0, ess_sum = 0;
     PhaseTimes times;
     GROVE_RETURN_IF_ERROR(r->Get("step", &step));
+    GROVE_RETURN_IF_ERROR(r->Get("weighting steps", &weight_steps));
     GROVE_RETURN_IF_ERROR(r->Get("resamplings", &resamplings));
     GROVE_RETURN_IF_ERROR(r->Get("heaviest particle", &heaviest));
     GROVE_RETURN_IF_ERROR(r->Get("ESS", &ess));
     GROVE_RETURN_IF_ERROR(r->Get("ESS sum", &ess_sum));
     GROVE_RETURN_IF_ERROR(r->Get("phase times", &times));
     GROVE_RETURN_IF_ERROR(r->Get("weight count", &count));
-    if (resamplings > step) return r->Error("resamplings", "more than the steps");
+    if (weight_steps > step) return r->Error("weighting steps", "more than the steps");
+    if (resamplings > weight_steps) return r->Error("resamplings", "more than the steps");
     if (heaviest >= n) return r->Error("heaviest particle", "not a particle");
     if (!(ess >= 0 && ess <= static_cast<double>(n) * (1 + 1e-9)) || !std::isfinite(ess_sum)) {
       return r->Error("ESS", "outside [0, particles]");
@@ -200,7 +203,7 @@ class ParticleFilter {
     heaviest_ = heaviest;
     ess_ = ess;
     ess_sum_ = ess_sum;
-    weight_steps_ = step;  // every step weights (no model checkpoints predict-only steps yet)
+    weight_steps_ = weight_steps;
     times_ = times;
     log_w_.swap(log_w);
     return Status::Ok();

@@ -25,23 +25,12 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-int Fail(int code, const std::string& message) {
-  std::fprintf(stderr, "grove: error: %s\n", message.c_str());
-  return code;
-}
-
 // Resident set size now, from /proc/self/statm (pages).
 int64_t CurrentRssBytes() {
   std::ifstream statm("/proc/self/statm");
   int64_t size = 0, resident = 0;
   statm >> size >> resident;
   return resident * sysconf(_SC_PAGESIZE);
-}
-
-int64_t PeakRssBytes() {
-  struct rusage usage;
-  getrusage(RUSAGE_SELF, &usage);
-  return static_cast<int64_t>(usage.ru_maxrss) * 1024;
 }
 
 std::string MachineDescription() {
@@ -121,6 +110,18 @@ std::vector<Sample> ParseSamples(const std::string& text) {
 }  // namespace
 
 int PaperBenchCommand(const PaperBenchOptions& options) {
+  if (!options.only.empty()) {
+    std::string known;
+    bool found = false;
+    for (const PaperConfig& pc : kPaperConfigs) {
+      found = found || options.only == pc.name;
+      known += fmt::format("{}\"{}\"", known.empty() ? "" : ", ", pc.name);
+    }
+    if (!found) {
+      return Fail(kExitUsage, fmt::format("--only = {}: must be one of {}",
+                                          QuoteForMessage(options.only), known));
+    }
+  }
   StatusOr<std::vector<StepRecord>> walk = PaperWalk(options.minutes);
   if (!walk.ok()) return Fail(kExitUsage, walk.status().message());
   Status s = EnsureDirectory(options.out_dir);

@@ -43,8 +43,9 @@ namespace {
 constexpr double kWeightScale = 4503599627370496.0;  // 2^52
 
 constexpr char kCheckpointKind[] = "grove footslam";
-// FootSLAM's checkpoint body layout; bumped whenever it changes.
-constexpr uint32_t kFootSlamFormatVersion = 1;
+// FootSLAM's checkpoint body layout; bumped whenever it changes. 2: poses of the paths in
+// double precision, the filter's count of weighting steps.
+constexpr uint32_t kFootSlamFormatVersion = 2;
 
 // Runs f() -> StatusOr<T> or Status, turning an escaping exception into a status.
 template <typename F>
@@ -282,8 +283,14 @@ int64_t FootSlam::EstimatePeakBytes(const FootSlamConfig& config, int64_t steps)
   // gather's temporaries.
   const int64_t state = 176;
   // Live poses stay near steps + C N log N (tests/stress/footslam_long_run_test.cc): with the
-  // 32-byte nodes of two generations, about 3 nodes per particle at 30,000 to 1,000,000.
-  const int64_t history = 3 * 32;
+  // 48-byte nodes of two generations, about 3 nodes per particle at 30,000 to 1,000,000.
+  const int64_t pose_node = (sizeof(footslam::PoseHistory::Node) + 15) / 16 * 16;
+  const int64_t history = 3 * pose_node;
+  // What grows with the walk whatever the particles: the time and mean pose of every step
+  // (40 bytes), the common ancestry of the paths (one pose node a step) and the map nodes of
+  // the area walked, shared by all particles (about 1.2 new hexagons a step, 64 bytes each
+  // with the inner nodes above them).
+  const int64_t per_step = 40 + pose_node + 77;
   int64_t map;
   if (config.map == FootSlamMapKind::kNaive) {
     const int64_t grid = int64_t{config.grid_size} * config.grid_size;
@@ -311,7 +318,7 @@ int64_t FootSlam::EstimatePeakBytes(const FootSlamConfig& config, int64_t steps)
     // Every particle owns the path it updated last, in two generations while resampling.
     map = 2 * path;
   }
-  return fixed + n * (state + history + map);
+  return fixed + n * (state + history + map) + steps * per_step;
 }
 
 FootSlam::FootSlam(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}

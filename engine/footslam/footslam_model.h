@@ -36,9 +36,10 @@ struct StepInput {
   double dy_m;
 };
 
-// A pose of a particle's path as its history keeps it.
+// A pose of a particle's path as its history keeps it: doubles, so that a path far from the
+// origin (georeferenced coordinates) keeps the resolution of the particles' own poses.
 struct PathPose {
-  float x_m, y_m, heading_rad;
+  double x_m, y_m, heading_rad;
 };
 using PoseHistory = Ancestry<PathPose>;
 
@@ -128,6 +129,11 @@ class FootSlamModel {
       if (config_.position_sigma_m > 0) {
         nx += config_.position_sigma_m * rs.NextNormal();
         ny += config_.position_sigma_m * rs.NextNormal();
+      }
+      if (!std::isfinite(nx) || !std::isfinite(ny) || !std::isfinite(heading)) {
+        return FailedPreconditionError(fmt::format(
+            "particle {}'s pose ({}, {}, {}) is not finite: the motion noise is too large", i, nx,
+            ny, heading));
       }
       double lw = 0;
       bool outside = false, no_memory = false;
@@ -285,9 +291,7 @@ class FootSlamModel {
   const Map& map() const { return *map_; }
 
  private:
-  static PathPose PathPoseOf(double x, double y, double heading) {
-    return PathPose{static_cast<float>(x), static_cast<float>(y), static_cast<float>(heading)};
-  }
+  static PathPose PathPoseOf(double x, double y, double heading) { return PathPose{x, y, heading}; }
   static Status NoMemory(size_t i, const char* what) {
     return ResourceExhaustedError(fmt::format("out of memory for particle {}'s {}", i, what));
   }

@@ -221,11 +221,18 @@ TEST_F(CorruptCheckpointTest, OtherFilesAndVersionsAreRefused) {
   Status s = ResumeStatus("t,dx,dy\n1,0.7,0\n", config_);
   EXPECT_EQ(s.code(), StatusCode::kDataLoss);
   EXPECT_NE(s.message().find("not a grove checkpoint"), std::string::npos) << s.ToString();
-  std::string newer = good_;
-  newer[8] = 2;  // format version, little-endian u32 at offset 8
-  s = ResumeStatus(newer, config_);
-  EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
-  EXPECT_NE(s.message().find("format version 2"), std::string::npos) << s.ToString();
+  // Another format version (the header's u32 at offset 8, outside the body's checksum), newer
+  // or older, is refused once the kind shows it is FootSLAM's.
+  for (uint8_t version : {1, 3}) {
+    std::string other = good_;
+    other[8] = static_cast<char>(version);
+    s = ResumeStatus(other, config_);
+    EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
+    EXPECT_NE(s.message().find("FootSLAM checkpoint format version " + std::to_string(version) +
+                               " cannot be read by this grove, which reads version 2"),
+              std::string::npos)
+        << s.ToString();
+  }
 }
 
 TEST_F(CorruptCheckpointTest, ADifferentConfigurationIsRefusedNamingTheField) {

@@ -46,8 +46,7 @@ TEST(FootSlamFaultTest, AnAllocationFailureStopsTheEngineCleanly) {
       if (s.ok()) continue;  // the walk needed fewer than k nodes
       ++failures;
       EXPECT_EQ(s.code(), StatusCode::kResourceExhausted) << s.ToString();
-      EXPECT_NE(s.message().find("step " + std::to_string(step)), std::string::npos)
-          << s.message();
+      EXPECT_NE(s.message().find("step " + std::to_string(step)), std::string::npos) << s.message();
       EXPECT_EQ((*slam)->Step(step + 1, 0.7, 0).code(), StatusCode::kFailedPrecondition);
       EXPECT_EQ((*slam)->Checkpoint().status().code(), StatusCode::kFailedPrecondition);
       Status counts = (*slam)->CheckInvariants();

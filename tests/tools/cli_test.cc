@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -300,6 +301,256 @@ TEST_F(CliTest, SigtermStopsAtAStepBoundaryWithACheckpoint) {
   Outcome o = Grove(run + "--resume " + ckpt.string() + " --out " + out.string());
   ASSERT_EQ(o.exit_code, 0) << o.err;
   ExpectSameOutputs(full, out);
+}
+
+// ---- Reliability, round two (the numbers in the test names' comments) ----
+
+// 1: a step file from a pipe is read once, whole.
+TEST_F(CliTest, StepsFromAFifoAreReadWhole) {
+  fs::path sim = dir_ / "sim", out = dir_ / "out", fifo = dir_ / "steps.fifo";
+  ASSERT_EQ(Grove("footslam simulate --minutes 2 --seed 5 --out " + sim.string()).exit_code, 0);
+  ASSERT_EQ(std::system(("mkfifo " + fifo.string()).c_str()), 0);
+  std::string feed = "cat " + (sim / "steps.csv").string() + " > " + fifo.string() + " &";
+  ASSERT_EQ(std::system(feed.c_str()), 0);
+  Outcome o = Grove("footslam run --no-progress --particles 200 --steps " + fifo.string() +
+                    " --out " + out.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  const std::string steps = Slurp(sim / "steps.csv");
+  const auto lines = [](const std::string& t) { return std::count(t.begin(), t.end(), '\n'); };
+  // The header and every step; the trajectory has the start too.
+  EXPECT_EQ(lines(Slurp(out / "trajectory.csv")), lines(steps) + 1);
+}
+
+// 2: the output set is written as a whole, summary.json last naming every file, and a second
+// run into a directory in use is refused.
+TEST_F(CliTest, OutputsAreASetWithAManifestAndTheDirectoryIsLocked) {
+  fs::path out = dir_ / "out";
+  const std::string run = "footslam run --no-progress --particles 50 --out " + out.string();
+  fs::create_directories(out / ".grove-staging-old");  // what a killed run left
+  Outcome o = Grove(run);
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_FALSE(fs::exists(out / ".grove-staging-old"));
+  const std::string summary = Slurp(out / "summary.json");
+  EXPECT_NE(summary.find("\"run_id\""), std::string::npos);
+  for (const char* name :
+       {"map.csv", "map_best.csv", "trajectory.csv", "mean_trajectory.csv", "map.png", "map.svg"}) {
+    const std::string entry = "\"" + std::string(name) + "\": {\n      \"bytes\": " +
+                              std::to_string(fs::file_size(out / name));
+    EXPECT_NE(summary.find(entry), std::string::npos) << name << " not listed with its size";
+  }
+  for (const auto& e : fs::directory_iterator(out)) {
+    EXPECT_EQ(e.path().filename().string().rfind(".grove", 0), std::string::npos) << e.path();
+  }
+  // A summary.json that cannot be written stops the run before its first step: nothing new.
+  fs::path other = dir_ / "other";
+  fs::create_directories(other / "summary.json");
+  o = Grove("footslam run --no-progress --particles 50 --out " + other.string());
+  EXPECT_EQ(o.exit_code, 5) << o.err;
+  EXPECT_NE(o.err.find("summary.json: it is a directory"), std::string::npos) << o.err;
+  EXPECT_FALSE(fs::exists(other / "map.csv"));
+  // Another process holds the directory's lock (flock(1) takes the same lock grove does).
+  o = Grove("footslam run --no-progress --particles 50 --out " + out.string());
+  ASSERT_EQ(o.exit_code, 0);
+  std::string lock = "flock -n " + out.string() + " sh -c '" + std::string(GROVE_BINARY) + " " +
+                     run + " 2>" + (dir_ / "locked.err").string() + "; echo $? >" +
+                     (dir_ / "locked.rc").string() + "'";
+  ASSERT_EQ(std::system(lock.c_str()), 0);
+  EXPECT_EQ(Slurp(dir_ / "locked.rc"), "5\n") << Slurp(dir_ / "locked.err");
+  EXPECT_NE(Slurp(dir_ / "locked.err").find("is in use by another grove run"), std::string::npos);
+}
+
+// 4, 5: every output path is checked before the first step.
+TEST_F(CliTest, OutputPathsAreCheckedBeforeTheFirstStep) {
+  std::string steps = Write("steps.csv", "t,dx,dy\n1,0.7,0\n2,0.7,0\n");
+  const std::string before = Slurp(steps);
+  fs::path out = dir_ / "out";
+  Outcome o = Grove("footslam run --no-progress --particles 20 --steps " + steps +
+                    " --checkpoint " + steps + " --out " + out.string());
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_NE(o.err.find("it is the input " + steps), std::string::npos) << o.err;
+  EXPECT_EQ(Slurp(steps), before);
+  // A hard link to the input is the input too.
+  fs::create_hard_link(steps, dir_ / "link.csv");
+  o = Grove("footslam run --no-progress --particles 20 --steps " + steps + " --checkpoint " +
+            (dir_ / "link.csv").string() + " --out " + out.string());
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_EQ(Slurp(steps), before);
+  // An output in the output directory that is the input.
+  fs::create_directories(dir_ / "in");
+  fs::copy_file(steps, dir_ / "in" / "map.csv");
+  o = Grove("footslam run --no-progress --particles 20 --steps " +
+            (dir_ / "in" / "map.csv").string() + " --out " + (dir_ / "in").string());
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_EQ(Slurp(dir_ / "in" / "map.csv"), before);
+  // A checkpoint path under a file, and --out on a file: refused at once, not after the run.
+  o = Grove("footslam run --no-progress --particles 20 --steps " + steps + " --checkpoint " +
+            steps + "/ck.grove --checkpoint-every 1000 --out " + out.string());
+  EXPECT_EQ(o.exit_code, 5) << o.err;
+  EXPECT_FALSE(fs::exists(out)) << "a refused run left its new output directory";
+  o = Grove("footslam run --no-progress --particles 20 --steps " + steps + " --out " + steps);
+  EXPECT_EQ(o.exit_code, 5) << o.err;
+  EXPECT_NE(o.err.find("exists and is not a directory"), std::string::npos) << o.err;
+}
+
+// 7: a closed stderr or terminal does not kill a run.
+TEST_F(CliTest, ARunSurvivesAClosedPipeAndAHangup) {
+  fs::path out = dir_ / "out";
+  std::string cmd = "bash -c '" + std::string(GROVE_BINARY) +
+                    " footslam run --particles 300 --out " + out.string() +
+                    " 2>&1 | head -c 1 >/dev/null; echo ${PIPESTATUS[0]}' > " +
+                    (dir_ / "rc").string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  EXPECT_EQ(Slurp(dir_ / "rc"), "0\n");
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+  fs::path hup = dir_ / "hup";
+  cmd = "sh -c '" + std::string(GROVE_BINARY) + " footslam run --particles 2000 --out " +
+        hup.string() + " 2>/dev/null & pid=$!; sleep 0.3; kill -HUP $pid; wait $pid; echo $?' > " +
+        (dir_ / "hup.rc").string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  EXPECT_EQ(Slurp(dir_ / "hup.rc"), "0\n");
+  EXPECT_TRUE(fs::exists(hup / "summary.json"));
+}
+
+// 8, 15: empty paths, and configuration files that are not files.
+TEST_F(CliTest, EmptyPathsAndNonFileConfigsAreErrors) {
+  const std::string out = " --out " + (dir_ / "out").string();
+  for (const char* option : {"--steps", "--resume", "--config", "--checkpoint"}) {
+    Outcome o = Grove(std::string("footslam run --no-progress ") + option + " ''" + out);
+    EXPECT_EQ(o.exit_code, 2) << option;
+    EXPECT_NE(o.err.find(std::string(option) + ": the path is empty"), std::string::npos) << o.err;
+  }
+  Outcome o = Grove("footslam run --print-config --config /dev/zero");
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find("is not a regular file"), std::string::npos) << o.err;
+  o = Grove("footslam run --print-config --config " + dir_.string());
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find("is a directory"), std::string::npos) << o.err;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+// 9: trajectories keep their resolution far from the origin.
+TEST_F(CliTest, GeoreferencedTrajectoriesAreNotQuantised) {
+  fs::path out = dir_ / "out";
+  std::string steps = Write("steps.csv", "t,dx,dy\n1,0.1,0.03\n2,0.1,0.03\n3,0.1,0.03\n");
+  Outcome o = Grove(
+      "footslam run --no-progress --particles 1 --heading-drift-sigma-rad 0 "
+      "--heading-sigma-rad 0 --step-length-sigma-m 0 --start-x-m 500000 "
+      "--start-y-m 5000000 --steps " +
+      steps + " --out " + out.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  const std::string t = Slurp(out / "trajectory.csv");
+  EXPECT_NE(t.find("500000.100000,5000000.030000"), std::string::npos) << t;
+  EXPECT_NE(t.find("500000.300000,5000000.090000"), std::string::npos) << t;
+}
+
+// 10-13, 17: values that used to crash, produce NaN or be taken silently are refused.
+TEST_F(CliTest, OutOfRangeValuesAreRefusedNamingTheOption) {
+  const std::string out = " --out " + (dir_ / "out").string();
+  struct Case {
+    std::string args, message;
+    int code;
+  };
+  const Case cases[] = {
+      {"footslam run --heading-sigma-rad 1e308" + out,
+       "--heading-sigma-rad = 1e+308: must be in [0, 10]", 2},
+      {"footslam run --threads 70000" + out, "--threads = 70000: must be in 0..256", 2},
+      {"footslam run --threads 2147483647" + out, "--threads = 2147483647", 2},
+      {"footslam run --start-x-m 1e10" + out, "start_x_m = 10000000000: must be within", 2},
+      {"footslam run --max-step 0" + out, "--max-step = 0: must be > 0", 2},
+      {"footslam run --particles abc" + out, "--particles = \"abc\": must be an integer", 2},
+      {"footslam simulate --heading-drift -5 --out " + (dir_ / "s").string(), "heading_drift", 2},
+      {"footslam simulate --scale-error -1 --out " + (dir_ / "s").string(), "scale_error", 2},
+      {"footslam simulate --seed -1 --out " + (dir_ / "s").string(), "--seed = \"-1\"", 2},
+      {"footslam simulate --minutes 1e-9 --out " + (dir_ / "s").string(), "shorter than one step",
+       2},
+      {"footslam render --hex-radius 0 --dir " + dir_.string(), "--hex-radius = 0: must be > 0", 2},
+      {"bench paper --only bogus --out " + (dir_ / "b").string(),
+       "--only = \"bogus\": must be one of", 2},
+      {"bench scaling --steps 0 --out " + (dir_ / "b").string(), "--steps", 2},
+      {"bench paper --naive-limit -1 --out " + (dir_ / "b").string(), "--naive-limit", 2},
+  };
+  for (const Case& c : cases) {
+    Outcome o = Grove(c.args);
+    EXPECT_EQ(o.exit_code, c.code) << c.args << ": " << o.err;
+    EXPECT_NE(o.err.find(c.message), std::string::npos) << c.args << ": " << o.err;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+  EXPECT_FALSE(fs::exists(dir_ / "s" / "steps.csv"));
+}
+
+// 12, 17: hostile configuration files get short one-line errors.
+TEST_F(CliTest, HostileConfigurationsGetShortErrors) {
+  std::string deep = "{\"particles\": " + std::string(100000, '[') + std::string(100000, ']') + "}";
+  Outcome o = Grove("footslam run --print-config --config " + Write("deep.json", deep));
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find("nested deeper than 32 levels"), std::string::npos) << o.err.substr(0, 300);
+  std::string big = "{\"particles\": \"" + std::string(500000, 'x') + "\"}";
+  o = Grove("footslam run --print-config --config " + Write("big.json", big));
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_LT(o.err.size(), 400u) << "a huge value is echoed whole";
+  o = Grove("footslam run --print-config --config " +
+            Write("dup.json", "{\"particles\": 10,\n \"particles\": 20}"));
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find(":2:2: duplicate key \"particles\""), std::string::npos) << o.err;
+  o = Grove("footslam run --print-config --config " +
+            Write("ctl.json", "{\"seed\": \"\x1b[31mred\"}"));
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_EQ(o.err.find('\x1b'), std::string::npos) << "an escape sequence reached the terminal";
+}
+
+// 17: a checkpoint of another configuration names the choice, not its number.
+TEST_F(CliTest, CheckpointMismatchNamesChoices) {
+  std::string steps = Write("steps.csv", "t,dx,dy\n1,0.7,0\n2,0.7,0\n3,0,0.7\n");
+  fs::path ckpt = dir_ / "c.grove";
+  const std::string run = "footslam run --no-progress --particles 30 --steps " + steps;
+  ASSERT_EQ(Grove(run + " --checkpoint-every 1 --checkpoint " + ckpt.string() + " --out " +
+                  (dir_ / "a").string())
+                .exit_code,
+            0);
+  Outcome o = Grove(run + " --resampling residual --resume " + ckpt.string() + " --out " +
+                    (dir_ / "b").string());
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find("made with resampling = systematic, this configuration has resampling = "
+                       "residual"),
+            std::string::npos)
+      << o.err;
+}
+
+// 14: the memory budget counts the walk's length and the process's limits.
+TEST_F(CliTest, TheMemoryBudgetCountsTheWalkAndTheAddressSpaceLimit) {
+#ifdef __SANITIZE_ADDRESS__
+  GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space: no ulimit -v";
+#endif
+  fs::path out = dir_ / "out";
+  Outcome o = Grove("footslam run --no-progress --particles 100 --out " + out.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  // Under ulimit -v the default budget is what the limit leaves.
+  std::string cmd = "sh -c 'ulimit -v 1500000; " + std::string(GROVE_BINARY) +
+                    " footslam run --no-progress --particles 2000000 --out " +
+                    (dir_ / "big").string() + " 2>" + (dir_ / "err").string() + "; echo $?' >" +
+                    (dir_ / "rc").string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  EXPECT_EQ(Slurp(dir_ / "rc"), "6\n") << Slurp(dir_ / "err");
+  EXPECT_NE(Slurp(dir_ / "err").find("address-space limit"), std::string::npos)
+      << Slurp(dir_ / "err");
+  EXPECT_FALSE(fs::exists(dir_ / "big"));
+}
+
+// An allocation that fails under a small ulimit -v, past the budget check: a clean error, no
+// outputs and no crash.
+TEST_F(CliTest, RunningOutOfMemoryIsACleanError) {
+#ifdef __SANITIZE_ADDRESS__
+  GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space: no ulimit -v";
+#endif
+  std::string cmd = "sh -c 'ulimit -v 1200000; " + std::string(GROVE_BINARY) +
+                    " footslam run --no-progress --particles 3000000 --memory-budget 1T --out " +
+                    (dir_ / "oom").string() + " 2>" + (dir_ / "err").string() + "; echo $?' >" +
+                    (dir_ / "rc").string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  const std::string rc = Slurp(dir_ / "rc");
+  EXPECT_TRUE(rc == "6\n") << rc << Slurp(dir_ / "err");
+  EXPECT_NE(Slurp(dir_ / "err").find("out of memory"), std::string::npos) << Slurp(dir_ / "err");
+  EXPECT_FALSE(fs::exists(dir_ / "oom" / "map.csv"));
 }
 
 }  // namespace

@@ -1,8 +1,12 @@
 // grove: the command-line front end. Subcommands:
 //   grove footslam run|simulate|evaluate|render ...
+#include <fmt/format.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <string>
+#include <utility>
+#include <variant>
 
 #include "grove/footslam.h"
 #include "tools/bench_commands.h"
@@ -23,13 +27,14 @@ int Main(int argc, char** argv) {
 
   // ---- run ----
   CLI::App* run = footslam->add_subcommand("run", "Run FootSLAM on a step file");
-  gt::RunOptions run_options;
+  gt::FootSlamRunOptions run_options;
   std::string config_path;
   bool print_config = false;
   bool no_progress = false;
-  run->add_option("--steps", run_options.steps_path,
-                  "Step file: CSV 't,dx,dy' or 't,x,y' (default: the bundled building walk)");
-  run->add_option("--out", run_options.out_dir, "Output directory");
+  CLI::Option* steps_option =
+      run->add_option("--steps", run_options.steps_path,
+                      "Step file: CSV 't,dx,dy' or 't,x,y' (default: the bundled building walk)");
+  run->add_option("--out", run_options.run.out_dir, "Output directory");
   CLI::Option* config_option =
       run->add_option("--config", config_path, "JSON file setting any FootSLAM parameter");
   gt::ConfigFlags<FootSlamConfig> config_flags(run, grove::FootSlamConfigFields());
@@ -39,31 +44,32 @@ int Main(int argc, char** argv) {
   run->add_option("--memory-budget", memory_budget,
                   "Refuse runs predicted to need more memory, e.g. 512M or 8G (default: the "
                   "memory available)");
-  run->add_option("--checkpoint-every", run_options.checkpoint_every,
+  run->add_option("--checkpoint-every", run_options.run.checkpoint_every,
                   "Write a checkpoint every N steps (0: only when stopped by SIGINT or SIGTERM)")
       ->check(CLI::NonNegativeNumber);
-  run->add_option("--checkpoint", run_options.checkpoint_path,
-                  "Checkpoint file (default: OUT/checkpoint.grove)");
-  run->add_option("--resume", run_options.resume_path,
-                  "Continue from this checkpoint; give the same steps and configuration as the "
-                  "interrupted run (threads may differ)");
+  CLI::Option* checkpoint_option =
+      run->add_option("--checkpoint", run_options.run.checkpoint_path,
+                      "Checkpoint file (default: OUT/checkpoint.grove)");
+  CLI::Option* resume_option =
+      run->add_option("--resume", run_options.run.resume_path,
+                      "Continue from this checkpoint; give the same steps and configuration as the "
+                      "interrupted run (threads may differ)");
   run->add_flag("--print-config", print_config, "Print the effective configuration and exit");
   run->add_flag("--no-progress", no_progress, "No progress output");
 
   // ---- simulate ----
   CLI::App* simulate = footslam->add_subcommand("simulate", "Simulate a pedestrian walk");
-  std::string sim_out, scenario = "building";
-  double minutes = 8;
-  uint64_t sim_seed = 1;
-  simulate->add_option("--out", sim_out, "Output directory (steps.csv, truth.csv)")->required();
-  simulate->add_option("--minutes", minutes, "Walk duration in minutes")->capture_default_str();
-  simulate->add_option("--seed", sim_seed, "Seed")->capture_default_str();
-  simulate->add_option("--scenario", scenario, "building or open")->capture_default_str();
-  double heading_drift = -1, scale_error = -2;
-  simulate->add_option("--heading-drift", heading_drift,
-                       "Heading random walk of the odometry, rad per sqrt(step) (default 0.006)");
-  simulate->add_option("--scale-error", scale_error,
-                       "Step-length scale error of the odometry (default 0.02)");
+  gt::SimulateOptions sim;
+  std::string sim_seed = "1";
+  simulate->add_option("--out", sim.out_dir, "Output directory (steps.csv, truth.csv)")->required();
+  simulate->add_option("--minutes", sim.minutes, "Walk duration in minutes")->capture_default_str();
+  simulate->add_option("--seed", sim_seed, "Seed, a non-negative integer")->capture_default_str();
+  simulate->add_option("--scenario", sim.scenario, "building or open")->capture_default_str();
+  CLI::Option* drift_option = simulate->add_option(
+      "--heading-drift", sim.heading_drift,
+      "Heading random walk of the odometry, rad per sqrt(step) (default 0.006)");
+  CLI::Option* scale_option = simulate->add_option(
+      "--scale-error", sim.scale_error, "Step-length scale error of the odometry (default 0.02)");
 
   // ---- evaluate ----
   CLI::App* evaluate = footslam->add_subcommand("evaluate", "Position error against truth");
@@ -74,11 +80,12 @@ int Main(int argc, char** argv) {
   // ---- render ----
   CLI::App* render = footslam->add_subcommand("render", "Redraw map.png and map.svg from CSVs");
   std::string render_dir, odometry_path;
-  double render_radius = 0.5;
+  double render_radius = 0;
   render->add_option("--dir", render_dir, "Directory holding map.csv and trajectory.csv")
       ->required();
-  render->add_option("--hex-radius", render_radius, "Hexagon radius in metres")
-      ->capture_default_str();
+  CLI::Option* radius_option = render->add_option(
+      "--hex-radius", render_radius,
+      "Hexagon radius in metres (default: the run's, from summary.json, or 0.5)");
   render->add_option("--steps", odometry_path, "Step file to draw the raw odometry from");
 
   // ---- bench ----
@@ -88,21 +95,31 @@ int Main(int argc, char** argv) {
       "paper", "Run time and memory against walk time (paper Figs. 9, 10) for each map");
   gt::PaperBenchOptions paper_options;
   paper->add_option("--out", paper_options.out_dir, "Output directory")->required();
-  paper->add_option("--particles", paper_options.particles)->capture_default_str();
-  paper->add_option("--minutes", paper_options.minutes, "Walk length")->capture_default_str();
-  paper->add_option("--threads", paper_options.threads, "0 = all cores")->capture_default_str();
+  paper->add_option("--particles", paper_options.particles)
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{1}, int64_t{1} << 31));
+  paper->add_option("--minutes", paper_options.minutes, "Walk length")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 1440.0));
+  paper->add_option("--threads", paper_options.threads, "0 = all cores")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 256));
   paper
       ->add_option("--naive-limit", paper_options.naive_limit_s,
                    "Stop the naive run after this many seconds")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   paper->add_option("--only", paper_options.only, "Run one configuration, e.g. 'htree s=16 T=5'");
   CLI::App* scaling =
       bench->add_subcommand("scaling", "Throughput against threads and particle counts");
   gt::ScalingBenchOptions scaling_options;
   scaling->add_option("--out", scaling_options.out_dir, "Output directory")->required();
   scaling->add_option("--steps", scaling_options.steps, "Steps of the paper walk per point")
-      ->capture_default_str();
-  scaling->add_option("--max-particles", scaling_options.max_particles)->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{1}, int64_t{1000000}));
+  scaling->add_option("--max-particles", scaling_options.max_particles)
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{1}, int64_t{1} << 31));
 
   try {
     app.parse(argc, argv);
@@ -111,42 +128,64 @@ int Main(int argc, char** argv) {
   }
 
   if (*run) {
+    // An option given with an empty path is an error, never "use the default".
+    for (auto [option, name] : {std::pair{steps_option, "--steps"},
+                                {config_option, "--config"},
+                                {resume_option, "--resume"},
+                                {checkpoint_option, "--checkpoint"}}) {
+      if (*option && option->as<std::string>().empty()) {
+        return gt::Fail(gt::kExitUsage, fmt::format("{}: the path is empty", name));
+      }
+    }
     FootSlamConfig config;
     if (*config_option) {
       grove::Status s = gt::LoadConfigFile(grove::FootSlamConfigFields(), config_path, &config);
       if (!s.ok()) {
-        std::fprintf(stderr, "grove: error: %s\n", s.message().c_str());
-        return s.code() == grove::StatusCode::kNotFound || s.code() == grove::StatusCode::kIoError
-                   ? gt::kExitInput
-                   : gt::kExitUsage;
+        return gt::Fail(
+            s.code() == grove::StatusCode::kNotFound || s.code() == grove::StatusCode::kIoError
+                ? gt::kExitInput
+                : gt::kExitUsage,
+            s.message());
       }
     }
     // Flags given on the command line override the file.
     if (grove::Status s = config_flags.Apply(&config); !s.ok()) {
-      std::fprintf(stderr, "grove: error: %s\n", s.message().c_str());
-      return gt::kExitUsage;
+      return gt::Fail(gt::kExitUsage, s.message());
     }
     if (print_config) {
       std::printf("%s\n", gt::ConfigToJson(grove::FootSlamConfigFields(), config).dump(2).c_str());
       return gt::kExitOk;
     }
-    run_options.progress = !no_progress;
+    if (run_options.run.out_dir.empty()) {
+      return gt::Fail(gt::kExitUsage, "--out: an output directory is required");
+    }
+    run_options.run.progress = !no_progress;
     if (!memory_budget.empty()) {
       grove::StatusOr<int64_t> bytes = gt::ParseMemorySize(memory_budget);
-      if (!bytes.ok()) {
-        std::fprintf(stderr, "grove: error: %s\n", bytes.status().message().c_str());
-        return gt::kExitUsage;
-      }
-      run_options.memory_budget_bytes = *bytes;
+      if (!bytes.ok()) return gt::Fail(gt::kExitUsage, bytes.status().message());
+      run_options.run.memory_budget_bytes = *bytes;
     }
     return gt::RunFootSlamCommand(config, run_options);
   }
   if (*paper) return gt::PaperBenchCommand(paper_options);
   if (*scaling) return gt::ScalingBenchCommand(scaling_options);
-  if (*simulate)
-    return gt::SimulateCommand(sim_out, minutes, sim_seed, scenario, heading_drift, scale_error);
+  if (*simulate) {
+    grove::FieldInfo seed_info{
+        "--seed", "", grove::FieldType::kUnsigned, grove::kChangesResults, 0, 0, {}, {}};
+    grove::StatusOr<grove::FieldValue> seed = grove::ParseFieldValue(seed_info, sim_seed);
+    if (!seed.ok()) return gt::Fail(gt::kExitUsage, seed.status().message());
+    sim.seed = std::get<uint64_t>(*seed);
+    sim.heading_drift_given = drift_option->count() > 0;
+    sim.scale_error_given = scale_option->count() > 0;
+    return gt::SimulateCommand(sim);
+  }
   if (*evaluate) return gt::EvaluateCommand(truth_path, trajectory_path);
-  if (*render) return gt::RenderCommand(render_dir, render_radius, odometry_path);
+  if (*render) {
+    if (*radius_option && !(render_radius > 0)) {
+      return gt::Fail(gt::kExitUsage, fmt::format("--hex-radius = {}: must be > 0", render_radius));
+    }
+    return gt::RenderCommand(render_dir, render_radius, odometry_path);
+  }
   return gt::kExitUsage;
 }
 
@@ -157,7 +196,7 @@ int main(int argc, char** argv) {
     return Main(argc, argv);
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "grove: error: out of memory\n");
-    return grove::tools::kExitRun;
+    return grove::tools::kExitMemory;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "grove: internal error: %s\n", e.what());
     return grove::tools::kExitInternal;

@@ -1,0 +1,119 @@
+// The run loop of every model's `grove ... run` command, written once: output and checkpoint
+// paths checked before the first step, the output directory locked, the memory budget, create
+// or resume (with the input digest), the step loop with progress, periodic and signal
+// checkpoints, and the outputs written as a set (OutputSet) with summary.json last.
+//
+// Signals: SIGINT and SIGTERM stop the run at the next step boundary, or during the writing of
+// the outputs before anything is renamed into place; it writes a checkpoint and exits with
+// 128 + the signal. A second one kills at once. SIGHUP (the terminal closed) stops the progress
+// output and the run goes on; SIGPIPE is ignored, so a closed stderr does not kill a run.
+#ifndef GROVE_TOOLS_RUN_LOOP_H_
+#define GROVE_TOOLS_RUN_LOOP_H_
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "grove/status.h"
+#include "tools/output_set.h"
+
+namespace grove::tools {
+
+// Exit codes of the grove command (documented in the README).
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitInternal = 1,  // a bug: please report
+  kExitUsage = 2,     // bad command line or configuration
+  kExitInput = 3,     // bad input file (steps, truth, CSV, checkpoint)
+  kExitRun = 4,       // the run itself failed: left the grid, filter degenerated
+  kExitOutput = 5,    // outputs could not be written (earlier outputs are left intact)
+  kExitMemory = 6,    // the predicted memory exceeds the budget; nothing was run
+  // 128 + the signal (130 for SIGINT, 143 for SIGTERM): stopped by the signal after writing a
+  // checkpoint.
+  kExitSignalBase = 128,
+};
+
+// Prints "grove: error: MESSAGE" on stderr and returns `code`.
+int Fail(int code, std::string_view message);
+// The exit code of a run's or an output's error status.
+int ExitCodeOf(const Status& s);
+// Peak resident memory of this process, bytes.
+int64_t PeakRssBytes();
+
+// Parses a memory size: a number of bytes with an optional binary suffix K, M, G or T
+// ("512M", "1.5G", "1073741824"). InvalidArgument naming the text otherwise.
+StatusOr<int64_t> ParseMemorySize(const std::string& text);
+
+// The memory this process may still use: the smallest of MemAvailable, the address-space
+// limit (RLIMIT_AS) less what is mapped now, and the cgroup's memory.max less its
+// memory.current; 0 when none can be read. *source names the limit that won.
+int64_t AvailableMemoryBytes(std::string* source = nullptr);
+
+// Options of a run that are not the model's configuration.
+struct RunOptions {
+  std::string out_dir;
+  bool progress = true;             // progress on stderr
+  int64_t memory_budget_bytes = 0;  // refuse runs predicted to need more; 0: the memory available
+  int64_t checkpoint_every = 0;     // steps between checkpoints; 0: only when stopped by a signal
+  std::string checkpoint_path;      // empty: out_dir + "/checkpoint.grove"
+  std::string resume_path;          // continue from this checkpoint
+};
+
+// What a model's run gives the loop.
+class RunJob {
+ public:
+  virtual ~RunJob() = default;
+
+  // The files the run reads (never written over) and the names of the files it writes into
+  // the output directory (summary.json aside).
+  virtual std::vector<std::string> InputPaths() const = 0;
+  virtual std::vector<std::string> OutputNames() const = 0;
+  // What the checkpoint's input position names ("steps.csv"), and what its records are called
+  // in messages ("steps").
+  virtual std::string InputName() const = 0;
+  virtual const char* RecordsName() const = 0;
+  // Input records in the whole input, or 0 when not known (a stream): progress and memory.
+  virtual int64_t ExpectedRecords() const = 0;
+  virtual int64_t particles() const = 0;
+  // Predicted peak memory of the whole run, bytes, for `records` input records.
+  virtual int64_t PredictPeakBytes(int64_t records) const = 0;
+  // "the run is predicted to need 120.0 MiB (30000 particles, htree map, 872 steps)": what the
+  // prediction is made of, for the refusal message.
+  virtual std::string DescribePrediction(int64_t records) const = 0;
+
+  virtual Status Create() = 0;
+  // Continues from a checkpoint; sets *user_data to what the loop stored in it.
+  virtual Status Resume(std::string_view bytes, const std::string& name,
+                        std::string* user_data) = 0;
+  virtual StatusOr<std::string> Checkpoint(std::string_view user_data) const = 0;
+
+  // Reads the next input record: false at the end of the input. Appends the bytes that
+  // identify the record (its values) to *digest_bytes.
+  virtual StatusOr<bool> Read(std::string* digest_bytes) = 0;
+  // The record read last was covered by the checkpoint: note it without stepping (a resumed
+  // run re-reads what it has done).
+  virtual void Replay() = 0;
+  // Feeds the record read last to the engine. The message names the input's file and line.
+  virtual Status Step() = 0;
+  // Filter steps taken so far.
+  virtual int64_t steps() const = 0;
+
+  // Adds the model's outputs to `out` and its fields to `summary`; `stop_requested()` is true
+  // when a signal asked the run to stop (check it between long pieces of work).
+  virtual Status WriteOutputs(OutputSet* out, nlohmann::json* summary) = 0;
+  // One paragraph for the terminal after a run.
+  virtual std::string BriefReport() const = 0;
+};
+
+// Runs `job` as `options` say; `config` is the effective configuration for summary.json.
+// Returns the exit code after printing any error on stderr as one line.
+int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& config);
+
+// True when SIGINT or SIGTERM asked the current run to stop.
+bool StopRequested();
+
+}  // namespace grove::tools
+
+#endif  // GROVE_TOOLS_RUN_LOOP_H_
