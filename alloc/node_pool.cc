@@ -222,7 +222,9 @@ NodePool::Page* NodePool::Refill(Heap* heap) {
 #else  // !GROVE_NODE_POOL: plain allocation, same counters.
 
 void* NodePool::Allocate(int slot) {
-  void* p = ::operator new (node_bytes_, std::align_val_t{kNodeAlign});
+  if (InjectedFailure()) return nullptr;
+  void* p = ::operator new (node_bytes_, std::align_val_t{kNodeAlign}, std::nothrow);
+  if (p == nullptr) return nullptr;
   // Relaxed: a statistic.
   heaps_[slot < 0 ? 0 : slot]->live.fetch_add(1, std::memory_order_relaxed);
   NotePeak();
