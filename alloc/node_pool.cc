@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <new>
 
+#include "alloc/cache_line.h"
 #include "alloc/check.h"
 
 namespace grove {
@@ -74,7 +75,7 @@ struct NodePool::Page {
   uint64_t free[kMaxWords];
 };
 
-struct alignas(128) NodePool::Heap {
+struct alignas(kFalseSharingBytes) NodePool::Heap {
   Page* current = nullptr;  // the page allocations come from
   Page* avail = nullptr;    // other pages that have free nodes
   char* slab_cursor = nullptr;
@@ -85,7 +86,7 @@ struct alignas(128) NodePool::Heap {
   std::atomic<int64_t> live{0};
   // Pushed by other threads, drained by the owner. Release on push publishes the node's `next`
   // to the owner's acquire exchange.
-  alignas(64) std::atomic<FreeNode*> remote{nullptr};
+  alignas(kFalseSharingBytes) std::atomic<FreeNode*> remote{nullptr};
   // Nodes on `remote` not yet drained; relaxed: a statistic, like `live`.
   std::atomic<int64_t> remote_pending{0};
 };

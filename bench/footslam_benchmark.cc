@@ -13,13 +13,7 @@ namespace grove {
 namespace {
 
 const std::vector<tools::StepRecord>& PaperWalk() {
-  static const std::vector<tools::StepRecord> steps = [] {
-    tools::SimulatorOptions options;
-    options.scenario = tools::Scenario::kOpen;
-    options.minutes = 13;
-    options.seed = 1;
-    return tools::SimulateWalk(options)->steps;
-  }();
+  static const std::vector<tools::StepRecord> steps = *tools::PaperWalk(13);
   return steps;
 }
 

@@ -20,6 +20,8 @@
 #include <memory>
 #include <vector>
 
+#include "alloc/cache_line.h"
+
 namespace grove {
 
 class WorkerPool {
@@ -49,7 +51,7 @@ class WorkerPool {
     }
     const size_t slots = static_cast<size_t>(threads_);
     // Home k holds chunks [k * chunks / slots, (k + 1) * chunks / slots).
-    struct alignas(128) Cursor {
+    struct alignas(kFalseSharingBytes) Cursor {
       std::atomic<size_t> next;
     };
     std::unique_ptr<Cursor[]> cursor(new Cursor[slots]);

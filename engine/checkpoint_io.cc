@@ -1,25 +1,15 @@
 #include "engine/checkpoint_io.h"
 
 #include <fmt/format.h>
-#include <zlib.h>
 
 #include <limits>
+
+#include "grove/checksum.h"
 
 namespace grove {
 namespace {
 
 constexpr char kMagic[8] = {'\x89', 'G', 'R', 'O', 'V', 'E', '\r', '\n'};
-
-uint32_t Crc32(std::string_view data) {
-  uLong crc = crc32(0L, Z_NULL, 0);
-  // zlib takes lengths as uInt: feed large bodies in pieces.
-  while (!data.empty()) {
-    size_t piece = std::min<size_t>(data.size(), std::numeric_limits<uInt>::max());
-    crc = crc32(crc, reinterpret_cast<const Bytef*>(data.data()), static_cast<uInt>(piece));
-    data.remove_prefix(piece);
-  }
-  return static_cast<uint32_t>(crc);
-}
 
 template <typename T>
 T Load(const char* p) {

@@ -42,6 +42,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "alloc/cache_line.h"
 #include "alloc/check.h"
 #include "alloc/node_pool.h"
 #include "concurrency/ref_count.h"
@@ -633,7 +634,7 @@ class PersistentTrie {
   NodePool inner_pool_;
   NodePool bottom_pool_;
   // ReleaseMany's queues, per worker slot (reused: no allocation per call once grown).
-  struct alignas(128) ReleaseScratch {
+  struct alignas(kFalseSharingBytes) ReleaseScratch {
     std::vector<Node*> drop;
     std::vector<Node*> dead;
   };

@@ -16,6 +16,7 @@
 #include "grove/footslam.h"
 #include "tools/atomic_file.h"
 #include "tools/chart.h"
+#include "tools/csv_reader.h"
 #include "tools/footslam_run.h"
 #include "tools/report_tables.h"
 #include "tools/walk_simulator.h"
@@ -48,16 +49,6 @@ std::string MachineDescription() {
                      std::thread::hardware_concurrency(), gib, __VERSION__);
 }
 
-StatusOr<std::vector<StepRecord>> PaperWalk(double minutes) {
-  SimulatorOptions sim;
-  sim.scenario = Scenario::kOpen;
-  sim.minutes = minutes;
-  sim.seed = 1;
-  StatusOr<SimulatedWalk> walk = SimulateWalk(sim);
-  if (!walk.ok()) return walk.status();
-  return walk->steps;
-}
-
 // Runs `body` in a child process so that its memory (peak RSS) is its own; the child writes its
 // result to `result_path`. Returns the child's exit status.
 template <typename F>
@@ -69,13 +60,6 @@ int InChild(F&& body) {
   int status = 0;
   waitpid(pid, &status, 0);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-std::string Slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 struct PaperConfig {
@@ -170,7 +154,9 @@ int PaperBenchCommand(const PaperBenchOptions& options) {
     });
     if (code != 0)
       return Fail(kExitRun, fmt::format("{}: the run failed (code {})", pc.name, code));
-    std::string text = Slurp(series_path);
+    StatusOr<std::string> series = ReadWholeFile(series_path);
+    if (!series.ok()) return Fail(kExitRun, series.status().message());
+    const std::string& text = *series;
     std::remove(series_path.c_str());
     Result r;
     r.config = &pc;

@@ -6,7 +6,6 @@
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#include <zlib.h>
 
 #include <cerrno>
 #include <chrono>
@@ -14,6 +13,7 @@
 #include <system_error>
 #include <utility>
 
+#include "grove/checksum.h"
 #include "tools/atomic_file.h"
 #include "tools/csv_reader.h"
 
@@ -21,16 +21,6 @@ namespace grove::tools {
 namespace {
 
 std::string ErrnoText(int err) { return std::generic_category().message(err); }
-
-uint32_t Crc32(std::string_view data) {
-  uLong crc = crc32(0L, Z_NULL, 0);
-  while (!data.empty()) {
-    const size_t piece = std::min<size_t>(data.size(), 1u << 30);
-    crc = crc32(crc, reinterpret_cast<const Bytef*>(data.data()), static_cast<uInt>(piece));
-    data.remove_prefix(piece);
-  }
-  return static_cast<uint32_t>(crc);
-}
 
 // Removes what killed runs left: staging directories. The caller holds the directory's lock.
 void RemoveStaleStaging(const std::string& dir) {

@@ -4,7 +4,6 @@
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#include <zlib.h>
 
 #include <algorithm>
 #include <atomic>
@@ -16,6 +15,7 @@
 #include <cstring>
 #include <fstream>
 
+#include "grove/checksum.h"
 #include "tools/atomic_file.h"
 #include "tools/csv_reader.h"
 #include "tools/progress_reporter.h"
@@ -75,8 +75,7 @@ struct InputPosition {
   uint32_t digest = 0;  // CRC-32 of the digest bytes of every record so far
 
   void Add(std::string_view bytes) {
-    digest = static_cast<uint32_t>(crc32(digest, reinterpret_cast<const Bytef*>(bytes.data()),
-                                         static_cast<uInt>(bytes.size())));
+    digest = Crc32(bytes, digest);
     ++records;
   }
   std::string ToJson() const {
@@ -394,8 +393,7 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
                     fmt::format("{}: the first {} {} differ from those of {} (made from {}): "
                                 "resume with the same input",
                                 job->InputName(), resumed_at.records, job->RecordsName(),
-                                options.resume_path,
-                                QuoteForMessage(resumed_at.input_name, 200)));
+                                options.resume_path, QuoteForMessage(resumed_at.input_name, 200)));
       }
       job->Replay();
       continue;

@@ -348,4 +348,14 @@ std::string TruthCsv(const SimulatedWalk& walk) {
   return out;
 }
 
+StatusOr<std::vector<StepRecord>> PaperWalk(double minutes) {
+  SimulatorOptions sim;
+  sim.scenario = Scenario::kOpen;
+  sim.minutes = minutes;
+  sim.seed = 1;
+  StatusOr<SimulatedWalk> walk = SimulateWalk(sim);
+  if (!walk.ok()) return walk.status();
+  return std::move(walk->steps);
+}
+
 }  // namespace grove::tools

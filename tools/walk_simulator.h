@@ -94,6 +94,10 @@ struct SimulatedWalk {
 // Returns InvalidArgument naming the field when an option is out of range.
 StatusOr<SimulatedWalk> SimulateWalk(const SimulatorOptions& options);
 
+// The walk of the paper's experiment (Garcia Puyol et al. §VII: an open area, 30,000
+// particles), as `grove bench` and the benchmarks use it: the open scenario, seed 1.
+StatusOr<std::vector<StepRecord>> PaperWalk(double minutes);
+
 // The steps as a step file in the deltas form ("t,dx,dy" then one row per step). Numbers are
 // written in the shortest form that reads back to the same double.
 std::string StepsCsv(const SimulatedWalk& walk);
