@@ -2,13 +2,17 @@
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace grove::tools {
@@ -85,7 +89,9 @@ TEST(WriteFileAtomicallyTest, MissingDirectoryFailsWithIoErrorNamingThePath) {
   Status status = WriteFileAtomically(path, "x");
   ASSERT_FALSE(status.ok());
   EXPECT_EQ(status.code(), StatusCode::kIoError);
-  EXPECT_NE(status.message().find(path), std::string::npos) << status.message();
+  // The message names the temporary that could not be created.
+  EXPECT_NE(status.message().find("cannot create temporary " + path + ".tmp-"), std::string::npos)
+      << status.message();
   EXPECT_NE(status.message().find("No such file or directory"), std::string::npos)
       << status.message();
   EXPECT_TRUE(ListDir(dir).empty());
@@ -103,10 +109,122 @@ TEST(AtomicFileWriterTest, TemporaryIsAUniqueNameInTheSameDirectory) {
   StatusOr<AtomicFileWriter> b = AtomicFileWriter::Create(path);
   ASSERT_TRUE(a.ok() && b.ok());
   EXPECT_NE(a->temp_path(), b->temp_path());
-  std::string prefix = path + ".tmp-" + std::to_string(::getpid()) + "-";
-  EXPECT_EQ(a->temp_path().rfind(prefix, 0), 0u) << a->temp_path();
-  EXPECT_TRUE(fs::exists(a->temp_path()));
+  for (const std::string& temp : {a->temp_path(), b->temp_path()}) {
+    const std::string prefix = path + ".tmp-";
+    ASSERT_EQ(temp.rfind(prefix, 0), 0u) << temp;
+    const std::string suffix = temp.substr(prefix.size());
+    EXPECT_EQ(suffix.size(), 12u) << temp;
+    EXPECT_TRUE(std::all_of(suffix.begin(), suffix.end(), [](unsigned char c) {
+      return std::isalnum(c) != 0;
+    })) << temp;
+    EXPECT_TRUE(fs::is_regular_file(temp));
+  }
+  // The second Create did not take the first writer's temporary for a stale one.
+  EXPECT_EQ(ListDir(dir).size(), 2u);
   EXPECT_FALSE(fs::exists(path));
+}
+
+TEST(AtomicFileWriterTest, TemporaryHasTheModeOfANormalCreate) {
+  ScratchDir scratch;
+  const mode_t old_mask = ::umask(027);
+  StatusOr<AtomicFileWriter> writer = AtomicFileWriter::Create(scratch.path() + "/out.csv");
+  ::umask(old_mask);
+  ASSERT_TRUE(writer.ok()) << writer.status().ToString();
+  struct stat st;
+  ASSERT_EQ(::stat(writer->temp_path().c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0640u);
+}
+
+void WriteRawFile(const std::string& path, const std::string& contents) {
+  std::ofstream out(path, std::ios::binary);
+  out << contents;
+  ASSERT_TRUE(out.good()) << path;
+}
+
+// Regression (issue 17, item 3): temporaries were named PATH.tmp-<pid>-<n> and created with
+// O_EXCL, so one left by a killed process whose pid came back (a PID namespace restarts at 1)
+// made every later write of PATH fail with "File exists", naming PATH.
+TEST(AtomicFileWriterTest, StaleTemporariesOfDeadWritersDoNotBlockAWriteAndAreRemoved) {
+  ScratchDir scratch;
+  const std::string& dir = scratch.path();
+  const std::string path = dir + "/checkpoint.grove";
+  // What a killed writer with our pid leaves behind, in the old naming (for every counter value
+  // this process may have reached) and in the new one.
+  for (int n = 0; n < 256; ++n) {
+    WriteRawFile(path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(n), "old");
+  }
+  WriteRawFile(path + ".tmp-AbCdEf012345", "stale");
+  // Not temporaries of this target, or not regular files: left alone.
+  WriteRawFile(dir + "/other.grove.tmp-AbCdEf012345", "x");
+  WriteRawFile(path + ".tmpX", "x");
+  WriteRawFile(path + ".tmp-", "x");
+  fs::create_directory(path + ".tmp-dir");
+  WriteRawFile(dir + "/target", "x");
+  fs::create_symlink(dir + "/target", path + ".tmp-link");
+
+  Status status = WriteFileAtomically(path, "new checkpoint");
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  EXPECT_EQ(ReadFile(path), "new checkpoint");
+  const std::vector<std::string> expected = {"checkpoint.grove",
+                                             "checkpoint.grove.tmp-",
+                                             "checkpoint.grove.tmp-dir",
+                                             "checkpoint.grove.tmp-link",
+                                             "checkpoint.grove.tmpX",
+                                             "other.grove.tmp-AbCdEf012345",
+                                             "target"};
+  EXPECT_EQ(ListDir(dir), expected);
+  EXPECT_EQ(ReadFile(dir + "/target"), "x");
+}
+
+TEST(AtomicFileWriterTest, TemporaryLockedByALiveWriterIsNotRemoved) {
+  ScratchDir scratch;
+  const std::string& dir = scratch.path();
+  const std::string path = dir + "/map.csv";
+  // A writer of this library in this process, and a foreign one that holds its own lock.
+  StatusOr<AtomicFileWriter> live = AtomicFileWriter::Create(path);
+  ASSERT_TRUE(live.ok()) << live.status().ToString();
+  ASSERT_TRUE(live->Append("from the live writer").ok());
+  const std::string foreign = path + ".tmp-Foreign00000";
+  WriteRawFile(foreign, "in progress");
+  const int fd = ::open(foreign.c_str(), O_RDONLY | O_CLOEXEC);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+
+  ASSERT_TRUE(WriteFileAtomically(path, "from the other writer").ok());
+  EXPECT_TRUE(fs::exists(live->temp_path()));
+  EXPECT_TRUE(fs::exists(foreign));
+  EXPECT_EQ(ReadFile(foreign), "in progress");
+  ASSERT_TRUE(live->Commit().ok());
+  EXPECT_EQ(ReadFile(path), "from the live writer");
+
+  // Once its writer is gone (the lock with it), the foreign temporary is stale.
+  ::close(fd);
+  ASSERT_TRUE(WriteFileAtomically(path, "last").ok());
+  EXPECT_EQ(ListDir(dir), std::vector<std::string>{"map.csv"});
+}
+
+TEST(AtomicFileWriterTest, ParallelWritersOfOneTargetAllSucceed) {
+  ScratchDir scratch;
+  const std::string& dir = scratch.path();
+  const std::string path = dir + "/summary.json";
+  const std::string contents[2] = {std::string(100000, 'a'), std::string(7, 'b')};
+  constexpr int kWrites = 100;
+  std::vector<std::string> failures[2];
+  {
+    std::vector<std::jthread> writers;
+    for (int w = 0; w < 2; ++w) {
+      writers.emplace_back([&, w] {
+        for (int i = 0; i < kWrites; ++i) {
+          Status status = WriteFileAtomically(path, contents[w]);
+          if (!status.ok()) failures[w].push_back(status.ToString());
+        }
+      });
+    }
+  }
+  for (int w = 0; w < 2; ++w) EXPECT_TRUE(failures[w].empty()) << failures[w].front();
+  const std::string result = ReadFile(path);
+  EXPECT_TRUE(result == contents[0] || result == contents[1]) << result.size() << " bytes";
+  EXPECT_EQ(ListDir(dir), std::vector<std::string>{"summary.json"});
 }
 
 TEST(AtomicFileWriterTest, StreamsDataLargerThanItsBuffer) {
@@ -189,7 +307,8 @@ TEST(AtomicFileWriterTest, FullDiskDuringAppendIsReportedAndLeavesNothingBehind)
   Status status = writer->Append(std::string(2 * AtomicFileWriter::kBufferBytes, 'x'));
   ASSERT_FALSE(status.ok());
   EXPECT_EQ(status.code(), StatusCode::kResourceExhausted);
-  EXPECT_NE(status.message().find(path), std::string::npos) << status.message();
+  EXPECT_NE(status.message().find("cannot write " + path + ".tmp-"), std::string::npos)
+      << status.message();
   EXPECT_NE(status.message().find("No space left on device"), std::string::npos)
       << status.message();
   // The temporary is gone at once, and the writer keeps reporting the failure.
