@@ -270,7 +270,12 @@ Status EnsureDirectory(const std::string& dir) {
     std::string prefix = dir.substr(0, pos);
     // Skip "" (root), repeated slashes and the trailing slash.
     if (prefix.empty() || prefix.back() == '/') continue;
-    if (::mkdir(prefix.c_str(), 0777) == 0) continue;
+    if (::mkdir(prefix.c_str(), 0777) == 0) {
+      // The new directory's own entries, then its entry in the parent.
+      GROVE_RETURN_IF_ERROR(SyncDirectory(prefix));
+      GROVE_RETURN_IF_ERROR(SyncDirectory(DirectoryOf(prefix)));
+      continue;
+    }
     int err = errno;
     struct stat st;
     if (err == EEXIST || err == EISDIR) {

@@ -66,8 +66,9 @@ class AtomicFileWriter {
   bool committed_ = false;
 };
 
-// mkdir -p: creates `dir` and its missing parents (mode 0777 minus umask). Fails if some component
-// exists and is not a directory.
+// mkdir -p: creates `dir` and its missing parents (mode 0777 minus umask), fsyncing each new
+// directory and then its parent, so that a crash cannot lose a directory a later file went into.
+// Fails if some component exists and is not a directory.
 Status EnsureDirectory(const std::string& dir);
 
 }  // namespace grove::tools

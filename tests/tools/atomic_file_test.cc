@@ -4,16 +4,41 @@
 #include <gtest/gtest.h>
 #include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
+
+namespace {
+
+std::mutex fsync_mutex;
+std::vector<std::string>* fsync_paths = nullptr;  // guarded by fsync_mutex
+
+}  // namespace
+
+// Every fsync of this test binary, grove_tools' included, comes here: the executable's definition
+// interposes the C library's. While a FsyncRecorder lives it records the path of each descriptor
+// synced; then it does the real fsync.
+extern "C" int fsync(int fd) {
+  {
+    std::lock_guard<std::mutex> lock(fsync_mutex);
+    if (fsync_paths != nullptr) {
+      char target[4096];
+      const std::string link = "/proc/self/fd/" + std::to_string(fd);
+      const ssize_t n = ::readlink(link.c_str(), target, sizeof(target));
+      fsync_paths->push_back(n > 0 ? std::string(target, static_cast<size_t>(n)) : "?");
+    }
+  }
+  return static_cast<int>(::syscall(SYS_fsync, fd));
+}
 
 namespace grove::tools {
 
@@ -55,6 +80,26 @@ std::string ReadFile(const std::string& path) {
   ss << in.rdbuf();
   return ss.str();
 }
+
+// The paths fsynced while it lives, in order. One at a time.
+class FsyncRecorder {
+ public:
+  FsyncRecorder() {
+    std::lock_guard<std::mutex> lock(fsync_mutex);
+    fsync_paths = &paths_;
+  }
+  ~FsyncRecorder() {
+    std::lock_guard<std::mutex> lock(fsync_mutex);
+    fsync_paths = nullptr;
+  }
+  std::vector<std::string> Take() {
+    std::lock_guard<std::mutex> lock(fsync_mutex);
+    return std::exchange(paths_, {});
+  }
+
+ private:
+  std::vector<std::string> paths_;
+};
 
 std::vector<std::string> ListDir(const std::string& dir) {
   std::vector<std::string> names;
@@ -345,6 +390,51 @@ TEST(EnsureDirectoryTest, CreatesMissingParentsAndIsIdempotent) {
   EXPECT_TRUE(fs::is_directory(dir + "/a/b/c"));
   EXPECT_TRUE(EnsureDirectory(nested).ok());
   EXPECT_TRUE(EnsureDirectory(dir).ok());
+}
+
+TEST(WriteFileAtomicallyTest, SyncsTheTemporaryThenTheDirectory) {
+  if (!fs::exists("/proc/self/fd")) GTEST_SKIP() << "no /proc/self/fd to name descriptors";
+  ScratchDir scratch;
+  const std::string dir = fs::canonical(scratch.path()).string();
+  FsyncRecorder recorder;
+  ASSERT_TRUE(WriteFileAtomically(dir + "/out.csv", "x").ok());
+  const std::vector<std::string> synced = recorder.Take();
+  ASSERT_EQ(synced.size(), 2u);
+  EXPECT_EQ(synced[0].rfind(dir + "/out.csv.tmp-", 0), 0u) << synced[0];
+  EXPECT_EQ(synced[1], dir);
+}
+
+// Regression (issue 17, item 6): mkdir was never followed by an fsync of the parent, so after a
+// crash the new output directory, and every file in it, could be gone.
+TEST(EnsureDirectoryTest, SyncsEachNewDirectoryAndThenItsParent) {
+  if (!fs::exists("/proc/self/fd")) GTEST_SKIP() << "no /proc/self/fd to name descriptors";
+  ScratchDir scratch;
+  const std::string base = fs::canonical(scratch.path()).string();
+  ASSERT_TRUE(fs::create_directory(base + "/old"));
+  FsyncRecorder recorder;
+  ASSERT_TRUE(EnsureDirectory(scratch.path() + "/old/a//b/").ok());
+  EXPECT_TRUE(fs::is_directory(base + "/old/a/b"));
+  const std::vector<std::string> expected = {base + "/old/a", base + "/old", base + "/old/a/b",
+                                             base + "/old/a"};
+  EXPECT_EQ(recorder.Take(), expected);
+  // Nothing new, nothing to sync.
+  ASSERT_TRUE(EnsureDirectory(base + "/old/a/b").ok());
+  EXPECT_TRUE(recorder.Take().empty());
+}
+
+TEST(EnsureDirectoryTest, RelativePathIsCreatedAndSyncedInTheWorkingDirectory) {
+  if (!fs::exists("/proc/self/fd")) GTEST_SKIP() << "no /proc/self/fd to name descriptors";
+  ScratchDir scratch;
+  const std::string base = fs::canonical(scratch.path()).string();
+  const fs::path previous = fs::current_path();
+  fs::current_path(base);
+  FsyncRecorder recorder;
+  const Status status = EnsureDirectory("rel");
+  const std::vector<std::string> synced = recorder.Take();
+  fs::current_path(previous);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  EXPECT_TRUE(fs::is_directory(base + "/rel"));
+  EXPECT_EQ(synced, (std::vector<std::string>{base + "/rel", base}));
 }
 
 TEST(EnsureDirectoryTest, FileInTheWayIsAnIoErrorNamingIt) {
