@@ -61,8 +61,9 @@ StatusOr<StepReader> StepReader::Start(LineReader lines, const StepReaderOptions
   } else if (header_is("t", "x", "y")) {
     reader.positions_form_ = true;
   } else {
-    return LineError(path, reader.lines_.line_number(), 1,
-                     fmt::format("unknown header \"{}\": expected \"t,dx,dy\" or \"t,x,y\"", line));
+    return LineError(
+        path, reader.lines_.line_number(), 1,
+        fmt::format("unknown header {}: expected \"t,dx,dy\" or \"t,x,y\"", QuotedField(line)));
   }
 
   while (reader.lookahead_end_ < 2) {

@@ -196,7 +196,8 @@ TEST(StepReaderTest, NanAndInfinityAreRejected) {
   const std::string inf_path = WriteTempFile("t,x,y\n0,0,0\n1,-inf,0\n", "inf.csv");
   EXPECT_EQ(ReadError(inf_path), inf_path + ":3:3: x = -inf: must be finite");
   const std::string time_path = WriteTempFile("t,dx,dy\nInfinity,0,0\n", "time.csv");
-  EXPECT_EQ(ReadError(time_path), time_path + ":2:1: t = Infinity: must be finite");
+  // The value as parsed, not the text.
+  EXPECT_EQ(ReadError(time_path), time_path + ":2:1: t = inf: must be finite");
 }
 
 TEST(StepReaderTest, NumberOutOfRangeIsRejected) {
@@ -286,7 +287,38 @@ TEST(StepReaderTest, MissingFileIsNotFound) {
   StatusOr<std::vector<StepRecord>> steps = ReadAllSteps(path);
   ASSERT_FALSE(steps.ok());
   EXPECT_EQ(steps.status().code(), StatusCode::kNotFound);
-  EXPECT_EQ(steps.status().message(), path + ": no such file");
+  EXPECT_EQ(steps.status().message(),
+            path + ": cannot open for reading: No such file or directory");
+}
+
+// True when `text` is printable ASCII only: no control byte, escape sequence or NUL that a
+// terminal would act on.
+bool Printable(std::string_view text) {
+  for (char c : text) {
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) return false;
+  }
+  return true;
+}
+
+// Regression (issue 17, "Messages"): the unknown-header message echoed the whole header line,
+// raw: up to 4 KB, terminal escape sequences and NULs included.
+TEST(StepReaderTest, UnknownHeaderIsEscapedAndCut) {
+  const std::string header =
+      std::string("t,\x1b[2J\x1b]0;owned\x07\0,dz", 20) + std::string(4000, 'y');
+  const std::string path = WriteTempFile(header + "\n1,0,0\n");
+  const std::string message = ReadError(path);
+  EXPECT_TRUE(Printable(message)) << message;
+  EXPECT_TRUE(
+      message.starts_with(path + ":1:1: unknown header \"t,\\x1b[2J\\x1b]0;owned\\x07\\x00,dz"))
+      << message;
+  EXPECT_NE(message.find("yyy...\": expected \"t,dx,dy\" or \"t,x,y\""), std::string::npos)
+      << message;
+  EXPECT_LT(message.size(), path.size() + 200) << message;
+}
+
+TEST(StepReaderTest, BadFieldWithControlBytesIsEscaped) {
+  const std::string path = WriteTempFile(std::string("t,dx,dy\n1,\x1b[31m\r\0x,0\n", 21));
+  EXPECT_EQ(ReadError(path), path + ":2:3: dx: \"\\x1b[31m\\x0d\\x00x\" is not a number");
 }
 
 TEST(StepReaderTest, InvalidOptionsAreRejected) {
