@@ -134,12 +134,14 @@ StatusOr<bool> LineReader::Next(std::string_view* line) {
       const size_t stop = static_cast<const char*>(newline) - buffer_.data();
       const size_t first = begin_;
       begin_ = stop + 1;
+      line_terminated_ = true;
       return Finish(first, stop, line);
     }
     if (eof_) {
       if (pending == 0) return false;
       const size_t first = begin_;
       begin_ = end_;
+      line_terminated_ = false;
       return Finish(first, end_, line);
     }
     // No newline yet. More than max + 1 bytes (a '\r' may precede the '\n') is too long already.

@@ -49,6 +49,8 @@ class LineReader {
   StatusOr<bool> Next(std::string_view* line);
   // The 1-based number of the line last returned (or found too long); 0 before the first.
   int64_t line_number() const { return line_number_; }
+  // Whether the line last returned ended in "\n": false only for a last line without one.
+  bool line_terminated() const { return line_terminated_; }
   const std::string& path() const { return path_; }
 
  private:
@@ -80,6 +82,7 @@ class LineReader {
   size_t end_ = 0;
   bool eof_ = false;
   int64_t line_number_ = 0;
+  bool line_terminated_ = true;
   Status error_;
 };
 
