@@ -2,8 +2,13 @@
 // rename over the target, fsync the directory (LevelDB SetCurrentFile). An earlier good output is
 // never truncated by a failed run.
 //
-// Errors: IoError naming the path and the operating system's reason; ResourceExhausted when the
-// disk is full (ENOSPC, EDQUOT).
+// Temporaries are named PATH.tmp-XXXXXXXXXXXX (random) and held under flock(LOCK_EX) by their
+// writer until the rename. Creating a writer removes the temporaries of the same target that no
+// live writer holds: those a killed writer left behind, whatever their suffix (the older
+// PATH.tmp-<pid>-<n> names too). On a file system without flock nothing is removed.
+//
+// Errors: IoError naming the file concerned (the temporary, for its creation, writes and fsync)
+// and the operating system's reason; ResourceExhausted when the disk is full (ENOSPC, EDQUOT).
 #ifndef GROVE_TOOLS_ATOMIC_FILE_H_
 #define GROVE_TOOLS_ATOMIC_FILE_H_
 
@@ -24,7 +29,8 @@ class AtomicFileWriter {
  public:
   static constexpr size_t kBufferBytes = 1 << 20;
 
-  // Creates `path` + ".tmp-<pid>-<counter>" next to `path` (the directory must exist).
+  // Removes stale temporaries of `path`, then creates a new one, `path` + ".tmp-" + 12 random
+  // characters, next to `path` (the directory must exist), mode 0666 less the umask.
   static StatusOr<AtomicFileWriter> Create(const std::string& path);
 
   AtomicFileWriter(AtomicFileWriter&& other) noexcept;
@@ -54,14 +60,15 @@ class AtomicFileWriter {
 
   std::string path_;
   std::string temp_path_;
-  int fd_ = -1;
+  int fd_ = -1;  // holds the flock that tells other writers the temporary is in use
   std::string buffer_;
   Status error_;
   bool committed_ = false;
 };
 
-// mkdir -p: creates `dir` and its missing parents (mode 0777 minus umask). Fails if some component
-// exists and is not a directory.
+// mkdir -p: creates `dir` and its missing parents (mode 0777 minus umask), fsyncing each new
+// directory and then its parent, so that a crash cannot lose a directory a later file went into.
+// Fails if some component exists and is not a directory.
 Status EnsureDirectory(const std::string& dir);
 
 }  // namespace grove::tools

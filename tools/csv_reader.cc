@@ -1,6 +1,9 @@
 #include "tools/csv_reader.h"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -8,8 +11,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <system_error>
 #include <utility>
 
@@ -19,7 +20,6 @@ namespace {
 constexpr size_t kMinBufferBytes = size_t{64} << 10;
 constexpr size_t kMinLineBytes = 16;
 constexpr size_t kMaxLineBytes = size_t{64} << 20;
-constexpr size_t kMaxQuotedBytes = 40;
 constexpr std::string_view kByteOrderMark = "\xEF\xBB\xBF";
 
 bool IsBlank(char c) { return c == ' ' || c == '\t'; }
@@ -32,11 +32,8 @@ Status CheckMaxLineBytes(size_t max_line_bytes) {
   return Status::Ok();
 }
 
-// The text cut after kMaxQuotedBytes bytes, marked by "...".
-std::string Shortened(std::string_view text) {
-  if (text.size() <= kMaxQuotedBytes) return std::string(text);
-  return fmt::format("{}...", text.substr(0, kMaxQuotedBytes));
-}
+// std::generic_category().message() is thread-safe where strerror() is not.
+std::string ErrnoText(int err) { return std::generic_category().message(err); }
 
 // from_chars takes no '+'; accept exactly one in front of a digit or '.'.
 std::string_view WithoutPlus(std::string_view text) {
@@ -64,8 +61,7 @@ StatusOr<std::string> ReadWholeFile(const std::string& path) {
                                                        &std::fclose);
   if (file == nullptr) {
     const int err = errno;
-    std::string message =
-        fmt::format("{}: cannot open: {}", path, std::generic_category().message(err));
+    std::string message = fmt::format("{}: cannot open: {}", path, ErrnoText(err));
     if (err == ENOENT) return NotFoundError(std::move(message));
     return IoError(std::move(message));
   }
@@ -74,26 +70,46 @@ StatusOr<std::string> ReadWholeFile(const std::string& path) {
   size_t n;
   while ((n = std::fread(chunk, 1, sizeof(chunk), file.get())) > 0) contents.append(chunk, n);
   if (std::ferror(file.get())) {
-    return IoError(
-        fmt::format("{}: cannot read: {}", path, std::generic_category().message(errno)));
+    return IoError(fmt::format("{}: cannot read: {}", path, ErrnoText(errno)));
   }
   return contents;
 }
 
+LineReader::FileDescriptor::FileDescriptor(FileDescriptor&& other) noexcept
+    : fd_(std::exchange(other.fd_, -1)) {}
+
+LineReader::FileDescriptor& LineReader::FileDescriptor::operator=(FileDescriptor&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = std::exchange(other.fd_, -1);
+  }
+  return *this;
+}
+
+LineReader::FileDescriptor::~FileDescriptor() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
 StatusOr<LineReader> LineReader::Open(const std::string& path, size_t max_line_bytes) {
   GROVE_RETURN_IF_ERROR(CheckMaxLineBytes(max_line_bytes));
-  std::error_code ec;
-  const std::filesystem::file_status status = std::filesystem::status(path, ec);
-  if (status.type() == std::filesystem::file_type::not_found) {
-    return NotFoundError(fmt::format("{}: no such file", path));
+  FileDescriptor fd(::open(path.c_str(), O_RDONLY | O_NOCTTY | O_CLOEXEC));
+  if (fd.get() < 0) {
+    const int err = errno;
+    std::string message = fmt::format("{}: cannot open for reading: {}", path, ErrnoText(err));
+    if (err == ENOENT) return NotFoundError(std::move(message));
+    return IoError(std::move(message));
   }
-  if (ec) return IoError(fmt::format("{}: {}", path, ec.message()));
-  if (std::filesystem::is_directory(status)) {
-    return IoError(fmt::format("{}: is a directory, not a file", path));
+  struct stat st;
+  if (::fstat(fd.get(), &st) != 0) {
+    return IoError(fmt::format("{}: cannot stat: {}", path, ErrnoText(errno)));
   }
-  auto in = std::make_unique<std::ifstream>(path, std::ios::binary);
-  if (!in->is_open()) return IoError(fmt::format("{}: cannot open for reading", path));
-  return FromStream(path, std::move(in), max_line_bytes);
+  if (S_ISDIR(st.st_mode)) return IoError(fmt::format("{}: is a directory, not a file", path));
+  LineReader reader;
+  reader.path_ = path;
+  reader.max_line_bytes_ = max_line_bytes;
+  reader.fd_ = std::move(fd);
+  reader.buffer_.resize(std::max(kMinBufferBytes, max_line_bytes + 2));
+  return reader;
 }
 
 StatusOr<LineReader> LineReader::FromStream(const std::string& path,
@@ -118,12 +134,14 @@ StatusOr<bool> LineReader::Next(std::string_view* line) {
       const size_t stop = static_cast<const char*>(newline) - buffer_.data();
       const size_t first = begin_;
       begin_ = stop + 1;
+      line_terminated_ = true;
       return Finish(first, stop, line);
     }
     if (eof_) {
       if (pending == 0) return false;
       const size_t first = begin_;
       begin_ = end_;
+      line_terminated_ = false;
       return Finish(first, end_, line);
     }
     // No newline yet. More than max + 1 bytes (a '\r' may precede the '\n') is too long already.
@@ -138,15 +156,39 @@ StatusOr<bool> LineReader::Next(std::string_view* line) {
       begin_ = 0;
       end_ = pending;
     }
-    // The buffer holds at least max + 2 bytes, so there is room for one more byte at least.
-    in_->read(buffer_.data() + end_, static_cast<std::streamsize>(buffer_.size() - end_));
-    end_ += static_cast<size_t>(in_->gcount());
-    if (in_->bad() || (in_->fail() && !in_->eof())) {
-      error_ = IoError(fmt::format("{}: read failed after line {}", path_, line_number_));
-      return error_;
-    }
-    if (in_->eof()) eof_ = true;
+    error_ = Fill();
+    if (!error_.ok()) return error_;
   }
+}
+
+Status LineReader::Fill() {
+  // The buffer holds at least max + 2 bytes, so there is room for one more byte at least.
+  char* data = buffer_.data() + end_;
+  const size_t room = buffer_.size() - end_;
+  if (in_ == nullptr) {
+    for (;;) {
+      const ssize_t n = ::read(fd_.get(), data, room);
+      if (n > 0) {
+        end_ += static_cast<size_t>(n);
+        return Status::Ok();
+      }
+      if (n == 0) {
+        eof_ = true;
+        return Status::Ok();
+      }
+      if (errno != EINTR) {
+        return IoError(fmt::format("{}: read failed after line {}: {}", path_, line_number_,
+                                   ErrnoText(errno)));
+      }
+    }
+  }
+  in_->read(data, static_cast<std::streamsize>(room));
+  end_ += static_cast<size_t>(in_->gcount());
+  if (in_->bad() || (in_->fail() && !in_->eof())) {
+    return IoError(fmt::format("{}: read failed after line {}", path_, line_number_));
+  }
+  if (in_->eof()) eof_ = true;
+  return Status::Ok();
 }
 
 StatusOr<bool> LineReader::Finish(size_t first, size_t stop, std::string_view* line) {
@@ -193,7 +235,7 @@ Status LineError(std::string_view path, int64_t line, int64_t column, std::strin
   return InvalidArgumentError(fmt::format("{}:{}:{}: {}", path, line, column, what));
 }
 
-std::string QuotedField(std::string_view text) { return fmt::format("\"{}\"", Shortened(text)); }
+std::string QuotedField(std::string_view text) { return QuoteForMessage(text, kMessageTextBytes); }
 
 NumberParse ParseCsvDouble(std::string_view text, double* value) {
   double parsed = 0;
@@ -208,18 +250,23 @@ NumberParse ParseCsvInt32(std::string_view text, int32_t* value) { return ParseW
 
 Status ParseFiniteNumber(std::string_view path, int64_t line, const CsvField& field,
                          std::string_view name, double* value) {
-  switch (ParseCsvDouble(field.text, value)) {
+  double parsed = 0;
+  switch (ParseWhole(field.text, &parsed, std::chars_format::general)) {
     case NumberParse::kOk:
-      return Status::Ok();
+      if (std::isfinite(parsed)) {
+        *value = parsed;
+        return Status::Ok();
+      }
+      // The value, not the text: "NaN(...)" can be long, and the value says what is wrong.
+      return LineError(path, line, field.column,
+                       fmt::format("{} = {}: must be finite", name, parsed));
     case NumberParse::kOutOfRange:
       return LineError(
           path, line, field.column,
           fmt::format("{}: {} is out of the range of a double", name, QuotedField(field.text)));
-    case NumberParse::kNotFinite:
-      return LineError(path, line, field.column,
-                       fmt::format("{} = {}: must be finite", name, Shortened(field.text)));
     case NumberParse::kEmpty:
     case NumberParse::kNotANumber:
+    case NumberParse::kNotFinite:
       break;
   }
   return LineError(path, line, field.column,

@@ -7,8 +7,10 @@
 // '+'.
 //
 // Errors: NotFound for a missing file; IoError for a file that cannot be opened or read (a
-// directory included); InvalidArgument for a bad line or field, as one line
-// "FILE:LINE:COLUMN: what" with a 1-based LINE and a 1-based byte COLUMN.
+// directory included), naming the reason the OS gives; InvalidArgument for a bad line or field,
+// as one line "FILE:LINE:COLUMN: what" with a 1-based LINE and a 1-based byte COLUMN. Text from
+// the file appears in messages only through QuoteForMessage (grove/status.h): escaped, and cut
+// after kMessageTextBytes bytes.
 // Thread safety: the functions are thread-safe; a LineReader is not (one thread at a time).
 #ifndef GROVE_TOOLS_CSV_READER_H_
 #define GROVE_TOOLS_CSV_READER_H_
@@ -24,6 +26,9 @@
 #include "grove/status.h"
 
 namespace grove::tools {
+
+// The most bytes of a field or line of a file that a reader's message shows.
+inline constexpr size_t kMessageTextBytes = 64;
 
 // The whole contents of a file. Messages name the path and the reason given by the OS.
 StatusOr<std::string> ReadWholeFile(const std::string& path);
@@ -44,20 +49,40 @@ class LineReader {
   StatusOr<bool> Next(std::string_view* line);
   // The 1-based number of the line last returned (or found too long); 0 before the first.
   int64_t line_number() const { return line_number_; }
+  // Whether the line last returned ended in "\n": false only for a last line without one.
+  bool line_terminated() const { return line_terminated_; }
   const std::string& path() const { return path_; }
 
  private:
+  // Owns a file descriptor, closed on destruction. Movable.
+  class FileDescriptor {
+   public:
+    FileDescriptor() = default;
+    explicit FileDescriptor(int fd) : fd_(fd) {}
+    FileDescriptor(FileDescriptor&& other) noexcept;
+    FileDescriptor& operator=(FileDescriptor&& other) noexcept;
+    ~FileDescriptor();
+    int get() const { return fd_; }
+
+   private:
+    int fd_ = -1;
+  };
+
   LineReader() = default;
   StatusOr<bool> Finish(size_t first, size_t stop, std::string_view* line);
+  // Appends what the input has, up to the buffer's end; sets eof_ at its end.
+  Status Fill();
 
   std::string path_;
   size_t max_line_bytes_ = 0;
-  std::unique_ptr<std::istream> in_;
+  FileDescriptor fd_;                 // the input, for Open
+  std::unique_ptr<std::istream> in_;  // the input, for FromStream
   std::vector<char> buffer_;
   size_t begin_ = 0;  // unread bytes are buffer_[begin_, end_)
   size_t end_ = 0;
   bool eof_ = false;
   int64_t line_number_ = 0;
+  bool line_terminated_ = true;
   Status error_;
 };
 
@@ -74,8 +99,7 @@ bool IsBlankLine(std::string_view line);
 bool IsSkippedLine(std::string_view line);
 // InvalidArgument "path:line:column: what".
 Status LineError(std::string_view path, int64_t line, int64_t column, std::string_view what);
-// A field's text in double quotes for a message, cut after 40 bytes ("...") so that one bad
-// field cannot flood the terminal.
+// A field's (or line's) text for a message: QuoteForMessage(text, kMessageTextBytes).
 std::string QuotedField(std::string_view text);
 
 // Why a field is not a number.
@@ -92,7 +116,8 @@ NumberParse ParseCsvInt32(std::string_view text, int32_t* value);
 
 // Parses field as a finite double named `name` in error messages, which are
 // "path:line:column: name: \"text\" is not a number" (an empty field too),
-// "...: name: \"text\" is out of the range of a double" or "...: name = text: must be finite".
+// "...: name: \"text\" is out of the range of a double" or "...: name = value: must be finite"
+// (the value as parsed: nan, inf or -inf).
 Status ParseFiniteNumber(std::string_view path, int64_t line, const CsvField& field,
                          std::string_view name, double* value);
 

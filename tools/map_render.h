@@ -57,6 +57,21 @@ struct MapLayout {
   double YPx(double y_m) const { return origin_y_px - (y_m - min_y_m) * px_per_m; }
 };
 
+// A point in device space (pixels, y down).
+struct PixelPoint {
+  double x_px = 0.0;
+  double y_px = 0.0;
+};
+
+// The points of a polyline worth drawing at `tolerance_px`: the first and the last, and each one
+// at least `tolerance_px` from the point kept before it. Kept points are not moved, and every
+// point dropped lies within `tolerance_px` of the kept point before it, so the drawn line passes
+// that close to every input point. A polyline whose segments are shorter than the tolerance thus
+// keeps at most 2 + (its length / tolerance_px) points, however many it had. REQUIRES:
+// tolerance_px >= 0.
+std::vector<PixelPoint> DecimatePolyline(const std::vector<PixelPoint>& points,
+                                         double tolerance_px);
+
 // Returns the centre of hexagon (q, r) in metres.
 RenderPoint HexCenter(int32_t q, int32_t r, double hex_radius_m);
 
@@ -68,7 +83,9 @@ double ScaleBarLengthM(double max_m);
 StatusOr<MapLayout> ComputeMapLayout(const MapImage& image, const RenderOptions& options = {});
 
 // Both return the encoded file (PNG bytes, SVG text). Empty content gives an image with the frame,
-// title and scale bar only.
+// title and scale bar only. Polylines are decimated at half a pixel (DecimatePolyline) and stroked
+// in pieces of a bounded number of points: one path of a million self-overlapping segments costs
+// cairo's stroker time quadratic in its crossings, pieces cost time linear in the points.
 StatusOr<std::string> RenderPng(const MapImage& image, const RenderOptions& options = {});
 StatusOr<std::string> RenderSvg(const MapImage& image, const RenderOptions& options = {});
 

@@ -16,6 +16,13 @@ constexpr std::string_view kExpectedHeader = "expected a header \"t,dx,dy\" or \
 
 }  // namespace
 
+Status StepReader::CheckLineEnd(std::string_view line) const {
+  if (lines_.line_terminated() || options_.allow_unterminated_last_line) return Status::Ok();
+  return LineError(lines_.path(), lines_.line_number(), static_cast<int64_t>(line.size()) + 1,
+                   "the last line has no line end: the file may still be being written; a "
+                   "complete step file ends in a newline");
+}
+
 StatusOr<StepReader> StepReader::Open(const std::string& path, const StepReaderOptions& options) {
   if (!(options.max_step_m > 0) || !std::isfinite(options.max_step_m)) {
     return InvalidArgumentError(
@@ -49,6 +56,7 @@ StatusOr<StepReader> StepReader::Start(LineReader lines, const StepReaderOptions
     if (!*more) {
       return InvalidArgumentError(fmt::format("{}: empty file: {}", path, kExpectedHeader));
     }
+    GROVE_RETURN_IF_ERROR(reader.CheckLineEnd(line));
     if (!IsSkippedLine(line)) break;
   }
   SplitCsvLine(line, &reader.fields_);
@@ -61,8 +69,9 @@ StatusOr<StepReader> StepReader::Start(LineReader lines, const StepReaderOptions
   } else if (header_is("t", "x", "y")) {
     reader.positions_form_ = true;
   } else {
-    return LineError(path, reader.lines_.line_number(), 1,
-                     fmt::format("unknown header \"{}\": expected \"t,dx,dy\" or \"t,x,y\"", line));
+    return LineError(
+        path, reader.lines_.line_number(), 1,
+        fmt::format("unknown header {}: expected \"t,dx,dy\" or \"t,x,y\"", QuotedField(line)));
   }
 
   while (reader.lookahead_end_ < 2) {
@@ -93,6 +102,7 @@ StatusOr<bool> StepReader::ReadRow(Row* row) {
     StatusOr<bool> more = lines_.Next(&line);
     if (!more.ok()) return more.status();
     if (!*more) return false;
+    GROVE_RETURN_IF_ERROR(CheckLineEnd(line));
     if (!IsSkippedLine(line)) break;
   }
   const std::string& path = lines_.path();

@@ -9,15 +9,23 @@
 // mark is ignored. Numbers are decimal as std::from_chars reads them (no locale, no hex), with an
 // optional leading '+'; NaN and infinities are rejected. Times are finite and strictly increasing.
 //
+// A complete step file ends its last line with "\n" (or "\r\n"). Nothing else tells a finished
+// file from one still being written, or left by a writer that was killed (its size and times do
+// not), and the last line of such a file may hold a cut number (0.7 read for 0.7312). So a last
+// line without a line end is an error, for a regular file, a pipe and a text alike, unless
+// StepReaderOptions::allow_unterminated_last_line is set.
+//
 // Every error message is one line "FILE:LINE:COLUMN: what (detail)", FILE as given to Open, COLUMN
-// the 1-based byte column of the offending field's first non-blank character, or 1 when the error
-// is about the whole row. Errors in records are InvalidArgument, a missing file is NotFound.
+// the 1-based byte column of the offending field's first non-blank character, 1 when the error
+// is about the whole row, or one past the last byte for a missing line end. Errors in records are
+// InvalidArgument, a missing file is NotFound.
 #ifndef GROVE_TOOLS_STEP_READER_H_
 #define GROVE_TOOLS_STEP_READER_H_
 
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -40,6 +48,9 @@ struct StepReaderOptions {
   // The longest accepted line in bytes, without its "\n" or "\r\n"; it bounds the reader's memory
   // and applies to comment lines too. Range: [16, 64 MiB]. Default: 4096.
   size_t max_line_bytes = 4096;
+  // Accept a last line without "\n" (see the file comment), for text known to be complete that
+  // was written without one. Default: false.
+  bool allow_unterminated_last_line = false;
 };
 
 // Reads a step file one record at a time; memory use does not depend on the file's length.
@@ -84,6 +95,8 @@ class StepReader {
   // Reads the next data row, checking its fields and its time against the row before.
   static StatusOr<StepReader> Start(LineReader lines, const StepReaderOptions& options);
   StatusOr<bool> ReadRow(Row* row);
+  // The error for `line`, the line last read, when it lacks its line end and that is refused.
+  Status CheckLineEnd(std::string_view line) const;
 
   LineReader lines_;
   StepReaderOptions options_;

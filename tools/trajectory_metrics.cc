@@ -54,9 +54,9 @@ StatusOr<std::vector<TimedPoint>> ReadTimedPoints(const std::string& path) {
     if (field_count == 0) {
       if (fields.size() < 3 || fields[0].text != "t" || fields[1].text != "x" ||
           fields[2].text != "y") {
-        return LineError(
-            path, number, 1,
-            fmt::format("unknown header \"{}\": expected one starting with \"t,x,y\"", line));
+        return LineError(path, number, 1,
+                         fmt::format("unknown header {}: expected one starting with \"t,x,y\"",
+                                     QuotedField(line)));
       }
       field_count = fields.size();
       continue;

@@ -4,6 +4,19 @@
 #include <ostream>
 
 namespace grove::footslam {
+namespace {
+
+// A rounded axial coordinate as an int32, saturated at +-kMaxAxial (NaN gives 0): a double
+// outside int32 would make the cast undefined. Sets *saturated when it clamps.
+int32_t SaturatedAxial(double v, bool* saturated) {
+  constexpr double kMax = HexGrid::kMaxAxial;
+  if (v >= -kMax && v <= kMax) return static_cast<int32_t>(v);
+  *saturated = true;
+  if (std::isnan(v)) return 0;
+  return v < 0 ? -HexGrid::kMaxAxial : HexGrid::kMaxAxial;
+}
+
+}  // namespace
 
 std::ostream& operator<<(std::ostream& os, Hex h) { return os << '(' << h.q << ", " << h.r << ')'; }
 
@@ -37,7 +50,10 @@ Hex HexGrid::HexAt(double x, double y) const {
   } else if (dr > ds) {
     r = -q - s;
   }
-  Hex h{static_cast<int32_t>(q), static_cast<int32_t>(r)};
+  bool saturated = false;
+  Hex h{SaturatedAxial(q, &saturated), SaturatedAxial(r, &saturated)};
+  // Out of range: the bisector tests would walk toward a point that cannot be reached.
+  if (saturated) return h;
   // Settle boundary points with the same bisector test Traverse stops on. Within 1e-9*R of a
   // vertex the tolerant test can in principle cycle, hence the bound.
   for (int step = 0; step < 8; ++step) {

@@ -56,8 +56,16 @@ class HexGrid {
 
   double radius_m() const { return radius_m_; }
 
-  // The hexagon containing (x, y), ties decided by the perturbation.
-  // REQUIRES: finite coordinates within about 1e9 radii of the origin.
+  // The axial coordinates HexAt saturates at: |q|, |r| <= kMaxAxial. Far inside int32, so that
+  // a neighbour, or a difference of two such hexagons, cannot overflow.
+  static constexpr int32_t kMaxAxial = int32_t{1} << 30;
+
+  // The hexagon containing (x, y), ties decided by the perturbation. Range: |x|, |y| <= 1e9
+  // radii, more exactly wherever the rounded axial coordinates are within +-kMaxAxial. (Beyond
+  // about 4e6 radii a double's spacing exceeds the 1e-9*R tie tolerance: ties are then decided by
+  // rounding, still deterministically.) Outside the range, and for non-finite input, it returns
+  // a defined hexagon that does not contain the point: the rounded axial coordinates clamped to
+  // +-kMaxAxial, NaN taken as 0. Callers bound positions (a walk leaving its grid) well inside.
   Hex HexAt(double x, double y) const;
 
   void Center(Hex h, double* x, double* y) const {
@@ -74,7 +82,8 @@ class HexGrid {
   // A zero-length segment, or one that ends where it started, crosses nothing. When
   // on_crossing returns bool, false stops the walk there and Traverse returns the hexagon the
   // segment was leaving (the caller bounds the work of a segment that leaves its grid).
-  // REQUIRES: start == HexAt(x0, y0) (or the hexagon a previous Traverse ended in at (x0, y0)).
+  // REQUIRES: start == HexAt(x0, y0) (or the hexagon a previous Traverse ended in at (x0, y0)),
+  // both ends within HexAt's range.
   // Allocation-free; six bisector tests per hexagon left, one distance test for the last.
   template <typename F>
   Hex Traverse(Hex start, double x0, double y0, double x1, double y1, F&& on_crossing) const;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <set>
@@ -207,6 +208,65 @@ TEST(HexGridTest, HexAtMatchesNearestCentreForRandomPoints) {
       }
     }
   }
+}
+
+// Random points out to 1e9 radii, the documented range, and the centres of hexagons at its
+// edge, still get the hexagon that contains them.
+TEST(HexGridTest, HexAtIsExactUpToTheEdgeOfItsRange) {
+  const HexGrid g(0.5);
+  std::mt19937_64 rng(5);
+  const double span = 1e9 * g.radius_m();
+  std::uniform_real_distribution<double> u(-span, span);
+  for (int i = 0; i < 2000; ++i) {
+    const double x = u(rng), y = u(rng);
+    ASSERT_EQ(g.HexAt(x, y), NearestCenter(g, x, y)) << "point " << x << ", " << y;
+  }
+  constexpr int32_t kMax = HexGrid::kMaxAxial;
+  for (const Hex h : {Hex{kMax, 0}, Hex{-kMax, 0}, Hex{0, kMax}, Hex{0, -kMax}, Hex{kMax, kMax},
+                      Hex{-kMax, -kMax}, Hex{kMax, -kMax}, Hex{kMax - 1, 1}}) {
+    const Point c = CenterOf(g, h);
+    EXPECT_EQ(g.HexAt(c.x, c.y), h) << "centre of " << h;
+  }
+}
+
+// Regression (issue 17, item 13): past about 1.86e9 m (R = 0.5) the rounded axial coordinate did
+// not fit the int32 it was cast to, which is undefined behaviour (GROVE_SANITIZE builds have
+// -fsanitize=float-cast-overflow to catch it). Such points now saturate at +-kMaxAxial.
+TEST(HexGridTest, HexAtFarOutsideItsRangeSaturates) {
+  const HexGrid g(0.5);
+  constexpr int32_t kMax = HexGrid::kMaxAxial;
+  struct Case {
+    double x, y;
+    Hex expected;
+  };
+  const Case cases[] = {
+      {1e10, 0.0, {kMax, 0}},
+      {-1e10, 0.0, {-kMax, 0}},
+      {0.0, 1e10, {-kMax, kMax}},
+      {0.0, -1e10, {kMax, -kMax}},
+      {1e10, 1e10, {kMax, kMax}},
+      {-1e10, -1e10, {-kMax, -kMax}},
+      {1e300, 1e300, {kMax, kMax}},
+      {-1e300, 1e300, {-kMax, kMax}},
+      {1e300, -1e300, {kMax, -kMax}},
+      {-1e300, -1e300, {-kMax, -kMax}},
+      {2e9, 0.0, {kMax, 0}},
+      {1e300, 0.0, {kMax, 0}},
+      {-std::numeric_limits<double>::max(), 0.0, {-kMax, 0}},
+  };
+  for (const Case& c : cases) {
+    EXPECT_EQ(g.HexAt(c.x, c.y), c.expected) << "point " << c.x << ", " << c.y;
+  }
+  // Not finite: still a defined answer.
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(g.HexAt(inf, 0.0), (Hex{kMax, 0}));
+  EXPECT_EQ(g.HexAt(-inf, 0.0), (Hex{-kMax, 0}));
+  EXPECT_EQ(g.HexAt(nan, 0.0), (Hex{0, 0}));
+  EXPECT_EQ(g.HexAt(0.0, nan).q, 0);
+  // A grid of tiny hexagons overflows the axial coordinates already at moderate distances.
+  const HexGrid tiny(1e-300);
+  EXPECT_EQ(tiny.HexAt(1.0, 0.0), (Hex{kMax, 0}));
 }
 
 // Centres, vertices and points on edges, where the tie-breaking is exercised.

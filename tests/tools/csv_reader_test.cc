@@ -1,8 +1,13 @@
 #include "tools/csv_reader.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -41,6 +46,83 @@ TEST(ReadWholeFileTest, DirectoryIsAnIoError) {
   StatusOr<std::string> read = ReadWholeFile(dir);
   EXPECT_EQ(read.status().code(), StatusCode::kIoError);
   EXPECT_EQ(read.status().message().rfind(dir + ": ", 0), 0u) << read.status().message();
+}
+
+// Regression (issue 17, "Messages"): a file that exists but cannot be opened gave "cannot open
+// for reading" without the reason. A socket cannot be opened even by root (ENXIO).
+TEST(LineReaderTest, OpenFailureNamesTheReason) {
+  const std::string path = TempPath("socket");
+  std::filesystem::remove(path);
+  const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  ASSERT_LT(path.size(), sizeof(address.sun_path)) << path;
+  std::memcpy(address.sun_path, path.c_str(), path.size() + 1);
+  ASSERT_EQ(::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof(address)), 0);
+  StatusOr<LineReader> lines = LineReader::Open(path, 64);
+  ::close(fd);
+  std::filesystem::remove(path);
+  EXPECT_EQ(lines.status().code(), StatusCode::kIoError);
+  EXPECT_EQ(lines.status().message(),
+            path + ": cannot open for reading: No such device or address");
+}
+
+// The status of LineReader::Open(path) as an unprivileged user: run in a child process that drops
+// root's rights when the test runs as root (root reads files without read permission).
+std::string OpenMessageWithoutPrivileges(const std::string& path) {
+  if (::geteuid() != 0) return LineReader::Open(path, 64).status().message();
+  int fds[2];
+  if (::pipe(fds) != 0) return "pipe failed";
+  const pid_t child = ::fork();
+  if (child == 0) {
+    ::close(fds[0]);
+    std::string message = "cannot drop privileges";
+    if (::setgid(65534) == 0 && ::setuid(65534) == 0) {
+      message = LineReader::Open(path, 64).status().message();
+    }
+    const ssize_t ignored = ::write(fds[1], message.data(), message.size());
+    (void)ignored;
+    ::_exit(0);
+  }
+  ::close(fds[1]);
+  std::string message;
+  char buffer[512];
+  ssize_t n;
+  while ((n = ::read(fds[0], buffer, sizeof(buffer))) > 0) message.append(buffer, n);
+  ::close(fds[0]);
+  ::waitpid(child, nullptr, 0);
+  return message;
+}
+
+TEST(LineReaderTest, UnreadableFileIsPermissionDenied) {
+  const std::string path = TempPath("unreadable");
+  std::ofstream(path) << "t,dx,dy\n";
+  std::filesystem::permissions(path, std::filesystem::perms::none);
+  const std::string message = OpenMessageWithoutPrivileges(path);
+  std::filesystem::remove(path);
+  EXPECT_EQ(message, path + ": cannot open for reading: Permission denied");
+}
+
+TEST(LineReaderTest, ReadsAFileThroughItsDescriptor) {
+  const std::string path = TempPath("lines");
+  // Longer than the 64 KiB buffer, so that reads continue where they stopped.
+  std::string contents;
+  for (int i = 0; i < 20000; ++i) contents += std::to_string(i) + "\n";
+  std::ofstream(path, std::ios::binary) << contents;
+  StatusOr<LineReader> lines = LineReader::Open(path, 64);
+  ASSERT_TRUE(lines.ok()) << lines.status().ToString();
+  std::string_view line;
+  int count = 0;
+  for (;;) {
+    StatusOr<bool> more = lines->Next(&line);
+    ASSERT_TRUE(more.ok()) << more.status().ToString();
+    if (!*more) break;
+    ASSERT_EQ(line, std::to_string(count)) << "line " << count + 1;
+    ++count;
+  }
+  std::filesystem::remove(path);
+  EXPECT_EQ(count, 20000);
 }
 
 TEST(LineReaderTest, DirectoryIsAnIoErrorMissingIsNotFoundBadLimitIsInvalid) {
@@ -98,9 +180,12 @@ TEST(CsvFieldsTest, BlankAndSkippedLines) {
   EXPECT_FALSE(IsSkippedLine("1,#"));
 }
 
-TEST(CsvFieldsTest, QuotedFieldIsShortened) {
+TEST(CsvFieldsTest, QuotedFieldIsEscapedAndShortened) {
   EXPECT_EQ(QuotedField("abc"), "\"abc\"");
-  EXPECT_EQ(QuotedField(std::string(41, 'z')), "\"" + std::string(40, 'z') + "...\"");
+  const std::string full(kMessageTextBytes, 'z');
+  EXPECT_EQ(QuotedField(full), fmt::format("\"{}\"", full));
+  EXPECT_EQ(QuotedField(full + "z"), fmt::format("\"{}...\"", full));
+  EXPECT_EQ(QuotedField(std::string("a\x1b[2J\0\n\"", 8)), "\"a\\x1b[2J\\x00\\x0a\\x22\"");
 }
 
 TEST(CsvNumbersTest, DoubleClassifiesEveryFailure) {

@@ -12,9 +12,11 @@
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <random>
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "tests/tools/decoded_png.h"
 #include "tools/atomic_file.h"
@@ -175,6 +177,108 @@ TEST(RenderPngTest, PathAndTruthPixelsHaveTheirColours) {
     if (p.b > 200 && p.r < 120) ++blue;
   }
   EXPECT_GT(blue, 10);
+}
+
+// A random walk in device space with steps of up to `max_step_px`, from (x0, y0).
+std::vector<PixelPoint> RandomWalkPx(size_t n, double max_step_px, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<PixelPoint> points;
+  points.reserve(n);
+  PixelPoint p{800.0, 500.0};
+  for (size_t i = 0; i < n; ++i) {
+    points.push_back(p);
+    const double angle = 2.0 * std::acos(-1.0) * unit(rng);
+    const double step = max_step_px * unit(rng);
+    p.x_px = std::clamp(p.x_px + step * std::cos(angle), 0.0, 1600.0);
+    p.y_px = std::clamp(p.y_px + step * std::sin(angle), 0.0, 1000.0);
+  }
+  return points;
+}
+
+bool SamePoint(const PixelPoint& a, const PixelPoint& b) {
+  return a.x_px == b.x_px && a.y_px == b.y_px;
+}
+
+TEST(DecimatePolylineTest, KeepsTheEndsAndMovesNoPointByMoreThanTheTolerance) {
+  constexpr double kTolerance = 0.5;
+  const std::vector<PixelPoint> points = RandomWalkPx(20000, 2.0, 7);
+  const std::vector<PixelPoint> kept = DecimatePolyline(points, kTolerance);
+  ASSERT_GE(kept.size(), 2u);
+  EXPECT_LT(kept.size(), points.size());
+  EXPECT_TRUE(SamePoint(kept.front(), points.front()));
+  EXPECT_TRUE(SamePoint(kept.back(), points.back()));
+  // The kept points are input points, unmoved and in order; each dropped one is within the
+  // tolerance of the kept point before it; kept neighbours (but the last) are that far apart.
+  size_t k = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (k + 1 < kept.size() && SamePoint(points[i], kept[k + 1]) &&
+        (k + 2 < kept.size() || i + 1 == points.size())) {
+      ++k;
+      if (k + 1 < kept.size()) {
+        EXPECT_GE(std::hypot(kept[k].x_px - kept[k - 1].x_px, kept[k].y_px - kept[k - 1].y_px),
+                  kTolerance)
+            << "kept point " << k;
+      }
+      continue;
+    }
+    if (i == 0) continue;
+    EXPECT_LT(std::hypot(points[i].x_px - kept[k].x_px, points[i].y_px - kept[k].y_px), kTolerance)
+        << "input point " << i << " is not near kept point " << k;
+  }
+  EXPECT_EQ(k + 1, kept.size()) << "a kept point is not an input point in order";
+}
+
+TEST(DecimatePolylineTest, HalfAMillionDensePointsBecomeAtMostTheirLengthOverTheTolerance) {
+  // A long walk drawn small: 500k points, steps below a tenth of a pixel, in a 1600 x 1000 image.
+  constexpr double kTolerance = 0.5;
+  const std::vector<PixelPoint> points = RandomWalkPx(500000, 0.1, 11);
+  double length_px = 0.0;
+  for (size_t i = 1; i < points.size(); ++i) {
+    length_px +=
+        std::hypot(points[i].x_px - points[i - 1].x_px, points[i].y_px - points[i - 1].y_px);
+  }
+  const std::vector<PixelPoint> kept = DecimatePolyline(points, kTolerance);
+  EXPECT_LE(static_cast<double>(kept.size()), 2.0 + length_px / kTolerance);
+  EXPECT_LT(kept.size(), 60000u);  // the bound above is 2 + 25,000 px / 0.5 px = 50,002
+}
+
+TEST(DecimatePolylineTest, SmallInputsKeepEveryEnd) {
+  EXPECT_TRUE(DecimatePolyline({}, 0.5).empty());
+  EXPECT_EQ(DecimatePolyline({{1.0, 2.0}}, 0.5).size(), 1u);
+  // A path that returns to its start is still drawn: a dot of both ends.
+  EXPECT_EQ(DecimatePolyline({{1.0, 2.0}, {1.1, 2.0}, {1.0, 2.0}}, 0.5).size(), 2u);
+  EXPECT_EQ(DecimatePolyline({{0.0, 0.0}, {0.2, 0.0}, {0.6, 0.0}, {0.7, 0.0}}, 0.5).size(), 3u);
+}
+
+// The odometry's dashes run on across the pieces a long line is stroked in: a straight line of
+// 2,000 points shows the same dashes as the same line of 2 points.
+TEST(RenderPngTest, DashesOfALongLineContinueAcrossStrokedPieces) {
+  RenderOptions options{1000, 1.0};
+  MapImage two_points;
+  two_points.odometry = {{0.0, 0.0}, {100.0, 0.0}};
+  MapImage many_points;
+  for (int i = 0; i <= 2000; ++i) many_points.odometry.push_back({i * 0.05, 0.0});
+  StatusOr<MapLayout> layout = ComputeMapLayout(two_points, options);
+  StatusOr<std::string> reference = RenderPng(two_points, options);
+  StatusOr<std::string> pieces = RenderPng(many_points, options);
+  ASSERT_TRUE(layout.ok() && reference.ok() && pieces.ok());
+  DecodedPng a(*reference);
+  DecodedPng b(*pieces);
+  ASSERT_TRUE(a.ok() && b.ok());
+  int inked = 0;
+  int differ = 0;
+  int columns = 0;
+  for (double x = layout->XPx(1.0); x < layout->XPx(99.0); x += 1.0, ++columns) {
+    const bool ink_a = test_images::Distance(a.At(x, layout->YPx(0.0)), kWhite) > 60;
+    const bool ink_b = test_images::Distance(b.At(x, layout->YPx(0.0)), kWhite) > 60;
+    inked += ink_a;
+    differ += ink_a != ink_b;
+  }
+  // Dashes, not a solid line or nothing; and where they are, up to antialiasing at their ends.
+  EXPECT_GT(inked, columns / 3);
+  EXPECT_LT(inked, columns * 5 / 6);
+  EXPECT_LE(differ, columns / 50) << inked << " of " << columns << " columns inked";
 }
 
 TEST(RenderPngTest, PathIsDrawnOverHexes) {

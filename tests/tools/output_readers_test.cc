@@ -171,6 +171,17 @@ TEST_F(OutputReadersTest, LongBadFieldIsShortenedInTheMessage) {
   EXPECT_NE(message.find("...\" is not a number"), std::string::npos) << message;
 }
 
+// Regression (issue 17, "Messages"): header and field text was echoed raw, control bytes, escape
+// sequences and NULs included.
+TEST_F(OutputReadersTest, ControlBytesInHeaderAndFieldsAreEscaped) {
+  EXPECT_EQ(PathError(std::string("t,x,\x1b[2J\0\n", 9)),
+            ":1:5: header: expected \"y\", found \"\\x1b[2J\\x00\" (the header \"t,x,y\" is "
+            "required)");
+  EXPECT_EQ(MapError(std::string(kMapHeader) + "0,\x9b"
+                                               "31m,0,0,1,1,1,1,1,1\n"),
+            ":2:3: r: \"\\x9b31m\" is not an integer");
+}
+
 TEST_F(OutputReadersTest, TrajectoryGivesPointsInOrder) {
   std::string path =
       Write("trajectory.csv", "t,x,y,heading\n0,0,0,0\n0.5,1.25,-2,0.1\n1.0,3,4.5,3.14\n");

@@ -2,15 +2,19 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <utility>
 #include <vector>
 
+#include "tools/footslam_run.h"
 #include "tools/walk_simulator.h"
 
 namespace grove::tools {
@@ -125,7 +129,7 @@ TEST(StepReaderTest, BothFormsGiveTheSameStepsForTheSameWalk) {
 TEST(StepReaderTest, AcceptsCrlfCommentsBlankLinesPaddingBomAndPlusSign) {
   const std::string path = WriteTempFile(
       "\xEF\xBB\xBF# recorded by hand\r\n\r\n  t , dx ,\tdy \r\n# a comment\r\n"
-      "1, +0.5 ,-0.25\r\n   \r\n  # indented comment\r\n2,1e-1,.5");
+      "1, +0.5 ,-0.25\r\n   \r\n  # indented comment\r\n2,1e-1,.5\r\n");
   StatusOr<std::vector<StepRecord>> steps = ReadAllSteps(path);
   ASSERT_TRUE(steps.ok()) << steps.status().ToString();
   ASSERT_EQ(steps->size(), 2u);
@@ -136,6 +140,77 @@ TEST(StepReaderTest, AcceptsCrlfCommentsBlankLinesPaddingBomAndPlusSign) {
   EXPECT_EQ((*steps)[1].dx_m, 0.1);
   EXPECT_EQ((*steps)[1].dy_m, 0.5);
   EXPECT_EQ((*steps)[1].line, 8);
+}
+
+// Regression (issue 17, "Messages"): a step file caught while being written ends in a partial line,
+// which was read as a step with a cut number (here 0.7 for 0.7312).
+TEST(StepReaderTest, LastLineWithoutLineEndIsAnError) {
+  const std::string kError =
+      "the last line has no line end: the file may still be being written; a complete step file "
+      "ends in a newline";
+  const std::string path = WriteTempFile("t,dx,dy\n1,0.5,0\n2,0.5,0\n3,0.7");
+  EXPECT_EQ(ReadError(path), path + ":4:6: " + kError);
+  // The same whether the partial line is a row, the header, a comment or blank; CRLF too.
+  const std::string header = WriteTempFile("t,dx,dy", "header.csv");
+  EXPECT_EQ(ReadError(header), header + ":1:8: " + kError);
+  const std::string comment = WriteTempFile("t,dx,dy\r\n1,0.5,0\r\n# more to co", "comment.csv");
+  EXPECT_EQ(ReadError(comment), comment + ":3:13: " + kError);
+  const std::string crlf = WriteTempFile("t,dx,dy\r\n1,0.5,0\r\n2,0.5,0\r", "crlf.csv");
+  EXPECT_EQ(ReadError(crlf), crlf + ":3:8: " + kError);
+  // Text held in memory follows the same rule.
+  StatusOr<StepReader> text = StepReader::OpenText("mem.csv", "t,dx,dy\n1,0.5,0\n2,0.5,0\n3,0.7");
+  ASSERT_TRUE(text.ok()) << text.status().ToString();
+  StepRecord step;
+  StatusOr<bool> more = text->Next(&step);
+  ASSERT_TRUE(more.ok() && *more);
+  more = text->Next(&step);
+  ASSERT_TRUE(more.ok() && *more);
+  more = text->Next(&step);
+  ASSERT_FALSE(more.ok());
+  EXPECT_EQ(more.status().message(), "mem.csv:4:6: " + kError);
+}
+
+TEST(StepReaderTest, UnterminatedLastLineIsReadWhenAllowed) {
+  StepReaderOptions options;
+  options.allow_unterminated_last_line = true;
+  const std::string path = WriteTempFile("t,dx,dy\n1,0.5,0\n2,0.7,0");
+  StatusOr<std::vector<StepRecord>> steps = ReadAllSteps(path, options);
+  ASSERT_TRUE(steps.ok()) << steps.status().ToString();
+  ASSERT_EQ(steps->size(), 2u);
+  EXPECT_EQ((*steps)[1].dx_m, 0.7);
+  EXPECT_EQ((*steps)[1].line, 3);
+}
+
+TEST(StepReaderTest, PipeWithoutFinalLineEndIsAnErrorToo) {
+  const std::string fifo =
+      ::testing::TempDir() + "/grove_step_reader_fifo_" + std::to_string(::getpid());
+  std::filesystem::remove(fifo);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::thread writer([&] {
+    std::ofstream out(fifo, std::ios::binary);
+    out << "t,dx,dy\n1,0.5,0\n2,0.5,0\n3,0.5,0\n4,0.7";  // a writer killed mid-line
+  });
+  const std::string message = ReadError(fifo);
+  writer.join();
+  std::filesystem::remove(fifo);
+  EXPECT_EQ(message, fifo +
+                         ":5:6: the last line has no line end: the file may still be being "
+                         "written; a complete step file ends in a newline");
+}
+
+TEST(StepReaderTest, BundledWalkEndsWithALineEndAndReadsWithDefaultOptions) {
+  const std::string walk = EmbeddedWalkSteps();
+  ASSERT_FALSE(walk.empty());
+  EXPECT_EQ(walk.back(), '\n');
+  StatusOr<StepReader> reader = StepReader::OpenText(EmbeddedWalkName(), walk);
+  ASSERT_TRUE(reader.ok()) << reader.status().ToString();
+  StepRecord step;
+  for (;;) {
+    StatusOr<bool> more = reader->Next(&step);
+    ASSERT_TRUE(more.ok()) << more.status().ToString();
+    if (!*more) break;
+  }
+  EXPECT_GT(reader->steps_read(), 100);
 }
 
 TEST(StepReaderTest, NonNumberReportsFileLineAndColumnOfTheField) {
@@ -196,7 +271,8 @@ TEST(StepReaderTest, NanAndInfinityAreRejected) {
   const std::string inf_path = WriteTempFile("t,x,y\n0,0,0\n1,-inf,0\n", "inf.csv");
   EXPECT_EQ(ReadError(inf_path), inf_path + ":3:3: x = -inf: must be finite");
   const std::string time_path = WriteTempFile("t,dx,dy\nInfinity,0,0\n", "time.csv");
-  EXPECT_EQ(ReadError(time_path), time_path + ":2:1: t = Infinity: must be finite");
+  // The value as parsed, not the text.
+  EXPECT_EQ(ReadError(time_path), time_path + ":2:1: t = inf: must be finite");
 }
 
 TEST(StepReaderTest, NumberOutOfRangeIsRejected) {
@@ -286,7 +362,38 @@ TEST(StepReaderTest, MissingFileIsNotFound) {
   StatusOr<std::vector<StepRecord>> steps = ReadAllSteps(path);
   ASSERT_FALSE(steps.ok());
   EXPECT_EQ(steps.status().code(), StatusCode::kNotFound);
-  EXPECT_EQ(steps.status().message(), path + ": no such file");
+  EXPECT_EQ(steps.status().message(),
+            path + ": cannot open for reading: No such file or directory");
+}
+
+// True when `text` is printable ASCII only: no control byte, escape sequence or NUL that a
+// terminal would act on.
+bool Printable(std::string_view text) {
+  for (char c : text) {
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) return false;
+  }
+  return true;
+}
+
+// Regression (issue 17, "Messages"): the unknown-header message echoed the whole header line,
+// raw: up to 4 KB, terminal escape sequences and NULs included.
+TEST(StepReaderTest, UnknownHeaderIsEscapedAndCut) {
+  const std::string header =
+      std::string("t,\x1b[2J\x1b]0;owned\x07\0,dz", 20) + std::string(4000, 'y');
+  const std::string path = WriteTempFile(header + "\n1,0,0\n");
+  const std::string message = ReadError(path);
+  EXPECT_TRUE(Printable(message)) << message;
+  EXPECT_TRUE(
+      message.starts_with(path + ":1:1: unknown header \"t,\\x1b[2J\\x1b]0;owned\\x07\\x00,dz"))
+      << message;
+  EXPECT_NE(message.find("yyy...\": expected \"t,dx,dy\" or \"t,x,y\""), std::string::npos)
+      << message;
+  EXPECT_LT(message.size(), path.size() + 200) << message;
+}
+
+TEST(StepReaderTest, BadFieldWithControlBytesIsEscaped) {
+  const std::string path = WriteTempFile(std::string("t,dx,dy\n1,\x1b[31m\r\0x,0\n", 21));
+  EXPECT_EQ(ReadError(path), path + ":2:3: dx: \"\\x1b[31m\\x0d\\x00x\" is not a number");
 }
 
 TEST(StepReaderTest, InvalidOptionsAreRejected) {

@@ -244,5 +244,20 @@ TEST(TrajectoryMetricsTest, ReadErrorsGiveFileLineAndColumn) {
   EXPECT_EQ(missing.status().code(), StatusCode::kNotFound);
 }
 
+// Regression (issue 17, "Messages"): the unknown-header message echoed the line raw and whole.
+TEST(TrajectoryMetricsTest, UnknownHeaderIsEscapedAndCut) {
+  const std::string path =
+      WriteTempFile("\x1b[1;31mtime\x7f,x,y" + std::string(4000, 'z') + "\n0,0,0\n");
+  StatusOr<std::vector<TimedPoint>> points = ReadTimedPoints(path);
+  ASSERT_FALSE(points.ok());
+  const std::string& message = points.status().message();
+  EXPECT_TRUE(message.starts_with(path + ":1:1: unknown header \"\\x1b[1;31mtime\\x7f,x,yzzz"))
+      << message;
+  EXPECT_NE(message.find("zzz...\": expected one starting with \"t,x,y\""), std::string::npos)
+      << message;
+  EXPECT_EQ(message.find('\x1b'), std::string::npos) << message;
+  EXPECT_LT(message.size(), path.size() + 200) << message;
+}
+
 }  // namespace
 }  // namespace grove::tools
