@@ -22,11 +22,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <exception>
 #include <new>
 #include <string>
 #include <vector>
 
+#include "alloc/check.h"
 #include "concurrency/worker_pool.h"
 #include "engine/checkpoint_io.h"
 #include "engine/particle_filter.h"
@@ -225,6 +227,14 @@ class FilterDriver {
         return Status(status.code(), fmt::format("step {} (t = {} s): {}", filter_.steps(), t_s,
                                                  status.message()));
       }
+#ifdef GROVE_EXPENSIVE_CHECKS
+      // Debug builds walk every shared node after every step (mimalloc's expensive level).
+      if constexpr (requires { model_->CheckCounts(); }) {
+        Status counts = model_->CheckCounts();
+        if (!counts.ok()) std::fprintf(stderr, "%s\n", counts.ToString().c_str());
+        GROVE_CHECK(counts.ok());
+      }
+#endif
       auto t0 = std::chrono::steady_clock::now();
       mean_.push_back({t_s, ComputeMeanPose()});
       bookkeeping_s_ +=

@@ -553,4 +553,23 @@ TEST_F(CliTest, RunningOutOfMemoryIsACleanError) {
   EXPECT_FALSE(fs::exists(dir_ / "oom" / "map.csv"));
 }
 
+// Bailey's simulator through the command: the four files, and its errors.
+TEST_F(CliTest, FastSlamSimulateWritesControlsObservationsAndTruth) {
+  fs::path out = dir_ / "fs";
+  Outcome o = Grove("fastslam simulate --seed 3 --out " + out.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_EQ(Slurp(out / "controls.csv").rfind("t,v,steer\n", 0), 0u);
+  EXPECT_EQ(Slurp(out / "observations.csv").rfind("t,range,bearing,id\n", 0), 0u);
+  EXPECT_EQ(Slurp(out / "truth.csv").rfind("t,x,y,heading\n", 0), 0u);
+  EXPECT_EQ(Slurp(out / "landmarks_truth.csv").rfind("id,x,y\n", 0), 0u);
+  o = Grove("fastslam simulate --preset bogus --out " + (dir_ / "b").string());
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  o = Grove("fastslam simulate --map " + (dir_ / "missing.txt").string() + " --out " +
+            (dir_ / "b").string());
+  EXPECT_EQ(o.exit_code, 3) << o.err;
+  o = Grove("fastslam simulate --seed -2 --out " + (dir_ / "b").string());
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_FALSE(fs::exists(dir_ / "b" / "controls.csv"));
+}
+
 }  // namespace

@@ -12,6 +12,7 @@
 #include "tools/bench_commands.h"
 #include "tools/cli/config_flags.h"
 #include "tools/config_json.h"
+#include "tools/fastslam_simulator.h"
 #include "tools/footslam_run.h"
 
 namespace {
@@ -87,6 +88,19 @@ int Main(int argc, char** argv) {
       "--hex-radius", render_radius,
       "Hexagon radius in metres (default: the run's, from summary.json, or 0.5)");
   render->add_option("--steps", odometry_path, "Step file to draw the raw odometry from");
+
+  // ---- fastslam ----
+  CLI::App* fastslam = app.add_subcommand("fastslam", "Landmark FastSLAM (simulator so far)");
+  fastslam->require_subcommand(1);
+  CLI::App* fs_simulate = fastslam->add_subcommand(
+      "simulate", "Bailey's FastSLAM simulator: controls, observations, truth");
+  std::string fs_map, fs_preset = "webmap", fs_out, fs_seed = "1";
+  fs_simulate->add_option("--map", fs_map,
+                          "Bailey's map file (blocks lm and wp; default: the bundled webmap)");
+  fs_simulate->add_option("--preset", fs_preset, "webmap, sim1, sim2 or sim3")
+      ->capture_default_str();
+  fs_simulate->add_option("--seed", fs_seed, "Seed, a non-negative integer")->capture_default_str();
+  fs_simulate->add_option("--out", fs_out, "Output directory")->required();
 
   // ---- bench ----
   CLI::App* bench = app.add_subcommand("bench", "Reproduce the paper's figures; measure scaling");
@@ -178,6 +192,13 @@ int Main(int argc, char** argv) {
     sim.heading_drift_given = drift_option->count() > 0;
     sim.scale_error_given = scale_option->count() > 0;
     return gt::SimulateCommand(sim);
+  }
+  if (*fs_simulate) {
+    grove::FieldInfo seed_info{
+        "--seed", "", grove::FieldType::kUnsigned, grove::kChangesResults, 0, 0, {}, {}};
+    grove::StatusOr<grove::FieldValue> seed = grove::ParseFieldValue(seed_info, fs_seed);
+    if (!seed.ok()) return gt::Fail(gt::kExitUsage, seed.status().message());
+    return gt::FastSlamSimulateCommand(fs_map, fs_preset, fs_out, std::get<uint64_t>(*seed));
   }
   if (*evaluate) return gt::EvaluateCommand(truth_path, trajectory_path);
   if (*render) {
