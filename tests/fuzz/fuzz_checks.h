@@ -367,6 +367,19 @@ inline std::vector<FootSlamConfig> CheckpointConfigs() {
   return configs;
 }
 
+// The format version this build writes (the header's u32 at offset 8 of any checkpoint of it).
+inline uint32_t CurrentCheckpointVersion() {
+  static const uint32_t version = [] {
+    FootSlamConfig c = CheckpointConfigs()[0];
+    auto slam = FootSlam::Create(c);
+    StatusOr<std::string> bytes = (*slam)->Checkpoint();
+    uint32_t v = 0;
+    std::memcpy(&v, bytes->data() + 8, sizeof(v));
+    return v;
+  }();
+  return version;
+}
+
 inline std::string CheckResumeError(const Status& status) {
   const std::string shown = "\"" + Printable(status.message()) + "\"";
   if (status.code() != StatusCode::kDataLoss && status.code() != StatusCode::kFailedPrecondition) {
@@ -411,9 +424,11 @@ inline std::string CheckCheckpointUnguarded(const uint8_t* data, size_t size) {
   const std::string raw(reinterpret_cast<const char*>(data), size);
   std::vector<std::string> inputs{raw};
   if (raw.size() >= kCheckpointHeaderBytes) {
-    // Same magic and version, matching length and checksum.
-    std::string sealed = SealCheckpoint(std::string_view(raw).substr(kCheckpointHeaderBytes), 0);
-    std::memcpy(sealed.data(), raw.data(), 12);
+    // The same magic, this build's format version, a matching length and checksum: the body
+    // reaches the parser.
+    std::string sealed = SealCheckpoint(std::string_view(raw).substr(kCheckpointHeaderBytes),
+                                        CurrentCheckpointVersion());
+    std::memcpy(sealed.data(), raw.data(), 8);
     inputs.push_back(sealed);
   }
   for (const std::string& input : inputs) {
