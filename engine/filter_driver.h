@@ -217,9 +217,10 @@ class FilterDriver {
         mean_.front().t_s = t_s;
         start_time_unset_ = false;
       }
-      // Reserved first, so that nothing below fails half-way for want of memory.
-      times_.reserve(times_.size() + 1);
-      mean_.reserve(mean_.size() + 1);
+      // Room first (growing geometrically), so that nothing below fails half-way for want of
+      // memory.
+      if (times_.size() == times_.capacity()) times_.reserve(2 * times_.size() + 16);
+      if (mean_.size() == mean_.capacity()) mean_.reserve(2 * mean_.size() + 16);
       Status status = run();
       times_.push_back(t_s);
       if (!status.ok()) {

@@ -112,14 +112,17 @@ class PersistentTrie {
   // Always inlined: GCC deduces that a call to it has no side effects (a prefetch does not
   // count) and would delete the call.
   [[gnu::always_inline]] void PrefetchPath(const Node* root, uint64_t key, int depth) const {
+    // The levels come from min_height(), not from the nodes: reading the header of a node that
+    // is only now being fetched would stall on the very miss this hint is meant to hide. (For a
+    // version grown above min_height() the hint misses; it is only a hint.)
     const Node* cur = root;
-    for (int level = 0; cur != nullptr && level < depth && cur->level > 0; ++level) {
-      cur = static_cast<const Inner*>(cur)->child[Digit(key, cur->level)];
+    for (int level = 0; cur != nullptr && level < depth; ++level) {
+      cur = static_cast<const Inner*>(cur)->child[Digit(key, height_ - 1 - level)];
     }
     if (cur == nullptr) return;
     __builtin_prefetch(cur);
-    if (cur->level > 0) {
-      __builtin_prefetch(&static_cast<const Inner*>(cur)->child[Digit(key, cur->level)]);
+    if (depth < height_ - 1) {
+      __builtin_prefetch(&static_cast<const Inner*>(cur)->child[Digit(key, height_ - 1 - depth)]);
     } else {
       __builtin_prefetch(&static_cast<const Bottom*>(cur)->leaf[Digit(key, 0)]);
     }

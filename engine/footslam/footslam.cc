@@ -43,8 +43,8 @@ namespace {
 constexpr double kWeightScale = 4503599627370496.0;  // 2^52
 
 constexpr char kCheckpointKind[] = "grove footslam";
-// FootSLAM's checkpoint body layout; bumped whenever it changes. 2: poses of the paths in
-// double precision, the filter's count of weighting steps.
+// FootSLAM's checkpoint body layout; bumped whenever it changes. 2: path positions relative to
+// the start, the filter's count of weighting steps.
 constexpr uint32_t kFootSlamFormatVersion = 2;
 
 // Runs f() -> StatusOr<T> or Status, turning an escaping exception into a status.
@@ -131,7 +131,7 @@ class Engine final : public FootSlam::Impl {
     std::vector<StampedPose> out;
     const std::vector<double>& times = driver_.times();
     for (const auto* n : footslam::PoseHistory::Path(model_.history(driver_.filter().heaviest()))) {
-      out.push_back({times[n->step], Pose2{n->value.x_m, n->value.y_m, n->value.heading_rad}});
+      out.push_back({times[n->step], model_.PoseOf(n->value)});
     }
     return out;
   }
@@ -283,7 +283,7 @@ int64_t FootSlam::EstimatePeakBytes(const FootSlamConfig& config, int64_t steps)
   // gather's temporaries.
   const int64_t state = 176;
   // Live poses stay near steps + C N log N (tests/stress/footslam_long_run_test.cc): with the
-  // 48-byte nodes of two generations, about 3 nodes per particle at 30,000 to 1,000,000.
+  // 32-byte nodes of two generations, about 3 nodes per particle at 30,000 to 1,000,000.
   const int64_t pose_node = (sizeof(footslam::PoseHistory::Node) + 15) / 16 * 16;
   const int64_t history = 3 * pose_node;
   // What grows with the walk whatever the particles: the time and mean pose of every step

@@ -136,7 +136,7 @@ TEST(AncestryTest, ReleaseManyFreesWhatReleaseFrees) {
     ASSERT_EQ(pa.size(), pb.size());
     for (size_t j = 0; j < pa.size(); ++j) {
       ASSERT_EQ(pa[j]->step, pb[j]->step);
-      ASSERT_EQ(pa[j]->value.x_m, pb[j]->value.x_m);
+      ASSERT_EQ(pa[j]->value.dx_m, pb[j]->value.dx_m);
     }
   }
   for (PoseHistory::Node* n : a) one.Release(n, 0);
