@@ -100,7 +100,7 @@ class RunJob {
   // Filter steps taken so far.
   virtual int64_t steps() const = 0;
 
-  // Adds the model's outputs to `out` and its fields to `summary`; `stop_requested()` is true
+  // Adds the model's outputs to `out` and its fields to `summary`; StopRequested() is true
   // when a signal asked the run to stop (check it between long pieces of work).
   virtual Status WriteOutputs(OutputSet* out, nlohmann::json* summary) = 0;
   // One paragraph for the terminal after a run.
