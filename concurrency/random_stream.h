@@ -50,6 +50,7 @@ enum StreamPurpose : uint32_t {
   kTest = 0,           // tests and tools
   kMotion = 1,         // a particle's motion noise in a step
   kInit = 2,           // a particle's initial state
+  kProposal = 3,       // a particle's draw from FastSLAM 2.0's proposal at a scan
   kResample = 0x5E5A,  // the resampling draws of a step
 };
 

@@ -38,6 +38,32 @@
 
 namespace grove {
 
+// Runs f() -> StatusOr<T> or Status, turning an escaping exception into a status: what every
+// facade call that builds a container wraps itself in.
+template <typename F>
+auto NoThrow(F&& f) noexcept -> decltype(f()) {
+  try {
+    return f();
+  } catch (const std::bad_alloc&) {
+    return ResourceExhaustedError("out of memory");
+  } catch (const std::exception& e) {
+    return InternalError(std::string("unexpected exception: ") + e.what());
+  } catch (...) {
+    return InternalError("unexpected exception");
+  }
+}
+
+// The loop's options from a model's configuration, whose fields carry the same names.
+template <typename Config>
+FilterOptions FilterOptionsOf(const Config& c) {
+  FilterOptions o;
+  o.resampling = c.resampling;
+  o.resample_threshold = c.resample_threshold;
+  o.batch = static_cast<size_t>(c.batch);
+  o.seed = c.seed;
+  return o;
+}
+
 enum class TimeOrder {
   kIncreasing,     // every step after the one before (FootSLAM's steps)
   kNonDecreasing,  // a step may share the time of the one before (an update after a prediction)

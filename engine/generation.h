@@ -1,5 +1,5 @@
-// GatherShared: the next generation of reference-counted handles (map roots, path histories)
-// after resampling.
+// GatherShared and GatherValues: the next generation of reference-counted handles (map roots,
+// path histories) and of plain per-particle values after resampling.
 #ifndef GROVE_ENGINE_GENERATION_H_
 #define GROVE_ENGINE_GENERATION_H_
 
@@ -34,6 +34,17 @@ std::vector<Handle> GatherShared(std::span<const uint32_t> parents, std::vector<
     }
   });
   return next;
+}
+
+// The next generation of a per-particle value (a pose, an error state): (*v)[k] becomes the old
+// (*v)[parents[k]], in parallel.
+template <typename T>
+void GatherValues(std::span<const uint32_t> parents, WorkerPool& workers, std::vector<T>* v) {
+  std::vector<T> next(parents.size());
+  workers.ParallelFor(parents.size(), 4096, [&](int, size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k) next[k] = (*v)[parents[k]];
+  });
+  v->swap(next);
 }
 
 }  // namespace grove

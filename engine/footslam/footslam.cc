@@ -47,20 +47,6 @@ constexpr char kCheckpointKind[] = "grove footslam";
 // the start, the filter's count of weighting steps.
 constexpr uint32_t kFootSlamFormatVersion = 2;
 
-// Runs f() -> StatusOr<T> or Status, turning an escaping exception into a status.
-template <typename F>
-auto NoThrow(F&& f) noexcept -> decltype(f()) {
-  try {
-    return f();
-  } catch (const std::bad_alloc&) {
-    return ResourceExhaustedError("out of memory");
-  } catch (const std::exception& e) {
-    return InternalError(std::string("unexpected exception: ") + e.what());
-  } catch (...) {
-    return InternalError("unexpected exception");
-  }
-}
-
 }  // namespace
 
 class FootSlam::Impl {
@@ -219,15 +205,6 @@ class Engine final : public FootSlam::Impl {
   Status CheckInvariants() const override { return model_.CheckCounts(); }
 
  private:
-  static FilterOptions FilterOptionsOf(const FootSlamConfig& c) {
-    FilterOptions o;
-    o.resampling = c.resampling;
-    o.resample_threshold = c.resample_threshold;
-    o.batch = static_cast<size_t>(c.batch);
-    o.seed = c.seed;
-    return o;
-  }
-
   HexCounts HexOf(uint64_t key) const {
     Hex h = model_.HexOfKey(key);
     HexCounts hc;

@@ -107,18 +107,13 @@ bool ParseFootSlamWeighting(const std::string& name, FootSlamWeighting* w) {
 }
 
 std::string FootSlamSummary::BriefReport() const {
-  double total = filter_s();
-  double rate = total > 0 ? static_cast<double>(particles) * steps / total : 0;
-  return fmt::format(
-      "FootSLAM: {} particles x {} steps on {} thread(s) in {:.2f} s ({:.2f} M particle-steps/s, "
-      "{:.0f} ns per particle-step); {} resamplings, mean ESS {:.0f} ({:.1f} %); phases: advance "
-      "{:.2f} s, normalise {:.2f} s, resample {:.2f} s, release {:.2f} s, bookkeeping {:.2f} s; "
-      "map {} live nodes ({:.1f} MiB, peak {:.1f} MiB), trajectory {} live nodes ({:.1f} MiB).",
-      particles, steps, threads_used, total, rate / 1e6, rate > 0 ? 1e9 / rate : 0.0, resamplings,
-      mean_ess, particles > 0 ? 100.0 * mean_ess / particles : 0.0, advance_s, normalize_s,
-      resample_s, release_s, bookkeeping_s, map_memory.live_nodes,
-      map_memory.live_bytes / 1048576.0, map_memory.peak_live_bytes / 1048576.0,
-      trajectory_memory.live_nodes, trajectory_memory.live_bytes / 1048576.0);
+  return BriefFilterReport("FootSLAM") +
+         fmt::format(
+             "; map {} live nodes ({:.1f} MiB, peak {:.1f} MiB), trajectory {} live nodes "
+             "({:.1f} MiB).",
+             map_memory.live_nodes, map_memory.live_bytes / 1048576.0,
+             map_memory.peak_live_bytes / 1048576.0, trajectory_memory.live_nodes,
+             trajectory_memory.live_bytes / 1048576.0);
 }
 
 }  // namespace grove

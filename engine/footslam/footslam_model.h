@@ -26,6 +26,7 @@
 #include "engine/footslam/hex_grid.h"
 #include "engine/footslam/htc.h"
 #include "engine/footslam/htree_layout.h"
+#include "engine/generation.h"
 #include "engine/version_set.h"
 #include "grove/footslam.h"
 
@@ -177,13 +178,13 @@ class FootSlamModel {
   }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
-    GatherVector(parents, workers, &x_);
-    GatherVector(parents, workers, &y_);
-    GatherVector(parents, workers, &heading_);
-    GatherVector(parents, workers, &heading_unit_);
-    GatherVector(parents, workers, &heading_error_);
-    GatherVector(parents, workers, &scale_);
-    GatherVector(parents, workers, &hex_);
+    GatherValues(parents, workers, &x_);
+    GatherValues(parents, workers, &y_);
+    GatherValues(parents, workers, &heading_);
+    GatherValues(parents, workers, &heading_unit_);
+    GatherValues(parents, workers, &heading_error_);
+    GatherValues(parents, workers, &scale_);
+    GatherValues(parents, workers, &hex_);
     history_roots_.Gather(parents, workers);
     map_->Gather(parents, workers);
   }
@@ -302,16 +303,6 @@ class FootSlamModel {
   }
   static Status NoMemory(size_t i, const char* what) {
     return ResourceExhaustedError(fmt::format("out of memory for particle {}'s {}", i, what));
-  }
-
-  template <typename T>
-  static void GatherVector(std::span<const uint32_t> parents, WorkerPool& workers,
-                           std::vector<T>* v) {
-    std::vector<T> next(parents.size());
-    workers.ParallelFor(parents.size(), 4096, [&](int, size_t b, size_t e) {
-      for (size_t k = b; k < e; ++k) next[k] = (*v)[parents[k]];
-    });
-    v->swap(next);
   }
 
   const FootSlamConfig config_;

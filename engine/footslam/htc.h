@@ -24,8 +24,7 @@
 
 #include <cstdint>
 
-#include "alloc/node_pool.h"
-#include "grove/types.h"
+#include "engine/memory_use.h"
 
 namespace grove::footslam {
 
@@ -46,13 +45,7 @@ struct EdgeCounts {
   uint32_t total;  // C_h before the crossing
 };
 
-inline void AddPoolStats(const PoolStats& s, MemoryUse* m) {
-  m->live_nodes += s.live_nodes;
-  m->live_bytes += s.live_bytes();
-  m->peak_live_nodes += s.peak_live_nodes;
-  m->peak_live_bytes += s.peak_live_bytes();
-  m->reserved_bytes += s.reserved_bytes;
-}
+using grove::AddPoolStats;
 
 }  // namespace grove::footslam
 

@@ -4,6 +4,8 @@
 #define GROVE_TYPES_H_
 
 #include <cstdint>
+#include <string>
+#include <string_view>
 
 namespace grove {
 
@@ -45,6 +47,9 @@ struct FilterSummary {
   double filter_s() const {
     return advance_s + normalize_s + resample_s + release_s + bookkeeping_s;
   }
+  // "MODEL: N particles x S steps on T thread(s) in X s (rate, ns per particle-step);
+  // R resamplings, mean ESS E (P %); phases: ...": the sentence every model's report starts with.
+  std::string BriefFilterReport(std::string_view model) const;
 };
 
 }  // namespace grove

@@ -1,0 +1,404 @@
+// The landmark FastSLAM facade: the engine on the generic FilterDriver, its inputs, read-outs
+// and checkpoints.
+#include "grove/fastslam.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <thread>
+
+#include "concurrency/worker_pool.h"
+#include "engine/checkpoint_io.h"
+#include "engine/fastslam/fastslam_model.h"
+#include "engine/filter_driver.h"
+
+namespace grove {
+
+using fastslam::ControlStep;
+using fastslam::FastSlamModel;
+using fastslam::ScanStep;
+using fastslam::SegmentHistory;
+using fastslam::VehiclePose;
+
+namespace {
+
+constexpr char kCheckpointKind[] = "grove fastslam";
+// FastSLAM's checkpoint body layout; bumped whenever it changes.
+constexpr uint32_t kFastSlamFormatVersion = 1;
+
+// The landmark trees' degree, 2^kLog2Degree (see the README for the measurement behind it).
+constexpr int kLog2Degree = 2;
+
+// What each filter step was: the replay of paths and the reported trajectory need it.
+enum StepKind : uint8_t {
+  kControlPredict = 0,  // a Control(): reported
+  kScanPredict = 1,     // the prediction to a scan's time: not reported
+  kScanUpdate = 2,      // a scan's update: reported
+};
+
+struct StepRecord {
+  ControlStep control;  // for the predictions
+  uint8_t kind = 0;
+  uint8_t unused[7] = {};
+};
+
+Status CheckObservation(size_t k, const LandmarkObservation& z) {
+  if (!std::isfinite(z.range_m) || !std::isfinite(z.bearing_rad)) {
+    return InvalidArgumentError(fmt::format(
+        "observation {}: range = {}, bearing = {}: must be finite", k, z.range_m, z.bearing_rad));
+  }
+  if (z.range_m < 0) {
+    return InvalidArgumentError(
+        fmt::format("observation {}: range = {}: must be >= 0", k, z.range_m));
+  }
+  if (!(z.bearing_rad > -std::numbers::pi && z.bearing_rad <= std::numbers::pi)) {
+    return InvalidArgumentError(
+        fmt::format("observation {}: bearing = {}: must be in (-pi, pi]", k, z.bearing_rad));
+  }
+  if (z.id < 0) {
+    return InvalidArgumentError(fmt::format("observation {}: id = {}: must be >= 0", k, z.id));
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+class FastSlam::Impl {
+ public:
+  using Model = FastSlamModel<kLog2Degree>;
+
+  Impl(const FastSlamConfig& config, int threads)
+      : config_(config),
+        workers_(threads),
+        model_(config, workers_.num_slots()),
+        driver_(&model_, &workers_, FilterOptionsOf(config), config.threads,
+                Pose2{config.start_x_m, config.start_y_m, config.start_heading_rad},
+                TimeOrder::kNonDecreasing),
+        geometry_(fastslam::VehicleGeometry::Of(config)) {
+    reported_.push_back(driver_.mean_trajectory().front());
+  }
+
+  Status Control(double t_s, double v, double g) {
+    if (!std::isfinite(t_s) || !std::isfinite(v) || !std::isfinite(g)) {
+      return InvalidArgumentError(fmt::format(
+          "control at t = {}: v = {}, steer = {}: every value must be finite", t_s, v, g));
+    }
+    if (!fastslam::SteeringUsable(geometry_, g)) {
+      return InvalidArgumentError(
+          fmt::format("control at t = {}: steer = {}: the {} model needs |steer| < pi/2 and "
+                      "1 - tan(steer) H / L > 0",
+                      t_s, g, FastSlamVehicleName(config_.vehicle)));
+    }
+    GROVE_RETURN_IF_ERROR(driver_.CheckNotFailed("cannot take another control"));
+    if (controls_ == 0) {
+      GROVE_RETURN_IF_ERROR(driver_.SetStartTime(t_s));
+      reported_.front().t_s = t_s;
+    } else {
+      if (!(t_s > last_control_s_)) {
+        return InvalidArgumentError(
+            fmt::format("control at t = {} is not after the previous control at t = {}: control "
+                        "times must be strictly increasing",
+                        t_s, last_control_s_));
+      }
+      if (t_s < driver_.times().back()) {
+        return InvalidArgumentError(fmt::format(
+            "control at t = {} is before the last scan at t = {}", t_s, driver_.times().back()));
+      }
+      GROVE_RETURN_IF_ERROR(PredictTo(t_s, kControlPredict));
+    }
+    held_ = {v, g};
+    last_control_s_ = t_s;
+    ++controls_;
+    return Status::Ok();
+  }
+
+  Status Scan(double t_s, std::span<const LandmarkObservation> z) {
+    if (!std::isfinite(t_s)) {
+      return InvalidArgumentError(fmt::format("scan at t = {}: must be finite", t_s));
+    }
+    if (controls_ == 0) {
+      return InvalidArgumentError(
+          fmt::format("scan at t = {} comes before the first control: the filter has no start "
+                      "time and no control to predict with",
+                      t_s));
+    }
+    if (t_s < driver_.times().back()) {
+      return InvalidArgumentError(
+          fmt::format("scan at t = {} is before the previous time {}: times must not decrease", t_s,
+                      driver_.times().back()));
+    }
+    for (size_t k = 0; k < z.size(); ++k) {
+      Status s = CheckObservation(k, z[k]);
+      if (!s.ok()) return Status(s.code(), fmt::format("scan at t = {}: {}", t_s, s.message()));
+    }
+    GROVE_RETURN_IF_ERROR(driver_.CheckNotFailed("cannot take another scan"));
+    return driver_.Guarded([&]() -> Status {
+      if (t_s > driver_.times().back()) GROVE_RETURN_IF_ERROR(PredictTo(t_s, kScanPredict));
+      StepRecord record;
+      record.kind = kScanUpdate;
+      log_.push_back(record);
+      Status s = driver_.Update(t_s, ScanStep{z});
+      if (!s.ok()) {
+        log_.pop_back();
+        return s;
+      }
+      model_.set_segment_start(true);
+      reported_.push_back(driver_.mean_trajectory().back());
+      ++scans_;
+      observations_ += static_cast<int64_t>(z.size());
+      return Status::Ok();
+    });
+  }
+
+  const FastSlamConfig& config() const { return config_; }
+  int64_t steps() const { return driver_.steps(); }
+  Pose2 MeanPose() const { return driver_.mean_trajectory().back().pose; }
+  Pose2 HeaviestPose() const {
+    const VehiclePose& p = model_.pose(driver_.filter().heaviest());
+    return Pose2{p.x_m, p.y_m, p.heading_rad};
+  }
+  const std::vector<StampedPose>& MeanTrajectory() const { return reported_; }
+
+  // Replays the heaviest particle's predictions segment by segment (fastslam_model.h).
+  std::vector<StampedPose> HeaviestTrajectory() const {
+    const size_t h = driver_.filter().heaviest();
+    const std::vector<double>& times = driver_.times();
+    const size_t steps = log_.size();
+    std::vector<StampedPose> out;
+    out.reserve(reported_.size());
+    out.push_back(reported_.front());
+    if (steps == 0) return out;
+    std::vector<const SegmentHistory::Node*> chain = SegmentHistory::Path(model_.path(h));
+    const VehiclePose& now = model_.pose(h);
+    for (size_t j = 0; j < chain.size(); ++j) {
+      const fastslam::SegmentStart& s = chain[j]->value;
+      VehiclePose p{s.x_m, s.y_m, s.heading_rad};
+      const size_t stop = j + 1 < chain.size() ? chain[j + 1]->step : steps;
+      for (size_t k = chain[j]->step; k < stop; ++k) {
+        if (log_[k].kind == kScanUpdate) {
+          // A scan closes its segment: the pose after it starts the next one (or is the
+          // particle's pose now, after the last step).
+          if (k + 1 == stop && j + 1 < chain.size()) {
+            const fastslam::SegmentStart& next = chain[j + 1]->value;
+            p = VehiclePose{next.x_m, next.y_m, next.heading_rad};
+          } else if (k + 1 == steps) {
+            p = now;
+          }
+        } else {
+          bool usable = true;
+          p = model_.PredictPose(p, log_[k].control, k, s.index, &usable);
+        }
+        if (log_[k].kind != kScanPredict) {
+          out.push_back({times[k + 1], Pose2{p.x_m, p.y_m, p.heading_rad}});
+        }
+      }
+    }
+    return out;
+  }
+
+  std::vector<LandmarkEstimate> HeaviestLandmarks() const {
+    std::vector<LandmarkEstimate> out;
+    model_.trie().ForEach(
+        model_.map(driver_.filter().heaviest()), [&](uint64_t id, const fastslam::Landmark& l) {
+          out.push_back({static_cast<int64_t>(id), l.x_m, l.y_m, l.xx, l.xy, l.yy});
+        });
+    return out;
+  }
+
+  FastSlamSummary Summary() const {
+    FastSlamSummary s;
+    static_cast<FilterSummary&>(s) = driver_.Summary();
+    s.controls = controls_;
+    s.scans = scans_;
+    s.observations = observations_;
+    s.predict_steps = driver_.steps() - scans_;
+    int64_t landmarks = 0;
+    model_.trie().ForEach(model_.map(driver_.filter().heaviest()),
+                          [&](uint64_t, const fastslam::Landmark&) { ++landmarks; });
+    s.landmarks = landmarks;
+    s.map_memory = model_.map_memory();
+    s.trajectory_memory = model_.path_memory();
+    return s;
+  }
+
+  Status CheckInvariants() const { return model_.CheckCounts(); }
+
+  StatusOr<std::string> Save(std::string_view user_data) const {
+    GROVE_RETURN_IF_ERROR(driver_.CheckNotFailed("there is no state to save"));
+    ByteWriter w;
+    WriteCheckpointHead(&w, kCheckpointKind, CheckpointFieldsOf(FastSlamConfigFields(), config_),
+                        user_data);
+    driver_.Save(&w);
+    model_.Save(&w);
+    w.Put<int64_t>(controls_);
+    w.Put<int64_t>(scans_);
+    w.Put<int64_t>(observations_);
+    w.Put<double>(last_control_s_);
+    w.Put<double>(held_.v_mps);
+    w.Put<double>(held_.steer_rad);
+    w.Put<uint64_t>(log_.size());
+    w.PutBytes(log_.data(), log_.size() * sizeof(StepRecord));
+    w.Put<uint32_t>(kCheckpointEndMarker);
+    return w.Take();
+  }
+
+  Status Load(ByteReader* r) {
+    GROVE_RETURN_IF_ERROR(driver_.Load(r));
+    const uint64_t steps = static_cast<uint64_t>(driver_.steps());
+    GROVE_RETURN_IF_ERROR(model_.Load(r, steps));
+    int64_t controls = 0, scans = 0, observations = 0;
+    double last_control = 0, v = 0, g = 0;
+    uint64_t count = 0;
+    GROVE_RETURN_IF_ERROR(r->Get("controls", &controls));
+    GROVE_RETURN_IF_ERROR(r->Get("scans", &scans));
+    GROVE_RETURN_IF_ERROR(r->Get("observations", &observations));
+    GROVE_RETURN_IF_ERROR(r->Get("last control time", &last_control));
+    GROVE_RETURN_IF_ERROR(r->Get("held speed", &v));
+    GROVE_RETURN_IF_ERROR(r->Get("held steering", &g));
+    GROVE_RETURN_IF_ERROR(r->GetCount("step count", sizeof(StepRecord), &count));
+    if (count != steps) return r->Error("step count", "not one record per filter step");
+    std::vector<StepRecord> log(count);
+    GROVE_RETURN_IF_ERROR(r->GetBytes("steps", log.data(), count * sizeof(StepRecord)));
+    int64_t updates = 0, control_predicts = 0;
+    for (const StepRecord& s : log) {
+      if (s.kind > kScanUpdate) return r->Error("steps", "a step of an unknown kind");
+      if (s.kind != kScanUpdate && (!std::isfinite(s.control.v_mps) ||
+                                    !fastslam::SteeringUsable(geometry_, s.control.steer_rad) ||
+                                    !(s.control.dt_s >= 0) || !std::isfinite(s.control.dt_s))) {
+        return r->Error("steps", "a prediction's control is not usable");
+      }
+      updates += s.kind == kScanUpdate;
+      control_predicts += s.kind == kControlPredict;
+    }
+    if (scans != updates || controls != control_predicts + (controls > 0 ? 1 : 0) ||
+        (steps > 0 && controls == 0) || observations < 0) {
+      return r->Error("controls", "the counts do not match the steps");
+    }
+    if (!std::isfinite(last_control) || !std::isfinite(v) ||
+        !fastslam::SteeringUsable(geometry_, g)) {
+      return r->Error("held control", "not finite or not usable");
+    }
+    uint32_t end = 0;
+    GROVE_RETURN_IF_ERROR(r->Get("end marker", &end));
+    if (end != kCheckpointEndMarker || !r->at_end()) {
+      return r->Error("end marker", "missing, or bytes follow it");
+    }
+    controls_ = controls;
+    scans_ = scans;
+    observations_ = observations;
+    last_control_s_ = last_control;
+    held_ = {v, g};
+    log_.swap(log);
+    const std::vector<StampedPose>& mean = driver_.mean_trajectory();
+    reported_.assign(1, mean.front());
+    for (size_t k = 0; k < log_.size(); ++k) {
+      if (log_[k].kind != kScanPredict) reported_.push_back(mean[k + 1]);
+    }
+    return Status::Ok();
+  }
+
+ private:
+  struct Held {
+    double v_mps = 0;
+    double steer_rad = 0;
+  };
+
+  // One prediction with the held control from the last time to t_s.
+  Status PredictTo(double t_s, StepKind kind) {
+    return driver_.Guarded([&]() -> Status {
+      StepRecord record;
+      record.control = ControlStep{held_.v_mps, held_.steer_rad, t_s - driver_.times().back()};
+      record.kind = kind;
+      log_.push_back(record);
+      Status s = driver_.Predict(t_s, record.control);
+      if (!s.ok()) {
+        log_.pop_back();
+        return s;
+      }
+      model_.set_segment_start(false);
+      if (kind == kControlPredict) reported_.push_back(driver_.mean_trajectory().back());
+      return Status::Ok();
+    });
+  }
+
+  FastSlamConfig config_;
+  WorkerPool workers_;
+  Model model_;
+  FilterDriver<Model> driver_;
+  fastslam::VehicleGeometry geometry_;
+  std::vector<StepRecord> log_;        // one per filter step
+  std::vector<StampedPose> reported_;  // the mean pose at the start and each reported step
+  Held held_;
+  double last_control_s_ = 0;
+  int64_t controls_ = 0;
+  int64_t scans_ = 0;
+  int64_t observations_ = 0;
+};
+
+FastSlam::FastSlam(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+FastSlam::~FastSlam() = default;
+
+StatusOr<std::unique_ptr<FastSlam>> FastSlam::Create(const FastSlamConfig& config) {
+  GROVE_RETURN_IF_ERROR(config.Validate());
+  return NoThrow([&]() -> StatusOr<std::unique_ptr<FastSlam>> {
+    const int threads = config.threads > 0
+                            ? config.threads
+                            : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+    return std::unique_ptr<FastSlam>(new FastSlam(std::make_unique<Impl>(config, threads)));
+  });
+}
+
+Status FastSlam::Control(double t_s, double speed_mps, double steer_rad) {
+  return NoThrow([&] { return impl_->Control(t_s, speed_mps, steer_rad); });
+}
+Status FastSlam::Scan(double t_s, std::span<const LandmarkObservation> observations) {
+  return NoThrow([&] { return impl_->Scan(t_s, observations); });
+}
+const FastSlamConfig& FastSlam::config() const { return impl_->config(); }
+int64_t FastSlam::steps() const { return impl_->steps(); }
+Pose2 FastSlam::MeanPose() const { return impl_->MeanPose(); }
+Pose2 FastSlam::HeaviestPose() const { return impl_->HeaviestPose(); }
+const std::vector<StampedPose>& FastSlam::MeanTrajectory() const { return impl_->MeanTrajectory(); }
+StatusOr<std::vector<StampedPose>> FastSlam::HeaviestTrajectory() const {
+  return NoThrow(
+      [&]() -> StatusOr<std::vector<StampedPose>> { return impl_->HeaviestTrajectory(); });
+}
+StatusOr<std::vector<LandmarkEstimate>> FastSlam::HeaviestLandmarks() const {
+  return NoThrow(
+      [&]() -> StatusOr<std::vector<LandmarkEstimate>> { return impl_->HeaviestLandmarks(); });
+}
+FastSlamSummary FastSlam::Summary() const { return impl_->Summary(); }
+Status FastSlam::CheckInvariants() const { return impl_->CheckInvariants(); }
+
+StatusOr<std::string> FastSlam::Checkpoint(std::string_view user_data) const {
+  return NoThrow([&]() -> StatusOr<std::string> {
+    StatusOr<std::string> body = impl_->Save(user_data);
+    if (!body.ok()) return body.status();
+    return SealCheckpoint(*body, kFastSlamFormatVersion);
+  });
+}
+
+StatusOr<std::unique_ptr<FastSlam>> FastSlam::Resume(const FastSlamConfig& config,
+                                                     std::string_view checkpoint,
+                                                     const std::string& name,
+                                                     std::string* user_data) {
+  GROVE_RETURN_IF_ERROR(config.Validate());
+  return NoThrow([&]() -> StatusOr<std::unique_ptr<FastSlam>> {
+    StatusOr<UnsealedCheckpoint> file = UnsealCheckpoint(checkpoint, name);
+    if (!file.ok()) return file.status();
+    ByteReader reader(file->body, name);
+    std::string user;
+    GROVE_RETURN_IF_ERROR(ReadCheckpointHead(
+        &reader, kCheckpointKind, "FastSLAM", file->format_version, kFastSlamFormatVersion,
+        CheckpointFieldsOf(FastSlamConfigFields(), config), &user));
+    StatusOr<std::unique_ptr<FastSlam>> slam = Create(config);
+    if (!slam.ok()) return slam.status();
+    GROVE_RETURN_IF_ERROR((*slam)->impl_->Load(&reader));
+    if (user_data != nullptr) user_data->swap(user);
+    return slam;
+  });
+}
+
+}  // namespace grove

@@ -1,0 +1,86 @@
+// FastSlamConfig's field table, its validation, the names of its enums and the summary's report.
+#include <fmt/format.h>
+
+#include <numbers>
+
+#include "grove/fastslam.h"
+
+namespace grove {
+
+const std::vector<ConfigField<FastSlamConfig>>& FastSlamConfigFields() {
+  using C = FastSlamConfig;
+  using I = Interval;
+  constexpr double kPi = std::numbers::pi;
+  // Never destroyed: read-outs of it may run during static destruction.
+  static const auto* fields = new std::vector<ConfigField<C>>{
+      IntegerField("particles", &C::particles, 1, int64_t{1} << 31, kChangesResults,
+                   "Number of particles"),
+      UnsignedField("seed", &C::seed, kChangesResults, "Seed of every random stream"),
+      ChoiceField("filter", &C::filter, {"fastslam1", "fastslam2"}, kChangesResults,
+                  "The filter: fastslam1 or fastslam2"),
+      ChoiceField("vehicle", &C::vehicle, {"bailey", "guivant_nebot"}, kChangesResults,
+                  "The vehicle model: bailey or guivant_nebot"),
+      RealField("wheelbase_m", &C::wheelbase_m, I::LeftOpen(0, 100), kChangesResults,
+                "Distance between the axles, metres"),
+      RealField("encoder_offset_m", &C::encoder_offset_m, I::Closed(-100, 100), kChangesResults,
+                "guivant_nebot: rear axle centre to the encoder wheel, metres"),
+      RealField("laser_forward_m", &C::laser_forward_m, I::Closed(-100, 100), kChangesResults,
+                "guivant_nebot: laser ahead of the rear axle, metres"),
+      RealField("laser_left_m", &C::laser_left_m, I::Closed(-100, 100), kChangesResults,
+                "guivant_nebot: laser to the side of the axle centre, metres"),
+      RealField("sigma_speed_mps", &C::sigma_speed_mps, I::Closed(0, 100), kChangesResults,
+                "Speed noise (standard deviation), m/s"),
+      RealField("sigma_steer_rad", &C::sigma_steer_rad, I::Closed(0, kPi), kChangesResults,
+                "Steering angle noise (standard deviation), radians"),
+      RealField("sigma_range_m", &C::sigma_range_m, I::Closed(0, 1e4), kChangesResults,
+                "Range noise (standard deviation), metres"),
+      RealField("sigma_bearing_rad", &C::sigma_bearing_rad, I::Closed(0, kPi), kChangesResults,
+                "Bearing noise (standard deviation), radians"),
+      RealField("start_x_m", &C::start_x_m, I::Closed(-1e9, 1e9), kChangesResults,
+                "Start position x, metres"),
+      RealField("start_y_m", &C::start_y_m, I::Closed(-1e9, 1e9), kChangesResults,
+                "Start position y, metres"),
+      RealField("start_heading_rad", &C::start_heading_rad, I::Closed(-1000, 1000), kChangesResults,
+                "Start heading, radians"),
+      ChoiceField("resampling", &C::resampling,
+                  {"systematic", "stratified", "residual", "multinomial"}, kChangesResults,
+                  "Resampling scheme"),
+      RealField("resample_threshold", &C::resample_threshold, I::LeftOpen(0, 1), kChangesResults,
+                "Resample after a scan when ESS/N is below this; 1 resamples every scan"),
+      IntegerField("threads", &C::threads, 0, 256, kChangesSpeedOnly,
+                   "Worker threads; 0: one per hardware thread"),
+      IntegerField("batch", &C::batch, 1, int64_t{1} << 31, kChangesSpeedOnly,
+                   "Particles per parallel batch"),
+  };
+  return *fields;
+}
+
+Status FastSlamConfig::Validate() const {
+  GROVE_RETURN_IF_ERROR(CheckFieldRanges(FastSlamConfigFields(), *this));
+  if (vehicle == FastSlamVehicle::kGuivantNebot && !(encoder_offset_m < wheelbase_m)) {
+    // 1 - tan(G) H / L > 0 must hold for small steering angles of either sign.
+    return InvalidArgumentError(fmt::format(
+        "encoder_offset_m = {}: must be below wheelbase_m = {} for the guivant_nebot vehicle",
+        encoder_offset_m, wheelbase_m));
+  }
+  return Status::Ok();
+}
+
+const char* FastSlamFilterName(FastSlamFilter filter) {
+  return filter == FastSlamFilter::kFastSlam1 ? "fastslam1" : "fastslam2";
+}
+const char* FastSlamVehicleName(FastSlamVehicle vehicle) {
+  return vehicle == FastSlamVehicle::kBailey ? "bailey" : "guivant_nebot";
+}
+
+std::string FastSlamSummary::BriefReport() const {
+  return BriefFilterReport("FastSLAM") +
+         fmt::format(
+             "; {} controls, {} scans, {} observations, {} landmarks in the heaviest map; map {} "
+             "live nodes ({:.1f} MiB, peak {:.1f} MiB), paths {} live nodes ({:.1f} MiB).",
+             controls, scans, observations, landmarks, map_memory.live_nodes,
+             map_memory.live_bytes / 1048576.0, map_memory.peak_live_bytes / 1048576.0,
+             trajectory_memory.live_nodes, trajectory_memory.live_bytes / 1048576.0);
+}
+
+}  // namespace grove

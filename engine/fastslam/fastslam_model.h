@@ -1,0 +1,370 @@
+// FastSlamModel: the landmark FastSLAM particle for ParticleFilter (grove/fastslam.h), generic
+// over the degree of its landmark trees.
+//
+// Per particle (structure of arrays): the vehicle pose and its unit heading vector, FastSLAM
+// 2.0's pose covariance, the map (a version of a PersistentTrie keyed by landmark id, leaves
+// holding a landmark Gaussian) and the path history.
+//
+// Steps:
+//   Predict(ControlStep): FastSLAM 1.0 draws the particle's own control from N(u, Q) and moves;
+//     FastSLAM 2.0 moves the mean with the control and propagates the pose covariance,
+//     Sigma' = Gv Sigma Gv^T + Gu Q Gu^T.
+//   Advance(ScanStep): FastSLAM 1.0 adds log N(v; 0, S) of each observation of a known
+//     landmark and updates it (EKF, Joseph form); FastSLAM 2.0 refines the pose mean and
+//     covariance by each observation of a known landmark (adding each one's predictive
+//     log-likelihood), draws the pose from the result (its covariance then starts again at 0)
+//     and updates the landmarks from the drawn pose. Both initialise new landmarks from the pose.
+//
+// Paths: a particle does not store a pose per step. Its history holds one entry per path
+// segment: the pose and particle index at the first prediction after the start or a scan.
+// Within a segment a particle keeps its index (resampling happens only at scans), so its poses
+// there are the same predictions redone from the segment's start (PredictPose() draws the same
+// numbers from the counter-based streams). The pose after a segment's closing scan is the next
+// entry's start pose. A path thus costs one node per scan, not one per control step, and the
+// histories of copies share their common part (Ancestry).
+#ifndef GROVE_ENGINE_FASTSLAM_FASTSLAM_MODEL_H_
+#define GROVE_ENGINE_FASTSLAM_FASTSLAM_MODEL_H_
+
+#include <fmt/format.h>
+
+#include <Eigen/Core>
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "concurrency/random_stream.h"
+#include "concurrency/worker_pool.h"
+#include "engine/ancestry.h"
+#include "engine/checkpoint_io.h"
+#include "engine/fastslam/landmark_math.h"
+#include "engine/fastslam/vehicle_model.h"
+#include "engine/generation.h"
+#include "engine/memory_use.h"
+#include "engine/persistent_trie.h"
+#include "engine/version_set.h"
+#include "grove/fastslam.h"
+
+namespace grove::fastslam {
+
+// A control held over dt_s.
+struct ControlStep {
+  double v_mps = 0;
+  double steer_rad = 0;
+  double dt_s = 0;
+};
+
+// One scan's observations (validated by the facade).
+struct ScanStep {
+  std::span<const LandmarkObservation> observations;
+};
+
+// The start of a path segment: the pose before the segment's first prediction and the
+// particle's index during the segment.
+struct SegmentStart {
+  double x_m, y_m, heading_rad;
+  uint32_t index;
+  uint32_t unused;
+};
+using SegmentHistory = Ancestry<SegmentStart>;
+
+inline bool ValidSegmentStart(const SegmentStart& s) {
+  return std::isfinite(s.x_m) && std::isfinite(s.y_m) && std::isfinite(s.heading_rad) &&
+         std::fabs(s.heading_rad) <= 4 && s.unused == 0;
+}
+
+// FastSLAM 2.0's pose covariance, its upper triangle.
+struct PoseCovariance {
+  double xx = 0, xy = 0, xh = 0, yy = 0, yh = 0, hh = 0;
+};
+
+template <int kLog2Degree>
+class FastSlamModel {
+ public:
+  using Trie = PersistentTrie<Landmark, kLog2Degree>;
+
+  // REQUIRES: config.Validate() is ok.
+  FastSlamModel(const FastSlamConfig& config, int slots)
+      : config_(config),
+        geometry_(VehicleGeometry::Of(config)),
+        noise_{config.sigma_range_m, config.sigma_bearing_rad},
+        n_(static_cast<size_t>(config.particles)),
+        trie_(1, slots),
+        history_(slots),
+        maps_(&trie_, n_),
+        paths_(&history_, n_) {
+    const VehiclePose start{config.start_x_m, config.start_y_m,
+                            WrapAngle(config.start_heading_rad)};
+    pose_.assign(n_, start);
+    unit_.assign(n_, Unit{std::cos(start.heading_rad), std::sin(start.heading_rad)});
+    cov_.assign(n_, PoseCovariance{});
+    q_ << config.sigma_speed_mps * config.sigma_speed_mps, 0, 0,
+        config.sigma_steer_rad * config.sigma_steer_rad;
+  }
+
+  size_t size() const { return n_; }
+
+  // The next Predict() is the first of a path segment (after the start or a scan).
+  void set_segment_start(bool v) { segment_start_ = v; }
+  bool segment_start() const { return segment_start_; }
+
+  // The pose particle `index` reaches from `p` by the prediction of filter step `step`: the
+  // one computation of a prediction, for Predict() and for the replay of paths.
+  VehiclePose PredictPose(const VehiclePose& p, const ControlStep& c, uint64_t step, uint32_t index,
+                          bool* usable) const {
+    double v = c.v_mps, g = c.steer_rad;
+    if (config_.filter == FastSlamFilter::kFastSlam1) {
+      RandomStream rs(config_.seed, step + 1, index, StreamPurpose::kMotion);
+      if (config_.sigma_speed_mps > 0) v += config_.sigma_speed_mps * rs.NextNormal();
+      if (config_.sigma_steer_rad > 0) g += config_.sigma_steer_rad * rs.NextNormal();
+    }
+    *usable = SteeringUsable(geometry_, g);
+    if (!*usable) return p;
+    return MoveVehicle(geometry_, p, v, g, c.dt_s);
+  }
+
+  Status Predict(const ControlStep& c, uint64_t step, size_t begin, size_t end, int slot) {
+    const bool fs2 = config_.filter == FastSlamFilter::kFastSlam2;
+    for (size_t i = begin; i < end; ++i) {
+      const VehiclePose p = pose_[i];
+      if (segment_start_) {
+        SegmentStart s{p.x_m, p.y_m, p.heading_rad, static_cast<uint32_t>(i), 0};
+        SegmentHistory::Node* node =
+            history_.Append(paths_[i], static_cast<uint32_t>(step), s, slot);
+        if (node == nullptr) return NoMemory(i, "path");
+        paths_[i] = node;
+      }
+      bool usable = true;
+      const VehiclePose next = PredictPose(p, c, step, static_cast<uint32_t>(i), &usable);
+      if (!usable) {
+        return FailedPreconditionError(fmt::format(
+            "particle {}'s steering angle is outside what the {} model can use (|G| < pi/2 and "
+            "1 - tan(G) H / L > 0)",
+            i, FastSlamVehicleName(config_.vehicle)));
+      }
+      if (!std::isfinite(next.x_m) || !std::isfinite(next.y_m) ||
+          !std::isfinite(next.heading_rad)) {
+        return FailedPreconditionError(fmt::format("particle {}'s pose ({}, {}, {}) is not finite",
+                                                   i, next.x_m, next.y_m, next.heading_rad));
+      }
+      if (fs2) {
+        Eigen::Matrix3d gv;
+        Eigen::Matrix<double, 3, 2> gu;
+        VehicleJacobians(geometry_, p, c.v_mps, c.steer_rad, c.dt_s, &gv, &gu);
+        const Eigen::Matrix3d sigma =
+            gv * Covariance(i) * gv.transpose() + gu * q_ * gu.transpose();
+        SetCovariance(i, sigma);
+      }
+      pose_[i] = next;
+      unit_[i] = Unit{std::cos(next.heading_rad), std::sin(next.heading_rad)};
+    }
+    return Status::Ok();
+  }
+
+  Status Advance(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot,
+                 double* log_w) {
+    if (scan.observations.empty()) return Status::Ok();
+    const bool fs2 = config_.filter == FastSlamFilter::kFastSlam2;
+    for (size_t i = begin; i < end; ++i) {
+      double lw = 0;
+      if (fs2) {
+        Eigen::Vector3d mu = ToVector(pose_[i]);
+        Eigen::Matrix3d sigma = Covariance(i);
+        for (const LandmarkObservation& z : scan.observations) {
+          const Landmark* l = trie_.Find(maps_[i], static_cast<uint64_t>(z.id));
+          if (l == nullptr) continue;
+          double w = 0;
+          Status s =
+              ProposalStep(&mu, &sigma, *l, RangeBearing{z.range_m, z.bearing_rad}, noise_, &w);
+          if (!s.ok()) return ParticleError(i, z, s);
+          lw += w;
+        }
+        RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), StreamPurpose::kProposal);
+        const Eigen::Vector3d normals(rs.NextNormal(), rs.NextNormal(), rs.NextNormal());
+        VehiclePose drawn;
+        Status s = SamplePose(mu, sigma, normals, &drawn);
+        if (!s.ok()) {
+          return FailedPreconditionError(fmt::format("particle {}'s proposal: {}", i, s.message()));
+        }
+        pose_[i] = drawn;
+        unit_[i] = Unit{std::cos(drawn.heading_rad), std::sin(drawn.heading_rad)};
+        cov_[i] = PoseCovariance{};
+      }
+      const VehiclePose pose = pose_[i];
+      for (const LandmarkObservation& z : scan.observations) {
+        const RangeBearing rb{z.range_m, z.bearing_rad};
+        Status s;
+        double ll = 0;
+        const bool ok = trie_.Update(&maps_[i], static_cast<uint64_t>(z.id), slot,
+                                     [&](Landmark& l, bool existed) {
+                                       if (!existed) {
+                                         l = InitLandmark(pose, rb, noise_);
+                                       } else {
+                                         s = UpdateLandmark(pose, rb, noise_, &l, &ll);
+                                       }
+                                     });
+        if (!ok) return NoMemory(i, "map");
+        if (!s.ok()) return ParticleError(i, z, s);
+        if (!fs2) lw += ll;
+      }
+      log_w[i] += lw;
+    }
+    return Status::Ok();
+  }
+
+  void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
+    GatherValues(parents, workers, &pose_);
+    GatherValues(parents, workers, &unit_);
+    GatherValues(parents, workers, &cov_);
+    maps_.Gather(parents, workers);
+    paths_.Gather(parents, workers);
+  }
+
+  void ReleaseDead(WorkerPool& workers) {
+    maps_.ReleaseDead(workers);
+    paths_.ReleaseDead(workers);
+  }
+
+  Status CheckCounts() const {
+    GROVE_RETURN_IF_ERROR(trie_.CheckCounts(maps_.AllReferences()));
+    return history_.CheckCounts(paths_.AllReferences());
+  }
+
+  double x(size_t i) const { return pose_[i].x_m; }
+  double y(size_t i) const { return pose_[i].y_m; }
+  double heading(size_t i) const { return pose_[i].heading_rad; }
+  double cos_heading(size_t i) const { return unit_[i].c; }
+  double sin_heading(size_t i) const { return unit_[i].s; }
+  const VehiclePose& pose(size_t i) const { return pose_[i]; }
+  const typename Trie::Node* map(size_t i) const { return maps_[i]; }
+  const SegmentHistory::Node* path(size_t i) const { return paths_[i]; }
+  const Trie& trie() const { return trie_; }
+
+  MemoryUse map_memory() const {
+    MemoryUse m;
+    AddPoolStats(trie_.inner_stats(), &m);
+    AddPoolStats(trie_.bottom_stats(), &m);
+    return m;
+  }
+  MemoryUse path_memory() const {
+    MemoryUse m;
+    AddPoolStats(history_.stats(), &m);
+    return m;
+  }
+
+  // The particles' state after a step: poses, covariances, the segment flag, maps and paths.
+  void Save(ByteWriter* w) const {
+    w->Put<uint64_t>(n_);
+    w->PutBytes(pose_.data(), n_ * sizeof(VehiclePose));
+    w->PutBytes(cov_.data(), n_ * sizeof(PoseCovariance));
+    w->Put<uint8_t>(segment_start_ ? 1 : 0);
+    trie_.Save(maps_.roots(), w);
+    SegmentHistory::Save(paths_.roots(), w);
+  }
+
+  // Replaces the state of a new model with a saved one taken after step `steps`.
+  Status Load(ByteReader* r, uint64_t steps) {
+    uint64_t n = 0;
+    GROVE_RETURN_IF_ERROR(r->Get("particle count", &n));
+    if (n != n_) {
+      return r->Error("particle count", std::to_string(n) + " does not match the configuration's " +
+                                            std::to_string(n_));
+    }
+    std::vector<VehiclePose> pose(n_);
+    std::vector<PoseCovariance> cov(n_);
+    GROVE_RETURN_IF_ERROR(r->GetBytes("poses", pose.data(), n_ * sizeof(VehiclePose)));
+    GROVE_RETURN_IF_ERROR(r->GetBytes("pose covariances", cov.data(), n_ * sizeof(PoseCovariance)));
+    for (size_t i = 0; i < n_; ++i) {
+      if (!std::isfinite(pose[i].x_m) || !std::isfinite(pose[i].y_m) ||
+          !(std::fabs(pose[i].heading_rad) <= 4)) {
+        return r->Error("poses", "particle " + std::to_string(i) + "'s pose is not finite");
+      }
+      const PoseCovariance& c = cov[i];
+      for (double v : {c.xx, c.xy, c.xh, c.yy, c.yh, c.hh}) {
+        if (!std::isfinite(v)) return r->Error("pose covariances", "a value is not finite");
+      }
+      if (!(c.xx >= 0 && c.yy >= 0 && c.hh >= 0)) {
+        return r->Error("pose covariances", "a variance is negative");
+      }
+    }
+    uint8_t segment = 0;
+    GROVE_RETURN_IF_ERROR(r->Get("segment flag", &segment));
+    if (segment > 1) return r->Error("segment flag", "not 0 or 1");
+    std::vector<typename Trie::Node*> roots;
+    GROVE_RETURN_IF_ERROR(trie_.Load(r, n_, 0, &ValidLandmark, &roots));
+    if (steps >= UINT32_MAX) {
+      for (auto* root : roots) trie_.Release(root, 0);
+      return r->Error("step", "too many steps");
+    }
+    std::vector<SegmentHistory::Node*> heads;
+    Status s = history_.Load(r, n_, static_cast<uint32_t>(steps), 0, &ValidSegmentStart, &heads);
+    if (s.ok() && steps > 0) {
+      for (size_t i = 0; i < n_ && s.ok(); ++i) {
+        if (heads[i] == nullptr || heads[i]->value.index >= n_) {
+          s = r->Error("path", "particle " + std::to_string(i) + " has no path or a bad index");
+        }
+      }
+      if (!s.ok()) {
+        for (auto* h : heads) history_.Release(h, 0);
+      }
+    }
+    if (!s.ok()) {
+      for (auto* root : roots) trie_.Release(root, 0);
+      return s;
+    }
+    pose_.swap(pose);
+    cov_.swap(cov);
+    for (size_t i = 0; i < n_; ++i) {
+      unit_[i] = Unit{std::cos(pose_[i].heading_rad), std::sin(pose_[i].heading_rad)};
+    }
+    segment_start_ = segment == 1;
+    maps_.Replace(std::move(roots));
+    paths_.Replace(std::move(heads));
+    return Status::Ok();
+  }
+
+ private:
+  struct Unit {
+    double c, s;
+  };
+
+  static bool ValidLandmark(const Landmark& l) {
+    return std::isfinite(l.x_m) && std::isfinite(l.y_m) && std::isfinite(l.xx) &&
+           std::isfinite(l.xy) && std::isfinite(l.yy) && l.xx >= 0 && l.yy >= 0;
+  }
+
+  Eigen::Matrix3d Covariance(size_t i) const {
+    const PoseCovariance& c = cov_[i];
+    return (Eigen::Matrix3d() << c.xx, c.xy, c.xh, c.xy, c.yy, c.yh, c.xh, c.yh, c.hh).finished();
+  }
+  void SetCovariance(size_t i, const Eigen::Matrix3d& m) {
+    cov_[i] = PoseCovariance{m(0, 0), 0.5 * (m(0, 1) + m(1, 0)), 0.5 * (m(0, 2) + m(2, 0)),
+                             m(1, 1), 0.5 * (m(1, 2) + m(2, 1)), m(2, 2)};
+  }
+
+  static Status NoMemory(size_t i, const char* what) {
+    return ResourceExhaustedError(fmt::format("out of memory for particle {}'s {}", i, what));
+  }
+  static Status ParticleError(size_t i, const LandmarkObservation& z, const Status& s) {
+    return Status(s.code(), fmt::format("particle {}, landmark {}: {}", i, z.id, s.message()));
+  }
+
+  const FastSlamConfig config_;
+  const VehicleGeometry geometry_;
+  const SensorNoise noise_;
+  const size_t n_;
+  Eigen::Matrix2d q_;
+  Trie trie_;
+  SegmentHistory history_;
+  VersionSet<Trie> maps_;
+  VersionSet<SegmentHistory> paths_;
+  std::vector<VehiclePose> pose_;
+  std::vector<Unit> unit_;
+  std::vector<PoseCovariance> cov_;
+  bool segment_start_ = true;
+};
+
+}  // namespace grove::fastslam
+
+#endif  // GROVE_ENGINE_FASTSLAM_FASTSLAM_MODEL_H_

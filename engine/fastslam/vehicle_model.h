@@ -1,0 +1,52 @@
+// The vehicle models of landmark FastSLAM: one Euler step of a control interval, and its
+// Jacobians for FastSLAM 2.0's pose covariance. Models and parameters: grove/fastslam.h.
+//
+// Bailey (his vehicle_model.m; sin(G) / B, not sin(G / B)):
+//   x' = x + V dt cos(G + phi),  y' = y + V dt sin(G + phi),  phi' = phi + V dt sin(G) / B.
+// Guivant-Nebot (the Victoria Park vehicle; ../shared/data/README.md): with the axle-centre
+// speed v_c = V / (1 - tan(G) H / L),
+//   x' = x + dt (v_c cos phi - (v_c / L) tan G (a sin phi + b cos phi)),
+//   y' = y + dt (v_c sin phi + (v_c / L) tan G (a cos phi - b sin phi)),
+//   phi' = phi + dt (v_c / L) tan G.
+// The new heading is wrapped to (-pi, pi] in both.
+//
+// Thread safety: values only.
+#ifndef GROVE_ENGINE_FASTSLAM_VEHICLE_MODEL_H_
+#define GROVE_ENGINE_FASTSLAM_VEHICLE_MODEL_H_
+
+#include <Eigen/Core>
+
+#include "engine/fastslam/landmark_math.h"
+#include "grove/fastslam.h"
+
+namespace grove::fastslam {
+
+struct VehicleGeometry {
+  FastSlamVehicle kind = FastSlamVehicle::kBailey;
+  double wheelbase_m = 4;
+  double encoder_offset_m = 0;
+  double laser_forward_m = 0;
+  double laser_left_m = 0;
+
+  static VehicleGeometry Of(const FastSlamConfig& c) {
+    return {c.vehicle, c.wheelbase_m, c.encoder_offset_m, c.laser_forward_m, c.laser_left_m};
+  }
+};
+
+// Whether the model can use steering angle `steer_rad`: any finite angle for Bailey's; for
+// Guivant-Nebot's |steer| < pi/2 and 1 - tan(steer) H / L > 0 (the wheel speed's conversion).
+bool SteeringUsable(const VehicleGeometry& g, double steer_rad);
+
+// One Euler step of dt_s with speed v_mps and steering angle steer_rad.
+// REQUIRES: SteeringUsable(g, steer_rad).
+VehiclePose MoveVehicle(const VehicleGeometry& g, const VehiclePose& p, double v_mps,
+                        double steer_rad, double dt_s);
+
+// The Jacobians of MoveVehicle with respect to the pose (x, y, phi) and the control (V, G).
+void VehicleJacobians(const VehicleGeometry& g, const VehiclePose& p, double v_mps,
+                      double steer_rad, double dt_s, Eigen::Matrix3d* d_pose,
+                      Eigen::Matrix<double, 3, 2>* d_control);
+
+}  // namespace grove::fastslam
+
+#endif  // GROVE_ENGINE_FASTSLAM_VEHICLE_MODEL_H_

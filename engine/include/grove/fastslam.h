@@ -1,0 +1,194 @@
+// Landmark FastSLAM: a vehicle driving among point landmarks, observed by a range-bearing sensor
+// (Montemerlo et al., "FastSLAM", AAAI 2002, and "FastSLAM 2.0", IJCAI 2003). A
+// Rao-Blackwellized particle filter: each particle carries a vehicle path and a map of landmark
+// Gaussians, kept in a persistent tree that it shares with its relatives (log-N updates, O(1)
+// copies, freed by reference counts).
+//
+//   grove::FastSlamConfig config;                       // FastSLAM 2.0, 100 particles, Bailey
+//   auto slam = grove::FastSlam::Create(config);         // validates; nothing built on error
+//   (*slam)->Control(0.0, 3.0, 0.0);                    // speed and steering from t = 0 on
+//   grove::LandmarkObservation z[] = {{12.5, 0.3, 7}};   // range, bearing, landmark id
+//   (*slam)->Scan(0.2, z);                               // predicts to t = 0.2, then updates
+//   auto landmarks = (*slam)->HeaviestLandmarks();
+//
+// Time: the first Control() sets the start time (the start pose is at it). A control holds
+// from its time until the next control's (zero-order hold); every call predicts from the last
+// time to its own with the held control, one Euler step per call. Scan() then updates.
+//
+// Thread safety: a FastSlam is driven by one thread at a time; it runs its own worker threads
+// inside each call. Two engines in one process share nothing.
+#ifndef GROVE_FASTSLAM_H_
+#define GROVE_FASTSLAM_H_
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "grove/config_fields.h"
+#include "grove/resampling.h"
+#include "grove/status.h"
+#include "grove/types.h"
+
+namespace grove {
+
+enum class FastSlamFilter {
+  // Proposal from the motion model: each particle draws its own noisy control; the weight is the
+  // likelihood of the scan's innovations; each observed landmark gets an EKF update.
+  kFastSlam1,
+  // Proposal that uses the scan (Montemerlo et al. 2003), applied observation by observation as
+  // Bailey's sample_proposal: between scans each particle predicts a pose mean and covariance
+  // from the control and its noise; at a scan the observations of known landmarks refine them,
+  // the pose is drawn from the result, and the weight is the product of each observation's
+  // predictive likelihood.
+  kFastSlam2,
+};
+
+enum class FastSlamVehicle {
+  // Bailey's simulator: x += V dt cos(G + phi), y += V dt sin(G + phi),
+  // phi += V dt sin(G) / wheelbase_m.
+  kBailey,
+  // Guivant and Nebot's Ackermann model of the Victoria Park vehicle: the speed is measured at
+  // the rear left wheel (encoder_offset_m from the axle centre) and the state is the laser's
+  // position (laser_forward_m ahead of the rear axle, laser_left_m to the side).
+  kGuivantNebot,
+};
+
+struct FastSlamConfig {
+  // ---- Options that change results ----
+
+  // Number of particles. Range: 1..2^31. Default: 100 (Bailey's NPARTICLES).
+  int64_t particles = 100;
+  // Seed of every random stream. Same seed, same result at any thread count. Default: 1.
+  uint64_t seed = 1;
+  // The filter. Default: kFastSlam2.
+  FastSlamFilter filter = FastSlamFilter::kFastSlam2;
+  // The vehicle model. Default: kBailey.
+  FastSlamVehicle vehicle = FastSlamVehicle::kBailey;
+  // Distance between the axles, metres (B of the Bailey model, L of Guivant-Nebot's).
+  // Range: (0, 100]. Default: 4 (Bailey's WHEELBASE).
+  double wheelbase_m = 4.0;
+  // Guivant-Nebot only: encoder offset H, laser offsets a (forward) and b (to the side), metres.
+  // Range: [-100, 100]. Defaults: the Victoria Park vehicle's H = 0.76, a = 3.78, b = 0.50.
+  double encoder_offset_m = 0.76;
+  double laser_forward_m = 3.78;
+  double laser_left_m = 0.50;
+  // Control noise: standard deviations of the speed (m/s) and the steering angle (rad) the
+  // filter assumes. Range: [0, 100] and [0, pi]. Defaults: Bailey's sigmaV = 0.3 m/s and
+  // sigmaG = 3 degrees.
+  double sigma_speed_mps = 0.3;
+  double sigma_steer_rad = 0.052359877559830;
+  // Sensor noise: standard deviations of range (m) and bearing (rad). Range: [0, 1e4] and
+  // [0, pi]. Defaults: Bailey's sigmaR = 0.1 m and sigmaB = 1 degree.
+  double sigma_range_m = 0.1;
+  double sigma_bearing_rad = 0.017453292519943;
+  // Start pose. Range: |x|, |y| <= 1e9 m, |heading| <= 1000 rad. Default: (0, 0, 0).
+  double start_x_m = 0;
+  double start_y_m = 0;
+  double start_heading_rad = 0;
+  // Resampling scheme. Default: systematic.
+  ResamplingScheme resampling = ResamplingScheme::kSystematic;
+  // Resample after a scan when ESS / N < threshold. Range: (0, 1]. Default: 0.75 (Bailey's
+  // NEFFECTIVE = 0.75 * NPARTICLES).
+  double resample_threshold = 0.75;
+
+  // ---- Options that change only speed ----
+
+  // Worker threads; 0 means one per hardware thread. Range: 0..256. Default: 0.
+  int threads = 0;
+  // Particles per parallel batch. Range: >= 1. Default: 64.
+  int64_t batch = 64;
+
+  // Checks every field; the message names the field, its value and the rule it breaks.
+  Status Validate() const;
+};
+
+const char* FastSlamFilterName(FastSlamFilter filter);     // "fastslam1", "fastslam2"
+const char* FastSlamVehicleName(FastSlamVehicle vehicle);  // "bailey", "guivant_nebot"
+
+// Every field of FastSlamConfig: name, type, range, effect and meaning, in the struct's order.
+const std::vector<ConfigField<FastSlamConfig>>& FastSlamConfigFields();
+
+// One detection of a scan: range (m, >= 0), bearing (rad, in (-pi, pi], counter-clockwise from
+// the heading) and the landmark's id (>= 0; known association).
+struct LandmarkObservation {
+  double range_m = 0;
+  double bearing_rad = 0;
+  int64_t id = 0;
+};
+
+// A landmark of a particle's map: its id, mean (m) and covariance (m^2).
+struct LandmarkEstimate {
+  int64_t id = 0;
+  double x_m = 0;
+  double y_m = 0;
+  double sxx = 0;
+  double sxy = 0;
+  double syy = 0;
+};
+
+struct FastSlamSummary : FilterSummary {
+  int64_t controls = 0;       // Control() calls
+  int64_t scans = 0;          // Scan() calls
+  int64_t observations = 0;   // detections over all scans
+  int64_t predict_steps = 0;  // filter steps that only predicted
+  int64_t landmarks = 0;      // in the heaviest particle's map
+  MemoryUse map_memory;
+  MemoryUse trajectory_memory;
+  // One paragraph for a terminal.
+  std::string BriefReport() const;
+};
+
+class FastSlam {
+ public:
+  // Validates `config` and builds the engine; nothing is built when the config is invalid.
+  static StatusOr<std::unique_ptr<FastSlam>> Create(const FastSlamConfig& config);
+  virtual ~FastSlam();
+
+  // A control (speed m/s, steering angle rad) from time t_s on: predicts from the last time to
+  // t_s with the control held so far (the first call sets the start time), then holds this one.
+  // InvalidArgument, the engine unchanged, for a non-finite value or a time not after the
+  // previous control's and not at or after the last scan's.
+  Status Control(double t_s, double speed_mps, double steer_rad);
+
+  // A scan at t_s (at or after the last time): predicts to t_s with the held control, then
+  // updates every particle with the observations. InvalidArgument, the engine unchanged, before
+  // the first control, for a bad time, or for an observation that is not finite, has a negative
+  // range, a bearing outside (-pi, pi] or a negative id (the message names its index).
+  // FailedPrecondition when the filter degenerated; the engine must then not be used again.
+  Status Scan(double t_s, std::span<const LandmarkObservation> observations);
+
+  const FastSlamConfig& config() const;
+  // Filter steps so far: one per prediction and one per scan update.
+  int64_t steps() const;
+  Pose2 MeanPose() const;
+  Pose2 HeaviestPose() const;
+  // The weighted mean pose at the start and after every step.
+  const std::vector<StampedPose>& MeanTrajectory() const;
+  // The heaviest particle's path at the same times, traced through its ancestry.
+  StatusOr<std::vector<StampedPose>> HeaviestTrajectory() const;
+  // The heaviest particle's landmarks in id order.
+  StatusOr<std::vector<LandmarkEstimate>> HeaviestLandmarks() const;
+  FastSlamSummary Summary() const;
+  // Walks every shared map node and path entry and checks its reference count (tests).
+  Status CheckInvariants() const;
+
+  // ---- Checkpoints (as FootSlam's) ----
+  StatusOr<std::string> Checkpoint(std::string_view user_data = {}) const;
+  static StatusOr<std::unique_ptr<FastSlam>> Resume(const FastSlamConfig& config,
+                                                    std::string_view checkpoint,
+                                                    const std::string& name,
+                                                    std::string* user_data);
+
+  class Impl;
+
+ private:
+  explicit FastSlam(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace grove
+
+#endif  // GROVE_FASTSLAM_H_

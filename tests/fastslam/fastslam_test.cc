@@ -1,0 +1,389 @@
+// Landmark FastSLAM on the engine: the facade (grove/fastslam.h) on Bailey's simulated webmap,
+// the vehicle models' Jacobians, and the model's maps across resampling.
+#include "grove/fastslam.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <vector>
+
+#include "concurrency/worker_pool.h"
+#include "engine/fastslam/fastslam_model.h"
+#include "engine/fastslam/vehicle_model.h"
+#include "tools/fastslam_simulator.h"
+
+namespace grove {
+namespace {
+
+using fastslam::VehicleGeometry;
+using fastslam::VehiclePose;
+using tools::BaileySimulation;
+
+constexpr double kPi = std::numbers::pi;
+
+BaileySimulation Simulate(tools::BaileySimOptions options) {
+  StatusOr<tools::BaileyMap> map = tools::ParseBaileyMap("webmap", tools::EmbeddedBaileyWebmap());
+  EXPECT_TRUE(map.ok()) << map.status().message();
+  StatusOr<BaileySimulation> sim = tools::SimulateBailey(*map, options);
+  EXPECT_TRUE(sim.ok()) << sim.status().message();
+  return std::move(sim).value();
+}
+
+// Feeds the simulation's first `controls` control rows, each followed by the scans from its
+// time until the next row's (controls first at a shared time, as `grove fastslam run` merges
+// its files).
+void Feed(const BaileySimulation& sim, FastSlam* slam, size_t controls = SIZE_MAX) {
+  controls = std::min(controls, sim.controls.size());
+  size_t z = 0;
+  for (size_t k = 0; k < controls; ++k) {
+    const tools::BaileyControl& c = sim.controls[k];
+    Status s = slam->Control(c.t_s, c.speed_mps, c.steer_rad);
+    ASSERT_TRUE(s.ok()) << s.message();
+    const double upper = k + 1 < sim.controls.size() ? sim.controls[k + 1].t_s : INFINITY;
+    while (z < sim.observations.size() && sim.observations[z].t_s < c.t_s) ++z;
+    while (z < sim.observations.size() && sim.observations[z].t_s < upper) {
+      const double t = sim.observations[z].t_s;
+      std::vector<LandmarkObservation> scan;
+      for (; z < sim.observations.size() && sim.observations[z].t_s == t; ++z) {
+        const tools::BaileyObservation& o = sim.observations[z];
+        scan.push_back({o.range_m, o.bearing_rad, o.id});
+      }
+      s = slam->Scan(t, scan);
+      ASSERT_TRUE(s.ok()) << s.message();
+    }
+  }
+}
+
+tools::BaileySimOptions NoiseFree() {
+  tools::BaileySimOptions o = tools::WebmapPreset();
+  o.sigma_speed_mps = o.sigma_steer_rad = o.sigma_range_m = o.sigma_bearing_rad = 0;
+  o.loops = 1;
+  return o;
+}
+
+FastSlamConfig Config(FastSlamFilter filter, int64_t particles, int threads = 1) {
+  FastSlamConfig c;
+  c.filter = filter;
+  c.particles = particles;
+  c.threads = threads;
+  c.batch = 8;
+  return c;
+}
+
+class ByFilter : public ::testing::TestWithParam<FastSlamFilter> {};
+INSTANTIATE_TEST_SUITE_P(Filters, ByFilter,
+                         ::testing::Values(FastSlamFilter::kFastSlam1, FastSlamFilter::kFastSlam2),
+                         [](const auto& info) { return FastSlamFilterName(info.param); });
+
+// Zero noise, one particle, known association: the trajectory is the truth and every landmark
+// its true position, to round-off.
+TEST_P(ByFilter, NoiseFreeRunReproducesTheTruth) {
+  const BaileySimulation sim = Simulate(NoiseFree());
+  FastSlamConfig config = Config(GetParam(), 1);
+  config.sigma_speed_mps = config.sigma_steer_rad = 0;
+  config.sigma_range_m = config.sigma_bearing_rad = 0;
+  auto slam = FastSlam::Create(config);
+  ASSERT_TRUE(slam.ok());
+  Feed(sim, slam->get());
+  // The mean trajectory: the start, every control time and every scan; at each truth time the
+  // pose before any scan at that time equals the truth row.
+  std::map<double, Pose2> at;
+  for (const StampedPose& p : (*slam)->MeanTrajectory()) at.emplace(p.t_s, p.pose);
+  ASSERT_EQ(at.size(), sim.truth.size());
+  double worst = 0, worst_heading = 0;
+  for (const tools::BaileyPose& t : sim.truth) {
+    const Pose2& p = at.at(t.t_s);
+    worst = std::max(worst, std::hypot(p.x_m - t.x_m, p.y_m - t.y_m));
+    worst_heading =
+        std::max(worst_heading, std::fabs(fastslam::WrapAngle(p.heading_rad - t.heading_rad)));
+  }
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_LT(worst_heading, 1e-12);
+  StatusOr<std::vector<LandmarkEstimate>> landmarks = (*slam)->HeaviestLandmarks();
+  ASSERT_TRUE(landmarks.ok());
+  ASSERT_FALSE(landmarks->empty());
+  for (const LandmarkEstimate& l : *landmarks) {
+    const tools::BaileyPoint& truth = sim.landmarks.at(static_cast<size_t>(l.id));
+    EXPECT_NEAR(l.x_m, truth.x_m, 1e-9) << l.id;
+    EXPECT_NEAR(l.y_m, truth.y_m, 1e-9) << l.id;
+  }
+  // The heaviest particle's path is the one particle's: the mean.
+  StatusOr<std::vector<StampedPose>> heaviest = (*slam)->HeaviestTrajectory();
+  ASSERT_TRUE(heaviest.ok());
+  ASSERT_EQ(heaviest->size(), (*slam)->MeanTrajectory().size());
+  for (size_t k = 0; k < heaviest->size(); ++k) {
+    EXPECT_EQ((*heaviest)[k].t_s, (*slam)->MeanTrajectory()[k].t_s);
+    EXPECT_NEAR((*heaviest)[k].pose.x_m, (*slam)->MeanTrajectory()[k].pose.x_m, 1e-9);
+  }
+}
+
+// The replayed path of the heaviest particle ends at its pose, bit for bit, and with one
+// particle it is the mean trajectory exactly (noise on: the replay redraws the same numbers).
+TEST_P(ByFilter, ReplayedPathMatchesTheParticle) {
+  tools::BaileySimOptions o = tools::WebmapPreset();
+  o.loops = 1;
+  const BaileySimulation sim = Simulate(o);
+  for (int64_t particles : {1, 30}) {
+    auto slam = FastSlam::Create(Config(GetParam(), particles));
+    ASSERT_TRUE(slam.ok());
+    Feed(sim, slam->get(), 3000);
+    StatusOr<std::vector<StampedPose>> path = (*slam)->HeaviestTrajectory();
+    ASSERT_TRUE(path.ok());
+    const std::vector<StampedPose>& mean = (*slam)->MeanTrajectory();
+    ASSERT_EQ(path->size(), mean.size());
+    const Pose2 end = (*slam)->HeaviestPose();
+    EXPECT_EQ(path->back().pose.x_m, end.x_m);
+    EXPECT_EQ(path->back().pose.y_m, end.y_m);
+    EXPECT_EQ(path->back().pose.heading_rad, end.heading_rad);
+    if (particles == 1) {
+      for (size_t k = 0; k < mean.size(); ++k) {
+        ASSERT_EQ((*path)[k].t_s, mean[k].t_s);
+        ASSERT_NEAR((*path)[k].pose.x_m, mean[k].pose.x_m, 1e-9) << k;
+        ASSERT_NEAR((*path)[k].pose.y_m, mean[k].pose.y_m, 1e-9) << k;
+      }
+    }
+    EXPECT_TRUE((*slam)->CheckInvariants().ok());
+  }
+}
+
+std::vector<double> Fingerprint(const FastSlam& slam) {
+  std::vector<double> v;
+  for (const StampedPose& p : slam.MeanTrajectory()) {
+    v.insert(v.end(), {p.t_s, p.pose.x_m, p.pose.y_m, p.pose.heading_rad});
+  }
+  // Held in locals: a range-for over *temporary would read a destroyed vector.
+  const StatusOr<std::vector<StampedPose>> heaviest = slam.HeaviestTrajectory();
+  const StatusOr<std::vector<LandmarkEstimate>> landmarks = slam.HeaviestLandmarks();
+  EXPECT_TRUE(heaviest.ok() && landmarks.ok());
+  for (const StampedPose& p : *heaviest) {
+    v.insert(v.end(), {p.pose.x_m, p.pose.y_m, p.pose.heading_rad});
+  }
+  for (const LandmarkEstimate& l : *landmarks) {
+    v.insert(v.end(), {static_cast<double>(l.id), l.x_m, l.y_m, l.sxx, l.sxy, l.syy});
+  }
+  return v;
+}
+
+TEST_P(ByFilter, SameResultAtAnyThreadCount) {
+  tools::BaileySimOptions o = tools::WebmapPreset();
+  o.loops = 1;
+  const BaileySimulation sim = Simulate(o);
+  std::vector<double> first;
+  for (int threads : {1, 2, 4}) {
+    auto slam = FastSlam::Create(Config(GetParam(), 200, threads));
+    ASSERT_TRUE(slam.ok());
+    Feed(sim, slam->get(), 2000);
+    EXPECT_GT((*slam)->Summary().resamplings, 0);
+    std::vector<double> f = Fingerprint(**slam);
+    if (threads == 1) {
+      first = f;
+    } else {
+      ASSERT_EQ(f.size(), first.size()) << threads << " threads";
+      size_t k = 0;
+      while (k < f.size() && f[k] == first[k]) ++k;
+      EXPECT_EQ(k, f.size()) << threads << " threads: first difference at " << k << " of "
+                             << f.size() << " (" << (*slam)->MeanTrajectory().size()
+                             << " poses): " << (k < f.size() ? f[k] : 0) << " vs "
+                             << (k < f.size() ? first[k] : 0);
+    }
+  }
+}
+
+TEST_P(ByFilter, CheckpointResumeIsBitIdentical) {
+  tools::BaileySimOptions o = tools::WebmapPreset();
+  o.loops = 1;
+  const BaileySimulation sim = Simulate(o);
+  const FastSlamConfig config = Config(GetParam(), 50);
+  auto whole = FastSlam::Create(config);
+  ASSERT_TRUE(whole.ok());
+  Feed(sim, whole->get(), 1600);
+
+  auto first = FastSlam::Create(config);
+  ASSERT_TRUE(first.ok());
+  Feed(sim, first->get(), 800);
+  StatusOr<std::string> bytes = (*first)->Checkpoint("position");
+  ASSERT_TRUE(bytes.ok()) << bytes.status().message();
+  FastSlamConfig other_speed = config;
+  other_speed.threads = 2;
+  other_speed.batch = 3;
+  std::string user;
+  auto resumed = FastSlam::Resume(other_speed, *bytes, "cp", &user);
+  ASSERT_TRUE(resumed.ok()) << resumed.status().message();
+  EXPECT_EQ(user, "position");
+  EXPECT_EQ(*(*resumed)->Checkpoint("position"), *bytes);
+  // Continue both from control 800 on.
+  BaileySimulation rest = sim;
+  rest.controls.erase(rest.controls.begin(), rest.controls.begin() + 800);
+  Feed(rest, resumed->get(), 800);
+  EXPECT_EQ(Fingerprint(**resumed), Fingerprint(**whole));
+
+  // Another configuration, a flipped byte, a truncation: refused.
+  FastSlamConfig other = config;
+  other.sigma_range_m = 0.2;
+  auto refused = FastSlam::Resume(other, *bytes, "cp", nullptr);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("sigma_range_m"), std::string::npos);
+  std::string flipped = *bytes;
+  flipped[flipped.size() / 2] ^= 1;
+  EXPECT_FALSE(FastSlam::Resume(config, flipped, "cp", nullptr).ok());
+  EXPECT_FALSE(FastSlam::Resume(config, bytes->substr(0, bytes->size() - 5), "cp", nullptr).ok());
+}
+
+// Weights are kept as logarithms: a long run in which every scan's likelihood is tiny (the
+// filter assumes a sensor ten times better than the simulated one) keeps finite weights.
+TEST(FastSlamWeights, NeverUnderflow) {
+  tools::BaileySimOptions o = tools::WebmapPreset();
+  o.max_range_m = 200;  // many observations per scan
+  o.loops = 1;
+  const BaileySimulation sim = Simulate(o);
+  FastSlamConfig config = Config(FastSlamFilter::kFastSlam1, 100);
+  config.sigma_range_m = 0.01;
+  config.sigma_bearing_rad = 0.1 * kPi / 180;
+  auto slam = FastSlam::Create(config);
+  ASSERT_TRUE(slam.ok());
+  Feed(sim, slam->get(), 4000);
+  const FastSlamSummary s = (*slam)->Summary();
+  EXPECT_GT(s.scans, 400);
+  EXPECT_GT(static_cast<double>(s.observations) / s.scans, 8);
+  for (const StampedPose& p : (*slam)->MeanTrajectory()) {
+    ASSERT_TRUE(std::isfinite(p.pose.x_m) && std::isfinite(p.pose.y_m));
+  }
+}
+
+TEST(FastSlamInput, BadInputLeavesTheEngineUnchanged) {
+  auto slam = FastSlam::Create(Config(FastSlamFilter::kFastSlam2, 10));
+  ASSERT_TRUE(slam.ok());
+  const LandmarkObservation good[] = {{10, 0.5, 3}};
+  Status s = (*slam)->Scan(0.0, good);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("before the first control"), std::string::npos) << s.message();
+  ASSERT_TRUE((*slam)->Control(0.0, 3.0, 0.1).ok());
+  ASSERT_TRUE((*slam)->Control(0.025, 3.0, 0.1).ok());
+  const std::string before = *(*slam)->Checkpoint();
+  const double nan = std::nan("");
+  const std::vector<std::vector<LandmarkObservation>> bad = {
+      {{nan, 0, 1}},  {{-1, 0, 1}}, {{5, kPi + 1e-9, 1}},
+      {{5, -kPi, 1}}, {{5, 0, -2}}, {{5, 0, 1}, {INFINITY, 0, 2}}};
+  for (const auto& z : bad) {
+    Status e = (*slam)->Scan(0.05, z);
+    EXPECT_EQ(e.code(), StatusCode::kInvalidArgument) << e.message();
+  }
+  EXPECT_EQ((*slam)->Scan(0.01, good).code(), StatusCode::kInvalidArgument);      // before the last
+  EXPECT_EQ((*slam)->Control(0.025, 3, 0).code(), StatusCode::kInvalidArgument);  // not after
+  EXPECT_EQ((*slam)->Control(0.03, nan, 0).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(*(*slam)->Checkpoint(), before);
+  ASSERT_TRUE((*slam)->Scan(0.05, good).ok());
+  // A control before the scan's time is refused too.
+  EXPECT_EQ((*slam)->Control(0.04, 3, 0).code(), StatusCode::kInvalidArgument);
+}
+
+TEST(FastSlamConfigTest, ValidateNamesTheField) {
+  FastSlamConfig c;
+  c.sigma_range_m = -1;
+  Status s = c.Validate();
+  EXPECT_NE(s.message().find("sigma_range_m"), std::string::npos) << s.message();
+  c = FastSlamConfig();
+  c.vehicle = FastSlamVehicle::kGuivantNebot;
+  c.wheelbase_m = 0.5;
+  EXPECT_NE(c.Validate().message().find("encoder_offset_m"), std::string::npos);
+  EXPECT_TRUE(FastSlamConfig().Validate().ok());
+}
+
+// Jacobians of both vehicle models against central differences.
+TEST(VehicleModel, JacobiansMatchDifferences) {
+  FastSlamConfig config;
+  for (FastSlamVehicle kind : {FastSlamVehicle::kBailey, FastSlamVehicle::kGuivantNebot}) {
+    config.vehicle = kind;
+    config.wheelbase_m = kind == FastSlamVehicle::kBailey ? 4.0 : 2.83;
+    const VehicleGeometry g = VehicleGeometry::Of(config);
+    const VehiclePose p{3, -2, 0.7};
+    const double v = 2.5, steer = 0.3, dt = 0.1;
+    Eigen::Matrix3d d_pose;
+    Eigen::Matrix<double, 3, 2> d_control;
+    fastslam::VehicleJacobians(g, p, v, steer, dt, &d_pose, &d_control);
+    auto move = [&](Eigen::Vector3d x, double vv, double gg) {
+      return fastslam::ToVector(fastslam::MoveVehicle(g, fastslam::ToPose(x), vv, gg, dt));
+    };
+    const double h = 1e-6;
+    for (int j = 0; j < 3; ++j) {
+      Eigen::Vector3d e = Eigen::Vector3d::Zero();
+      e(j) = h;
+      Eigen::Vector3d diff =
+          (move(ToVector(p) + e, v, steer) - move(ToVector(p) - e, v, steer)) / (2 * h);
+      for (int i = 0; i < 3; ++i) EXPECT_NEAR(d_pose(i, j), diff(i), 1e-7) << i << j;
+    }
+    Eigen::Vector3d dv =
+        (move(ToVector(p), v + h, steer) - move(ToVector(p), v - h, steer)) / (2 * h);
+    Eigen::Vector3d dg =
+        (move(ToVector(p), v, steer + h) - move(ToVector(p), v, steer - h)) / (2 * h);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_NEAR(d_control(i, 0), dv(i), 1e-7) << FastSlamVehicleName(kind) << i;
+      EXPECT_NEAR(d_control(i, 1), dg(i), 1e-7) << FastSlamVehicleName(kind) << i;
+    }
+  }
+}
+
+TEST(VehicleModel, BaileyUsesSinOfSteeringOverWheelbase) {
+  const VehicleGeometry g{FastSlamVehicle::kBailey, 4, 0, 0, 0};
+  const VehiclePose p = fastslam::MoveVehicle(g, VehiclePose{0, 0, 0}, 3, 0.5, 0.025);
+  EXPECT_DOUBLE_EQ(p.heading_rad, 3 * 0.025 * std::sin(0.5) / 4);
+  EXPECT_DOUBLE_EQ(p.x_m, 3 * 0.025 * std::cos(0.5));
+}
+
+// Two copies of one particle after resampling, updated differently, keep two maps (the aliasing
+// bug of ports that copy a map pointer without copy-on-write).
+TEST(FastSlamModelMaps, CopiesUpdatedDifferentlyKeepTwoMaps) {
+  FastSlamConfig config = Config(FastSlamFilter::kFastSlam1, 2);
+  config.sigma_speed_mps = config.sigma_steer_rad = 0;
+  WorkerPool workers(1);
+  fastslam::FastSlamModel<2> model(config, 1);
+  double log_w[2] = {0, 0};
+  const LandmarkObservation first[] = {{10, 0.1, 5}};
+  ASSERT_TRUE(model.Advance(fastslam::ScanStep{first}, 0, 0, 2, 0, log_w).ok());
+  const uint32_t parents[] = {0, 0};
+  model.Gather(parents, workers);
+  model.ReleaseDead(workers);
+  EXPECT_EQ(model.map(0), model.map(1));  // shared after resampling
+  const LandmarkObservation a[] = {{10.5, 0.1, 5}};
+  const LandmarkObservation b[] = {{9.5, 0.1, 5}, {20, -1, 1u << 20}};
+  ASSERT_TRUE(model.Advance(fastslam::ScanStep{a}, 1, 0, 1, 0, log_w).ok());
+  ASSERT_TRUE(model.Advance(fastslam::ScanStep{b}, 1, 1, 2, 0, log_w).ok());
+  const fastslam::Landmark* l0 = model.trie().Find(model.map(0), 5);
+  const fastslam::Landmark* l1 = model.trie().Find(model.map(1), 5);
+  ASSERT_NE(l0, nullptr);
+  ASSERT_NE(l1, nullptr);
+  EXPECT_GT(std::hypot(l0->x_m, l0->y_m), 10.0);
+  EXPECT_LT(std::hypot(l1->x_m, l1->y_m), 10.0);
+  EXPECT_EQ(model.trie().Find(model.map(0), 1u << 20), nullptr);
+  EXPECT_NE(model.trie().Find(model.map(1), 1u << 20), nullptr);
+  EXPECT_TRUE(model.CheckCounts().ok());
+}
+
+// Landmark ids far beyond any preset height: the trees grow, and stay consistent.
+TEST(FastSlamModelMaps, TreesGrowPastAnyHeight) {
+  FastSlamConfig config = Config(FastSlamFilter::kFastSlam2, 3);
+  config.sigma_speed_mps = config.sigma_steer_rad = 0;
+  WorkerPool workers(1);
+  fastslam::FastSlamModel<2> model(config, 1);
+  double log_w[3] = {0, 0, 0};
+  uint64_t step = 0;
+  for (int64_t id :
+       {int64_t{0}, int64_t{3}, int64_t{1} << 10, int64_t{1} << 33, (int64_t{1} << 62) + 7}) {
+    const LandmarkObservation z[] = {{5, 0.2, id}};
+    ASSERT_TRUE(model.Advance(fastslam::ScanStep{z}, step++, 0, 3, 0, log_w).ok());
+    EXPECT_EQ(fastslam::FastSlamModel<2>::Trie::Height(model.map(0)),
+              fastslam::FastSlamModel<2>::Trie::HeightFor(static_cast<uint64_t>(id)));
+    const uint32_t parents[] = {0, 1, 1};
+    model.Gather(parents, workers);
+    model.ReleaseDead(workers);
+    ASSERT_TRUE(model.CheckCounts().ok());
+  }
+  int count = 0;
+  model.trie().ForEach(model.map(2), [&](uint64_t, const fastslam::Landmark&) { ++count; });
+  EXPECT_EQ(count, 5);
+}
+
+}  // namespace
+}  // namespace grove
