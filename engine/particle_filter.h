@@ -10,7 +10,9 @@
 //   3. normalise: log-sum-exp over fixed blocks, then the effective sample size 1 / sum(w^2);
 //   4. resample when ESS / N < threshold (threshold 1 resamples every step): parents are drawn
 //      (systematic by default, in parallel), the model gathers the new generation (O(1) per
-//      particle: maps are shared) and releases the dead one, both in parallel.
+//      particle: maps are shared) and releases the dead one, both in parallel;
+//   5. complete (optional): a model whose weights do not depend on what it draws (FastSLAM
+//      2.0) draws and updates after resampling, in parallel over batches.
 // One Predict() propagates every particle without weighting (a landmark filter predicts at the
 // control rate and weights only at scans). Both count as one step of the random streams.
 // Sums over particles are taken over fixed blocks and every draw comes from a counter-based
@@ -92,6 +94,15 @@ concept PopulationModel = requires(M& m, const Input& in, uint64_t step, std::sp
   { m.Population(in, step, log_w, workers) } -> std::same_as<Status>;
 };
 
+// A model that completes its update of `Input` after resampling, over every particle:
+// Complete(input, step, begin, end, slot). FastSLAM 2.0 weights a particle by its predictive
+// likelihood, which does not depend on the pose it then draws, so it resamples first and draws
+// after (Bailey's order): copies of one parent draw distinct poses.
+template <typename M, typename Input>
+concept CompletingModel = requires(M& m, const Input& in, uint64_t step, size_t i, int slot) {
+  { m.Complete(in, step, i, i, slot) } -> std::same_as<Status>;
+};
+
 template <FilterModel Model>
 class ParticleFilter {
  public:
@@ -136,8 +147,15 @@ class ParticleFilter {
     if (options_.resample_threshold >= 1.0 || ess_ < options_.resample_threshold * n) {
       Resample();
     }
+    if constexpr (CompletingModel<Model, Input>) {
+      auto t3 = Clock::now();
+      status = ForBatches([&](int slot, size_t begin, size_t end) {
+        return model_->Complete(input, step_, begin, end, slot);
+      });
+      times_.advance_s += Seconds(Clock::now() - t3);
+    }
     ++step_;
-    return Status::Ok();
+    return status;
   }
 
   // Runs one predict-only step: every particle is propagated on `input`, no weight changes.

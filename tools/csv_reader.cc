@@ -273,4 +273,66 @@ Status ParseFiniteNumber(std::string_view path, int64_t line, const CsvField& fi
                    fmt::format("{}: {} is not a number", name, QuotedField(field.text)));
 }
 
+StatusOr<CsvTableReader> CsvTableReader::Open(
+    const std::string& path, const std::vector<std::vector<std::string>>& headers) {
+  StatusOr<LineReader> lines = LineReader::Open(path, 64 * 1024);
+  if (!lines.ok()) return lines.status();
+  CsvTableReader reader(std::move(lines).value());
+  std::string expected;
+  for (size_t k = 0; k < headers.size(); ++k) {
+    std::string joined;
+    for (const std::string& h : headers[k]) joined += (joined.empty() ? "" : ",") + h;
+    expected += fmt::format("{}\"{}\"",
+                            k == 0                    ? ""
+                            : k + 1 == headers.size() ? " or "
+                                                      : ", ",
+                            joined);
+  }
+  std::string_view line;
+  StatusOr<bool> more = reader.NextLine(&line);
+  if (!more.ok()) return more.status();
+  if (!*more)
+    return InvalidArgumentError(
+        fmt::format("{}: empty file: expected a header {}", path, expected));
+  SplitCsvLine(line, &reader.fields_);
+  for (size_t k = 0; k < headers.size(); ++k) {
+    const std::vector<std::string>& h = headers[k];
+    bool match = h.size() == reader.fields_.size();
+    for (size_t i = 0; match && i < h.size(); ++i) match = reader.fields_[i].text == h[i];
+    if (match) {
+      reader.header_ = k;
+      reader.columns_ = h.size();
+      return reader;
+    }
+  }
+  return LineError(path, reader.lines_.line_number(), 1,
+                   fmt::format("unknown header {}: expected {}", QuotedField(line), expected));
+}
+
+StatusOr<bool> CsvTableReader::NextLine(std::string_view* line) {
+  for (;;) {
+    StatusOr<bool> more = lines_.Next(line);
+    if (!more.ok() || !*more) return more;
+    if (!lines_.line_terminated()) {
+      return LineError(lines_.path(), lines_.line_number(), static_cast<int64_t>(line->size()) + 1,
+                       "the last line has no line end: the file may still be being written; a "
+                       "complete file ends in a newline");
+    }
+    if (!IsSkippedLine(*line)) return true;
+  }
+}
+
+StatusOr<bool> CsvTableReader::Next(const std::vector<CsvField>** fields) {
+  std::string_view line;
+  StatusOr<bool> more = NextLine(&line);
+  if (!more.ok() || !*more) return more;
+  SplitCsvLine(line, &fields_);
+  if (fields_.size() != columns_) {
+    return LineError(lines_.path(), lines_.line_number(), 1,
+                     fmt::format("expected {} fields, found {}", columns_, fields_.size()));
+  }
+  *fields = &fields_;
+  return true;
+}
+
 }  // namespace grove::tools

@@ -121,6 +121,32 @@ NumberParse ParseCsvInt32(std::string_view text, int32_t* value);
 Status ParseFiniteNumber(std::string_view path, int64_t line, const CsvField& field,
                          std::string_view name, double* value);
 
+// A CSV table: a header row naming the columns, then rows of as many fields. Comment and blank
+// lines are skipped anywhere; a last line without a line end is an error (the file may still be
+// being written). The model-specific readers (controls, observations) check the fields.
+class CsvTableReader {
+ public:
+  // Opens `path` and reads its header, which must be one of `headers` (each a list of column
+  // names): "FILE:LINE:1: unknown header ...: expected ..." otherwise. Lines are limited to
+  // 64 KiB.
+  static StatusOr<CsvTableReader> Open(const std::string& path,
+                                       const std::vector<std::vector<std::string>>& headers);
+  // The index in `headers` of the header found.
+  size_t header() const { return header_; }
+  // The next row's fields (as many as the header's): false at the end of the file.
+  StatusOr<bool> Next(const std::vector<CsvField>** fields);
+  int64_t line_number() const { return lines_.line_number(); }
+  const std::string& path() const { return lines_.path(); }
+
+ private:
+  explicit CsvTableReader(LineReader lines) : lines_(std::move(lines)) {}
+  StatusOr<bool> NextLine(std::string_view* line);
+  LineReader lines_;
+  size_t header_ = 0;
+  size_t columns_ = 0;
+  std::vector<CsvField> fields_;
+};
+
 }  // namespace grove::tools
 
 #endif  // GROVE_TOOLS_CSV_READER_H_

@@ -9,14 +9,13 @@
 #include <vector>
 
 #include "grove/footslam.h"
+#include "tools/filter_outputs.h"
 #include "tools/map_render.h"
 
 namespace grove::tools {
 
 // `q,r,x,y,c0..c5`, one hexagon a row; counts with 9 significant digits, or as integers.
 std::string MapCsv(const std::vector<HexCounts>& hexes, bool integer_counts);
-// `t,x,y,heading`, one pose a row.
-std::string TrajectoryCsv(const std::vector<StampedPose>& poses);
 
 // The raw odometry in the map frame: the steps rotated by the start heading and summed from
 // the start position. The one integration of a step file, for `run` and `render` alike.
@@ -42,9 +41,8 @@ MapImage FootSlamImage(double hex_radius_m, const std::vector<HexCounts>& map,
                        const std::vector<StampedPose>& path, std::vector<RenderPoint> odometry,
                        std::string title);
 
-// summary.json's fields of every filter: particles, steps, threads, timings, rates, phases.
-nlohmann::json FilterSummaryJson(const FilterSummary& s);
-// ... and FootSLAM's own: memory, resamplings, ESS, scale and heading error.
+// summary.json's FootSLAM fields: FilterSummaryJson's and its own: memory, resamplings, ESS, scale
+// and heading error.
 nlohmann::json FootSlamSummaryJson(const FootSlamSummary& s);
 
 }  // namespace grove::tools

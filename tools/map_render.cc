@@ -49,6 +49,7 @@ constexpr Rgb kPathColour = {0.70, 0.05, 0.10};
 constexpr Rgb kOdometryColour = {0.10, 0.35, 0.95};
 constexpr Rgb kTruthColour = {0.10, 0.62, 0.20};
 constexpr Rgb kFrameColour = {0.6, 0.6, 0.6};
+constexpr Rgb kLandmarkColour = {0.90, 0.45, 0.0};
 
 Rgb Palette(double t) {
   t = std::clamp(t, 0.0, 1.0) * (kYlGnBu.size() - 1);
@@ -85,7 +86,8 @@ Status CheckPoints(const std::vector<RenderPoint>& points, std::string_view name
 
 int LegendEntries(const MapImage& image) {
   return (image.path.empty() ? 0 : 1) + (image.odometry.empty() ? 0 : 1) +
-         (image.truth.empty() ? 0 : 1);
+         (image.truth.empty() ? 0 : 1) + (image.landmarks.empty() ? 0 : 1) +
+         (image.landmarks_truth.empty() ? 0 : 1);
 }
 
 void SetColour(cairo_t* cr, const Rgb& c) { cairo_set_source_rgb(cr, c.r, c.g, c.b); }
@@ -285,9 +287,14 @@ void DrawHeader(cairo_t* cr, const MapImage& image, const MapLayout& layout,
     const char* label;
     const LineStyle* style;
   };
+  const std::vector<RenderPoint> landmarks_mark(image.landmarks.empty() ? 0 : 1);
+  const LineStyle landmark_style{kLandmarkColour, path_style.width_px, false};
+  const LineStyle landmark_truth_style{kTruthColour, truth_style.width_px, true};
   const Entry entries[] = {{&image.path, "path (heaviest particle)", &path_style},
                            {&image.odometry, "odometry", &odometry_style},
-                           {&image.truth, "ground truth", &truth_style}};
+                           {&image.truth, "ground truth", &truth_style},
+                           {&landmarks_mark, "landmarks, 2-sigma ellipses", &landmark_style},
+                           {&image.landmarks_truth, "true landmarks", &landmark_truth_style}};
   cairo_set_font_size(cr, layout.font_px);
   double x = layout.font_px;
   const double sample_px = layout.font_px * 2.5;
@@ -304,6 +311,51 @@ void DrawHeader(cairo_t* cr, const MapImage& image, const MapLayout& layout,
     cairo_move_to(cr, x, baseline);
     cairo_show_text(cr, entry.label);
     x += TextWidth(cr, entry.label) + layout.font_px * 1.5;
+  }
+}
+
+// The half axes (m) and the angle of the major axis of the 2-sigma ellipse of a covariance.
+void EllipseOf(const RenderLandmark& l, double* a_m, double* b_m, double* angle_rad) {
+  const double mean = 0.5 * (l.sxx + l.syy);
+  const double d = std::hypot(0.5 * (l.sxx - l.syy), l.sxy);
+  *a_m = 2.0 * std::sqrt(std::max(mean + d, 0.0));
+  *b_m = 2.0 * std::sqrt(std::max(mean - d, 0.0));
+  *angle_rad = 0.5 * std::atan2(2.0 * l.sxy, l.sxx - l.syy);
+}
+
+void DrawLandmarks(cairo_t* cr, const MapImage& image, const MapLayout& layout, double line_px) {
+  const double mark_px = line_px * 2.5;
+  SetColour(cr, kTruthColour);
+  cairo_set_line_width(cr, line_px * 0.8);
+  cairo_set_dash(cr, nullptr, 0, 0.0);
+  for (const RenderPoint& p : image.landmarks_truth) {
+    const double x = layout.XPx(p.x_m), y = layout.YPx(p.y_m);
+    cairo_move_to(cr, x - mark_px, y - mark_px);
+    cairo_line_to(cr, x + mark_px, y + mark_px);
+    cairo_move_to(cr, x - mark_px, y + mark_px);
+    cairo_line_to(cr, x + mark_px, y - mark_px);
+  }
+  cairo_stroke(cr);
+  SetColour(cr, kLandmarkColour);
+  for (const RenderLandmark& l : image.landmarks) {
+    const double x = layout.XPx(l.x_m), y = layout.YPx(l.y_m);
+    double a, b, angle;
+    EllipseOf(l, &a, &b, &angle);
+    // At least half a pixel: a point estimate still shows its ring.
+    const double a_px = std::max(a * layout.px_per_m, 0.5),
+                 b_px = std::max(b * layout.px_per_m, 0.5);
+    cairo_save(cr);
+    cairo_translate(cr, x, y);
+    cairo_rotate(cr, -angle);  // device y points down
+    cairo_scale(cr, a_px, b_px);
+    cairo_new_sub_path(cr);
+    cairo_arc(cr, 0, 0, 1, 0, 2 * std::numbers::pi);
+    cairo_restore(cr);
+    cairo_set_line_width(cr, line_px * 0.6);
+    cairo_stroke(cr);
+    cairo_new_sub_path(cr);
+    cairo_arc(cr, x, y, line_px * 1.2, 0, 2 * std::numbers::pi);
+    cairo_fill(cr);
   }
 }
 
@@ -330,6 +382,7 @@ void Draw(cairo_t* cr, const MapImage& image, const MapLayout& layout) {
   DrawPolyline(cr, layout, image.odometry, odometry_style);
   DrawPolyline(cr, layout, image.truth, truth_style);
   DrawPolyline(cr, layout, image.path, path_style);
+  DrawLandmarks(cr, image, layout, line_px);
   cairo_restore(cr);
 
   SetColour(cr, kFrameColour);
@@ -404,6 +457,17 @@ StatusOr<MapLayout> ComputeMapLayout(const MapImage& image, const RenderOptions&
   GROVE_RETURN_IF_ERROR(CheckPoints(image.path, "path"));
   GROVE_RETURN_IF_ERROR(CheckPoints(image.odometry, "odometry"));
   GROVE_RETURN_IF_ERROR(CheckPoints(image.truth, "truth"));
+  GROVE_RETURN_IF_ERROR(CheckPoints(image.landmarks_truth, "landmarks_truth"));
+  for (size_t i = 0; i < image.landmarks.size(); ++i) {
+    const RenderLandmark& l = image.landmarks[i];
+    if (!std::isfinite(l.x_m) || !std::isfinite(l.y_m) || !std::isfinite(l.sxx) ||
+        !std::isfinite(l.sxy) || !std::isfinite(l.syy) || l.sxx < 0 || l.syy < 0) {
+      return InvalidArgumentError(fmt::format(
+          "landmarks[{}] = ({}, {}) with covariance ({}, {}, {}) is not finite or not a "
+          "covariance",
+          i, l.x_m, l.y_m, l.sxx, l.sxy, l.syy));
+    }
+  }
 
   Box box;
   const double half_w = image.hex_radius_m * kSqrt3 / 2.0;
@@ -417,9 +481,10 @@ StatusOr<MapLayout> ComputeMapLayout(const MapImage& image, const RenderOptions&
     RenderPoint c = HexCenter(hex.q, hex.r, image.hex_radius_m);
     box.Add(c.x_m - half_w, c.y_m - image.hex_radius_m, c.x_m + half_w, c.y_m + image.hex_radius_m);
   }
-  for (const auto* points : {&image.path, &image.odometry, &image.truth}) {
+  for (const auto* points : {&image.path, &image.odometry, &image.truth, &image.landmarks_truth}) {
     for (const RenderPoint& p : *points) box.Add(p.x_m, p.y_m, p.x_m, p.y_m);
   }
+  for (const RenderLandmark& l : image.landmarks) box.Add(l.x_m, l.y_m, l.x_m, l.y_m);
   if (box.empty()) box.Add(0, 0, 0, 0);
   box.Add(box.min_x - options.margin_m, box.min_y - options.margin_m, box.max_x + options.margin_m,
           box.max_y + options.margin_m);

@@ -1,5 +1,6 @@
 // Map images (PNG and SVG, drawn with cairo) in the style of the FootSLAM paper's Figure 8: the
-// hexagons shaded by use, the heaviest particle's path, the raw odometry and optional truth.
+// hexagons shaded by use, the heaviest particle's path, the raw odometry and optional truth; for a
+// landmark map, the landmarks with their 2-sigma ellipses and the true landmarks.
 #ifndef GROVE_TOOLS_MAP_RENDER_H_
 #define GROVE_TOOLS_MAP_RENDER_H_
 
@@ -23,14 +24,25 @@ struct RenderPoint {
   double y_m = 0.0;
 };
 
+// A landmark estimate: its mean and covariance (m^2), drawn as a dot with its 2-sigma ellipse.
+struct RenderLandmark {
+  double x_m = 0.0;
+  double y_m = 0.0;
+  double sxx = 0.0;
+  double sxy = 0.0;
+  double syy = 0.0;
+};
+
 struct MapImage {
   // Pointy-top hexagons with circumradius R; the centre of (q, r) is
   // x = R * sqrt(3) * (q + r / 2), y = 1.5 * R * r.
   double hex_radius_m = 1.0;
-  std::vector<RenderHex> hexes;       // hexes with use 0 are not drawn
-  std::vector<RenderPoint> path;      // heaviest particle's path: solid dark red
-  std::vector<RenderPoint> odometry;  // raw odometry: thin dashed blue
-  std::vector<RenderPoint> truth;     // optional ground truth: green
+  std::vector<RenderHex> hexes;              // hexes with use 0 are not drawn
+  std::vector<RenderPoint> path;             // heaviest particle's path: solid dark red
+  std::vector<RenderPoint> odometry;         // raw odometry: thin dashed blue
+  std::vector<RenderPoint> truth;            // optional ground truth: green
+  std::vector<RenderLandmark> landmarks;     // estimated landmarks: orange, 2-sigma ellipses
+  std::vector<RenderPoint> landmarks_truth;  // true landmarks: green crosses
   std::string title;
 };
 

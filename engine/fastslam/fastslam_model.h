@@ -11,9 +11,12 @@
 //     Sigma' = Gv Sigma Gv^T + Gu Q Gu^T.
 //   Advance(ScanStep): FastSLAM 1.0 adds log N(v; 0, S) of each observation of a known
 //     landmark and updates it (EKF, Joseph form); FastSLAM 2.0 refines the pose mean and
-//     covariance by each observation of a known landmark (adding each one's predictive
-//     log-likelihood), draws the pose from the result (its covariance then starts again at 0)
-//     and updates the landmarks from the drawn pose. Both initialise new landmarks from the pose.
+//     covariance by each observation of a known landmark and adds each one's predictive
+//     log-likelihood, which does not depend on the pose drawn next.
+//   Complete(ScanStep), after resampling (FastSLAM 2.0): the refinement again, the draw of the
+//     pose from it (its covariance then starts again at 0) and the landmark updates from the
+//     drawn pose. Copies of one parent draw distinct poses (Bailey's order: resample, then
+//     sample). Both filters initialise new landmarks from the pose.
 //
 // Paths: a particle does not store a pose per step. Its history holds one entry per path
 // segment: the pose and particle index at the first prediction after the start or a scan.
@@ -162,53 +165,48 @@ class FastSlamModel {
     return Status::Ok();
   }
 
+  // FastSLAM 1.0: the whole update. FastSLAM 2.0: the weight only (the predictive likelihood
+  // of the observations of known landmarks); Complete() draws and updates after resampling.
   Status Advance(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot,
                  double* log_w) {
     if (scan.observations.empty()) return Status::Ok();
-    const bool fs2 = config_.filter == FastSlamFilter::kFastSlam2;
     for (size_t i = begin; i < end; ++i) {
       double lw = 0;
-      if (fs2) {
-        Eigen::Vector3d mu = ToVector(pose_[i]);
-        Eigen::Matrix3d sigma = Covariance(i);
-        for (const LandmarkObservation& z : scan.observations) {
-          const Landmark* l = trie_.Find(maps_[i], static_cast<uint64_t>(z.id));
-          if (l == nullptr) continue;
-          double w = 0;
-          Status s =
-              ProposalStep(&mu, &sigma, *l, RangeBearing{z.range_m, z.bearing_rad}, noise_, &w);
-          if (!s.ok()) return ParticleError(i, z, s);
-          lw += w;
-        }
-        RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), StreamPurpose::kProposal);
-        const Eigen::Vector3d normals(rs.NextNormal(), rs.NextNormal(), rs.NextNormal());
-        VehiclePose drawn;
-        Status s = SamplePose(mu, sigma, normals, &drawn);
-        if (!s.ok()) {
-          return FailedPreconditionError(fmt::format("particle {}'s proposal: {}", i, s.message()));
-        }
-        pose_[i] = drawn;
-        unit_[i] = Unit{std::cos(drawn.heading_rad), std::sin(drawn.heading_rad)};
-        cov_[i] = PoseCovariance{};
-      }
-      const VehiclePose pose = pose_[i];
-      for (const LandmarkObservation& z : scan.observations) {
-        const RangeBearing rb{z.range_m, z.bearing_rad};
-        Status s;
-        double ll = 0;
-        const bool ok = trie_.Update(&maps_[i], static_cast<uint64_t>(z.id), slot,
-                                     [&](Landmark& l, bool existed) {
-                                       if (!existed) {
-                                         l = InitLandmark(pose, rb, noise_);
-                                       } else {
-                                         s = UpdateLandmark(pose, rb, noise_, &l, &ll);
-                                       }
-                                     });
-        if (!ok) return NoMemory(i, "map");
-        if (!s.ok()) return ParticleError(i, z, s);
-        if (!fs2) lw += ll;
+      if (config_.filter == FastSlamFilter::kFastSlam2) {
+        Eigen::Vector3d mu;
+        Eigen::Matrix3d sigma;
+        GROVE_RETURN_IF_ERROR(Proposal(scan, i, &mu, &sigma, &lw));
+      } else {
+        GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &lw));
       }
       log_w[i] += lw;
+    }
+    return Status::Ok();
+  }
+
+  // FastSLAM 2.0, after resampling: the proposal again (for the particle's new index), the draw
+  // from it, then the landmark updates from the drawn pose. Nothing for FastSLAM 1.0.
+  Status Complete(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot) {
+    if (scan.observations.empty() || config_.filter != FastSlamFilter::kFastSlam2) {
+      return Status::Ok();
+    }
+    for (size_t i = begin; i < end; ++i) {
+      Eigen::Vector3d mu;
+      Eigen::Matrix3d sigma;
+      double lw = 0;
+      GROVE_RETURN_IF_ERROR(Proposal(scan, i, &mu, &sigma, &lw));
+      RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), StreamPurpose::kProposal);
+      const Eigen::Vector3d normals(rs.NextNormal(), rs.NextNormal(), rs.NextNormal());
+      VehiclePose drawn;
+      Status s = SamplePose(mu, sigma, normals, &drawn);
+      if (!s.ok()) {
+        return FailedPreconditionError(fmt::format("particle {}'s proposal: {}", i, s.message()));
+      }
+      pose_[i] = drawn;
+      unit_[i] = Unit{std::cos(drawn.heading_rad), std::sin(drawn.heading_rad)};
+      cov_[i] = PoseCovariance{};
+      double unused = 0;
+      GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &unused));
     }
     return Status::Ok();
   }
@@ -341,6 +339,46 @@ class FastSlamModel {
   void SetCovariance(size_t i, const Eigen::Matrix3d& m) {
     cov_[i] = PoseCovariance{m(0, 0), 0.5 * (m(0, 1) + m(1, 0)), 0.5 * (m(0, 2) + m(2, 0)),
                              m(1, 1), 0.5 * (m(1, 2) + m(2, 1)), m(2, 2)};
+  }
+
+  // FastSLAM 2.0's proposal for particle i: its predicted pose refined by each observation of a
+  // known landmark in turn; *log_w gets the sum of their predictive log-likelihoods.
+  Status Proposal(const ScanStep& scan, size_t i, Eigen::Vector3d* mu, Eigen::Matrix3d* sigma,
+                  double* log_w) const {
+    *mu = ToVector(pose_[i]);
+    *sigma = Covariance(i);
+    for (const LandmarkObservation& z : scan.observations) {
+      const Landmark* l = trie_.Find(maps_[i], static_cast<uint64_t>(z.id));
+      if (l == nullptr) continue;
+      double w = 0;
+      Status s = ProposalStep(mu, sigma, *l, RangeBearing{z.range_m, z.bearing_rad}, noise_, &w);
+      if (!s.ok()) return ParticleError(i, z, s);
+      *log_w += w;
+    }
+    return Status::Ok();
+  }
+
+  // The EKF update of each observed landmark from particle i's pose (new ones initialised);
+  // *log_w gets the sum of the known ones' log-likelihoods.
+  Status UpdateLandmarks(const ScanStep& scan, size_t i, int slot, double* log_w) {
+    const VehiclePose pose = pose_[i];
+    for (const LandmarkObservation& z : scan.observations) {
+      const RangeBearing rb{z.range_m, z.bearing_rad};
+      Status s;
+      double ll = 0;
+      const bool ok = trie_.Update(&maps_[i], static_cast<uint64_t>(z.id), slot,
+                                   [&](Landmark& l, bool existed) {
+                                     if (!existed) {
+                                       l = InitLandmark(pose, rb, noise_);
+                                     } else {
+                                       s = UpdateLandmark(pose, rb, noise_, &l, &ll);
+                                     }
+                                   });
+      if (!ok) return NoMemory(i, "map");
+      if (!s.ok()) return ParticleError(i, z, s);
+      *log_w += ll;
+    }
+    return Status::Ok();
   }
 
   static Status NoMemory(size_t i, const char* what) {

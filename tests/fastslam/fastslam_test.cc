@@ -363,7 +363,7 @@ TEST(FastSlamModelMaps, CopiesUpdatedDifferentlyKeepTwoMaps) {
 
 // Landmark ids far beyond any preset height: the trees grow, and stay consistent.
 TEST(FastSlamModelMaps, TreesGrowPastAnyHeight) {
-  FastSlamConfig config = Config(FastSlamFilter::kFastSlam2, 3);
+  FastSlamConfig config = Config(FastSlamFilter::kFastSlam1, 3);
   config.sigma_speed_mps = config.sigma_steer_rad = 0;
   WorkerPool workers(1);
   fastslam::FastSlamModel<2> model(config, 1);

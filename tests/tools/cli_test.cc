@@ -572,4 +572,82 @@ TEST_F(CliTest, FastSlamSimulateWritesControlsObservationsAndTruth) {
   EXPECT_FALSE(fs::exists(dir_ / "b" / "controls.csv"));
 }
 
+// `grove fastslam run` end to end on the simulator's files: every output, the truth scored, the
+// run identical at 1 and 2 threads, and `evaluate` agreeing with the run's own score.
+TEST_F(CliTest, FastSlamSimulateRunAndEvaluate) {
+  fs::path sim = dir_ / "sim";
+  ASSERT_EQ(Grove("fastslam simulate --seed 2 --out " + sim.string()).exit_code, 0);
+  const std::string inputs = " --controls " + (sim / "controls.csv").string() + " --observations " +
+                             (sim / "observations.csv").string() + " --truth " +
+                             (sim / "truth.csv").string() + " --landmarks-truth " +
+                             (sim / "landmarks_truth.csv").string();
+  fs::path a = dir_ / "a", b = dir_ / "b";
+  Outcome o = Grove("fastslam run --no-progress --particles 20 --threads 1" + inputs + " --out " +
+                    a.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  for (const char* f : {"trajectory.csv", "heaviest_trajectory.csv", "landmarks.csv", "map.png",
+                        "map.svg", "summary.json"}) {
+    EXPECT_TRUE(fs::exists(a / f)) << f;
+  }
+  EXPECT_EQ(Slurp(a / "landmarks.csv").rfind("id,x,y,sxx,sxy,syy\n", 0), 0u);
+  const std::string summary = Slurp(a / "summary.json");
+  EXPECT_NE(summary.find("\"position_rmse_m\""), std::string::npos);
+  EXPECT_NE(summary.find("\"landmark_accuracy\""), std::string::npos);
+  o = Grove("fastslam run --no-progress --particles 20 --threads 2 --filter fastslam2" + inputs +
+            " --out " + b.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  for (const char* f : {"trajectory.csv", "heaviest_trajectory.csv", "landmarks.csv"}) {
+    EXPECT_EQ(Slurp(a / f), Slurp(b / f)) << f;
+  }
+  o = Grove("fastslam evaluate --truth " + (sim / "truth.csv").string() + " --trajectory " +
+            (a / "trajectory.csv").string() + " --landmarks " + (a / "landmarks.csv").string() +
+            " --landmarks-truth " + (sim / "landmarks_truth.csv").string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.out.find("\"position_mse_variance_m4\""), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("\"rmse_m\""), std::string::npos) << o.out;
+  o = Grove("fastslam run --print-config --filter fastslam1 --controls x --observations y");
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.out.find("\"filter\": \"fastslam1\""), std::string::npos) << o.out;
+}
+
+// Bad FastSLAM inputs: file:line:column, exit 3, no output directory left behind.
+TEST_F(CliTest, FastSlamBadInputsStopWithFileLineColumn) {
+  const std::string good_controls = "t,v,steer\n0,3,0\n0.025,3,0.1\n0.05,3,0.1\n";
+  const std::string good_observations = "t,range,bearing,id\n0.025,10,0.5,1\n0.05,11,0.4,1\n";
+  struct Case {
+    std::string controls, observations, file, where, what;
+  };
+  const Case cases[] = {
+      {"t,v,steer\n0,3,0\n0.05,3,0\n0.025,3,0\n", good_observations, "controls",
+       "4:1:", "strictly increasing"},
+      {"t,v,steer\n0,3,0\n0.025,nan,0\n", good_observations, "controls", "3:", "must be finite"},
+      {good_controls, "t,range,bearing,id\n0.025,-1,0.5,1\n", "observations", "2:", ">= 0"},
+      {good_controls, "t,range,bearing,id\n0.025,10,3.5,1\n", "observations", "2:", "(-pi, pi]"},
+      {good_controls, "t,range,bearing,id\n0.025,10,0.5,1.5\n", "observations",
+       "2:", "not an integer"},
+      {good_controls, "t,range,bearing,id\n0.05,10,0.5,1\n0.025,10,0.5,1\n", "observations",
+       "3:1:", "must not decrease"},
+      {"t,v,steer\n1,3,0\n2,3,0\n", "t,range,bearing,id\n0.5,10,0.5,1\n", "observations",
+       "2:1:", "before the first control"},
+      {good_controls, "t,range,bearing,id\n0.025,inf,0.5,1\n", "observations",
+       "2:", "must be finite"},
+      {good_controls, "t,range,bearing\n0.025,10,0.5\n", "observations",
+       "1:1:", "unknown data association"},
+      {"t,v\n0,3\n", good_observations, "controls", "1:1:", "unknown header"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.controls + " | " + c.observations);
+    const std::string controls = Write("controls.csv", c.controls);
+    const std::string observations = Write("observations.csv", c.observations);
+    fs::path out = dir_ / "out";
+    Outcome o = Grove("fastslam run --no-progress --particles 5 --controls " + controls +
+                      " --observations " + observations + " --out " + out.string());
+    EXPECT_EQ(o.exit_code, 3) << o.err;
+    const std::string& path = c.file == "controls" ? controls : observations;
+    EXPECT_NE(o.err.find(path + ":" + c.where), std::string::npos) << o.err;
+    EXPECT_NE(o.err.find(c.what), std::string::npos) << o.err;
+    EXPECT_FALSE(fs::exists(out)) << "a failed run left " << out;
+  }
+}
+
 }  // namespace

@@ -1,5 +1,7 @@
 // grove: the command-line front end. Subcommands:
 //   grove footslam run|simulate|evaluate|render ...
+//   grove fastslam run|simulate|evaluate ...
+//   grove bench paper|scaling ...
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
@@ -8,10 +10,11 @@
 #include <utility>
 #include <variant>
 
+#include "grove/fastslam.h"
 #include "grove/footslam.h"
 #include "tools/bench_commands.h"
-#include "tools/cli/config_flags.h"
-#include "tools/config_json.h"
+#include "tools/cli/run_flags.h"
+#include "tools/fastslam_run.h"
 #include "tools/fastslam_simulator.h"
 #include "tools/footslam_run.h"
 
@@ -29,34 +32,12 @@ int Main(int argc, char** argv) {
   // ---- run ----
   CLI::App* run = footslam->add_subcommand("run", "Run FootSLAM on a step file");
   gt::FootSlamRunOptions run_options;
-  std::string config_path;
-  bool print_config = false;
-  bool no_progress = false;
   CLI::Option* steps_option =
       run->add_option("--steps", run_options.steps_path,
                       "Step file: CSV 't,dx,dy' or 't,x,y' (default: the bundled building walk)");
-  run->add_option("--out", run_options.run.out_dir, "Output directory");
-  CLI::Option* config_option =
-      run->add_option("--config", config_path, "JSON file setting any FootSLAM parameter");
-  gt::ConfigFlags<FootSlamConfig> config_flags(run, grove::FootSlamConfigFields());
+  gt::RunFlags<FootSlamConfig> run_flags(run, grove::FootSlamConfigFields());
   run->add_option("--max-step", run_options.max_step_m,
                   "Reject input steps longer than this many metres (default 5)");
-  std::string memory_budget;
-  run->add_option("--memory-budget", memory_budget,
-                  "Refuse runs predicted to need more memory, e.g. 512M or 8G (default: the "
-                  "memory available)");
-  run->add_option("--checkpoint-every", run_options.run.checkpoint_every,
-                  "Write a checkpoint every N steps (0: only when stopped by SIGINT or SIGTERM)")
-      ->check(CLI::NonNegativeNumber);
-  CLI::Option* checkpoint_option =
-      run->add_option("--checkpoint", run_options.run.checkpoint_path,
-                      "Checkpoint file (default: OUT/checkpoint.grove)");
-  CLI::Option* resume_option =
-      run->add_option("--resume", run_options.run.resume_path,
-                      "Continue from this checkpoint; give the same steps and configuration as the "
-                      "interrupted run (threads may differ)");
-  run->add_flag("--print-config", print_config, "Print the effective configuration and exit");
-  run->add_flag("--no-progress", no_progress, "No progress output");
 
   // ---- simulate ----
   CLI::App* simulate = footslam->add_subcommand("simulate", "Simulate a pedestrian walk");
@@ -90,8 +71,33 @@ int Main(int argc, char** argv) {
   render->add_option("--steps", odometry_path, "Step file to draw the raw odometry from");
 
   // ---- fastslam ----
-  CLI::App* fastslam = app.add_subcommand("fastslam", "Landmark FastSLAM (simulator so far)");
+  CLI::App* fastslam = app.add_subcommand("fastslam", "Landmark FastSLAM");
   fastslam->require_subcommand(1);
+  CLI::App* fs_run = fastslam->add_subcommand(
+      "run", "Run FastSLAM 1.0 or 2.0 on controls.csv and observations.csv");
+  gt::FastSlamRunOptions fs_run_options;
+  CLI::Option* fs_controls =
+      fs_run->add_option("--controls", fs_run_options.controls_path, "controls.csv (t,v,steer)")
+          ->required();
+  CLI::Option* fs_observations =
+      fs_run
+          ->add_option("--observations", fs_run_options.observations_path,
+                       "observations.csv (t,range,bearing,id)")
+          ->required();
+  CLI::Option* fs_truth = fs_run->add_option("--truth", fs_run_options.truth_path,
+                                             "truth.csv (t,x,y,heading): scored and drawn");
+  CLI::Option* fs_landmarks_truth =
+      fs_run->add_option("--landmarks-truth", fs_run_options.landmarks_truth_path,
+                         "landmarks_truth.csv (id,x,y): scored and drawn");
+  gt::RunFlags<grove::FastSlamConfig> fs_run_flags(fs_run, grove::FastSlamConfigFields());
+  CLI::App* fs_evaluate =
+      fastslam->add_subcommand("evaluate", "Pose and landmark errors against the truth");
+  std::string fs_eval_truth, fs_eval_trajectory, fs_eval_landmarks, fs_eval_landmarks_truth;
+  fs_evaluate->add_option("--truth", fs_eval_truth, "truth.csv (t,x,y,heading)")->required();
+  fs_evaluate->add_option("--trajectory", fs_eval_trajectory, "trajectory.csv (t,x,y,heading)")
+      ->required();
+  fs_evaluate->add_option("--landmarks", fs_eval_landmarks, "landmarks.csv of the run");
+  fs_evaluate->add_option("--landmarks-truth", fs_eval_landmarks_truth, "landmarks_truth.csv");
   CLI::App* fs_simulate = fastslam->add_subcommand(
       "simulate", "Bailey's FastSLAM simulator: controls, observations, truth");
   std::string fs_map, fs_preset = "webmap", fs_out, fs_seed = "1";
@@ -142,44 +148,24 @@ int Main(int argc, char** argv) {
   }
 
   if (*run) {
-    // An option given with an empty path is an error, never "use the default".
-    for (auto [option, name] : {std::pair{steps_option, "--steps"},
-                                {config_option, "--config"},
-                                {resume_option, "--resume"},
-                                {checkpoint_option, "--checkpoint"}}) {
-      if (*option && option->as<std::string>().empty()) {
-        return gt::Fail(gt::kExitUsage, fmt::format("{}: the path is empty", name));
-      }
-    }
     FootSlamConfig config;
-    if (*config_option) {
-      grove::Status s = gt::LoadConfigFile(grove::FootSlamConfigFields(), config_path, &config);
-      if (!s.ok()) {
-        return gt::Fail(
-            s.code() == grove::StatusCode::kNotFound || s.code() == grove::StatusCode::kIoError
-                ? gt::kExitInput
-                : gt::kExitUsage,
-            s.message());
-      }
-    }
-    // Flags given on the command line override the file.
-    if (grove::Status s = config_flags.Apply(&config); !s.ok()) {
-      return gt::Fail(gt::kExitUsage, s.message());
-    }
-    if (print_config) {
-      std::printf("%s\n", gt::ConfigToJson(grove::FootSlamConfigFields(), config).dump(2).c_str());
-      return gt::kExitOk;
-    }
-    if (run_options.run.out_dir.empty()) {
-      return gt::Fail(gt::kExitUsage, "--out: an output directory is required");
-    }
-    run_options.run.progress = !no_progress;
-    if (!memory_budget.empty()) {
-      grove::StatusOr<int64_t> bytes = gt::ParseMemorySize(memory_budget);
-      if (!bytes.ok()) return gt::Fail(gt::kExitUsage, bytes.status().message());
-      run_options.run.memory_budget_bytes = *bytes;
-    }
+    const int code = run_flags.Prepare(&config, &run_options.run, {{steps_option, "--steps"}});
+    if (code >= 0) return code;
     return gt::RunFootSlamCommand(config, run_options);
+  }
+  if (*fs_run) {
+    grove::FastSlamConfig config;
+    const int code = fs_run_flags.Prepare(&config, &fs_run_options.run,
+                                          {{fs_controls, "--controls"},
+                                           {fs_observations, "--observations"},
+                                           {fs_truth, "--truth"},
+                                           {fs_landmarks_truth, "--landmarks-truth"}});
+    if (code >= 0) return code;
+    return gt::RunFastSlamCommand(config, fs_run_options);
+  }
+  if (*fs_evaluate) {
+    return gt::FastSlamEvaluateCommand(fs_eval_truth, fs_eval_trajectory, fs_eval_landmarks,
+                                       fs_eval_landmarks_truth);
   }
   if (*paper) return gt::PaperBenchCommand(paper_options);
   if (*scaling) return gt::ScalingBenchCommand(scaling_options);

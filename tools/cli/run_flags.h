@@ -1,0 +1,101 @@
+// The flags every model's `grove ... run` takes besides its inputs, written once: --out,
+// --config, one flag per configuration field, --memory-budget, --checkpoint-every,
+// --checkpoint, --resume, --print-config and --no-progress; and what they mean: the file's
+// values first, flags over them, --print-config printing the result.
+#ifndef GROVE_TOOLS_CLI_RUN_FLAGS_H_
+#define GROVE_TOOLS_CLI_RUN_FLAGS_H_
+
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "grove/config_fields.h"
+#include "tools/cli/config_flags.h"
+#include "tools/config_json.h"
+#include "tools/run_loop.h"
+
+namespace grove::tools {
+
+template <typename Config>
+class RunFlags {
+ public:
+  RunFlags(CLI::App* app, const std::vector<ConfigField<Config>>& fields)
+      : fields_(fields), config_flags_(app, fields) {
+    app->add_option("--out", options_.out_dir, "Output directory");
+    config_option_ = app->add_option("--config", config_path_, "JSON file setting any parameter");
+    app->add_option("--memory-budget", memory_budget_,
+                    "Refuse runs predicted to need more memory, e.g. 512M or 8G (default: the "
+                    "memory available)");
+    app->add_option("--checkpoint-every", options_.checkpoint_every,
+                    "Write a checkpoint every N steps (0: only when stopped by SIGINT or SIGTERM)")
+        ->check(CLI::NonNegativeNumber);
+    checkpoint_option_ = app->add_option("--checkpoint", options_.checkpoint_path,
+                                         "Checkpoint file (default: OUT/checkpoint.grove)");
+    resume_option_ = app->add_option(
+        "--resume", options_.resume_path,
+        "Continue from this checkpoint; give the same inputs and configuration as the "
+        "interrupted run (threads may differ)");
+    app->add_flag("--print-config", print_config_, "Print the effective configuration and exit");
+    app->add_flag("--no-progress", no_progress_, "No progress output");
+  }
+
+  // After parsing: sets *config (the --config file, then the flags) and *options. Returns -1 to
+  // go on with the run, or the exit code to return (--print-config printed, or an error).
+  // `input_paths`: the model's own path options, refused when given empty.
+  int Prepare(Config* config, RunOptions* options,
+              const std::vector<std::pair<CLI::Option*, const char*>>& input_paths) const {
+    std::vector<std::pair<CLI::Option*, const char*>> paths = input_paths;
+    paths.insert(paths.end(), {{config_option_, "--config"},
+                               {resume_option_, "--resume"},
+                               {checkpoint_option_, "--checkpoint"}});
+    // An option given with an empty path is an error, never "use the default".
+    for (const auto& [option, name] : paths) {
+      if (*option && option->template as<std::string>().empty()) {
+        return Fail(kExitUsage, fmt::format("{}: the path is empty", name));
+      }
+    }
+    if (*config_option_) {
+      Status s = LoadConfigFile(fields_, config_path_, config);
+      if (!s.ok()) {
+        return Fail(s.code() == StatusCode::kNotFound || s.code() == StatusCode::kIoError
+                        ? kExitInput
+                        : kExitUsage,
+                    s.message());
+      }
+    }
+    if (Status s = config_flags_.Apply(config); !s.ok()) return Fail(kExitUsage, s.message());
+    if (print_config_) {
+      std::printf("%s\n", ConfigToJson(fields_, *config).dump(2).c_str());
+      return kExitOk;
+    }
+    if (options_.out_dir.empty()) return Fail(kExitUsage, "--out: an output directory is required");
+    *options = options_;
+    options->progress = !no_progress_;
+    if (!memory_budget_.empty()) {
+      StatusOr<int64_t> bytes = ParseMemorySize(memory_budget_);
+      if (!bytes.ok()) return Fail(kExitUsage, bytes.status().message());
+      options->memory_budget_bytes = *bytes;
+    }
+    return -1;
+  }
+
+ private:
+  const std::vector<ConfigField<Config>>& fields_;
+  ConfigFlags<Config> config_flags_;
+  RunOptions options_;
+  std::string config_path_;
+  std::string memory_budget_;
+  bool print_config_ = false;
+  bool no_progress_ = false;
+  CLI::Option* config_option_ = nullptr;
+  CLI::Option* checkpoint_option_ = nullptr;
+  CLI::Option* resume_option_ = nullptr;
+};
+
+}  // namespace grove::tools
+
+#endif  // GROVE_TOOLS_CLI_RUN_FLAGS_H_

@@ -1,0 +1,416 @@
+// `grove fastslam run` (FastSLAM on the generic run loop, tools/run_loop.h) and
+// `grove fastslam evaluate`.
+#include "tools/fastslam_run.h"
+
+#include <fmt/format.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <memory>
+#include <numbers>
+
+#include "tools/config_json.h"
+#include "tools/fastslam_inputs.h"
+#include "tools/filter_outputs.h"
+#include "tools/map_render.h"
+
+namespace grove::tools {
+namespace {
+
+// Lines of a regular file; 0 for anything else (a pipe must be read once, by the run).
+int64_t CountRegularFileLines(const std::string& path) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return 0;
+  std::ifstream in(path, std::ios::binary);
+  return static_cast<int64_t>(
+      std::count(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>(), '\n'));
+}
+
+double Wrap(double a) { return std::remainder(a, 2 * std::numbers::pi); }
+
+// A pose file `t,x,y,heading` (trajectory.csv, truth.csv), times non-decreasing; at a repeated
+// time the last row wins (a scan's update follows the prediction to its time).
+StatusOr<std::map<double, Pose2>> ReadPoses(const std::string& path) {
+  StatusOr<CsvTableReader> table = CsvTableReader::Open(path, {{"t", "x", "y", "heading"}});
+  if (!table.ok()) return table.status();
+  std::map<double, Pose2> poses;
+  double last = -INFINITY;
+  for (;;) {
+    const std::vector<CsvField>* f = nullptr;
+    StatusOr<bool> more = table->Next(&f);
+    if (!more.ok()) return more.status();
+    if (!*more) break;
+    const int64_t line = table->line_number();
+    double t = 0;
+    Pose2 p;
+    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[0], "t", &t));
+    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[1], "x", &p.x_m));
+    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[2], "y", &p.y_m));
+    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[3], "heading", &p.heading_rad));
+    if (t < last) {
+      return LineError(path, line, (*f)[0].column,
+                       fmt::format("t = {} is before the previous time {}", t, last));
+    }
+    last = t;
+    poses[t] = p;
+  }
+  if (poses.empty()) return InvalidArgumentError(fmt::format("{}: no poses", path));
+  return poses;
+}
+
+struct TruthLandmark {
+  double x_m, y_m;
+};
+
+// landmarks_truth.csv: `id,x,y`.
+StatusOr<std::map<int64_t, TruthLandmark>> ReadTruthLandmarks(const std::string& path) {
+  StatusOr<CsvTableReader> table = CsvTableReader::Open(path, {{"id", "x", "y"}});
+  if (!table.ok()) return table.status();
+  std::map<int64_t, TruthLandmark> out;
+  for (;;) {
+    const std::vector<CsvField>* f = nullptr;
+    StatusOr<bool> more = table->Next(&f);
+    if (!more.ok()) return more.status();
+    if (!*more) break;
+    const int64_t line = table->line_number();
+    int32_t id = 0;
+    if (ParseCsvInt32((*f)[0].text, &id) != NumberParse::kOk || id < 0) {
+      return LineError(path, line, (*f)[0].column,
+                       fmt::format("id: {} is not an integer >= 0", QuotedField((*f)[0].text)));
+    }
+    TruthLandmark l{};
+    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[1], "x", &l.x_m));
+    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[2], "y", &l.y_m));
+    if (!out.emplace(id, l).second) {
+      return LineError(path, line, (*f)[0].column, fmt::format("id {} appears twice", id));
+    }
+  }
+  return out;
+}
+
+// landmarks.csv: `id,x,y,sxx,sxy,syy`.
+StatusOr<std::vector<LandmarkEstimate>> ReadLandmarkEstimates(const std::string& path) {
+  StatusOr<CsvTableReader> table =
+      CsvTableReader::Open(path, {{"id", "x", "y", "sxx", "sxy", "syy"}});
+  if (!table.ok()) return table.status();
+  std::vector<LandmarkEstimate> out;
+  for (;;) {
+    const std::vector<CsvField>* f = nullptr;
+    StatusOr<bool> more = table->Next(&f);
+    if (!more.ok()) return more.status();
+    if (!*more) break;
+    const int64_t line = table->line_number();
+    int32_t id = 0;
+    if (ParseCsvInt32((*f)[0].text, &id) != NumberParse::kOk || id < 0) {
+      return LineError(path, line, (*f)[0].column,
+                       fmt::format("id: {} is not an integer >= 0", QuotedField((*f)[0].text)));
+    }
+    LandmarkEstimate l;
+    l.id = id;
+    const char* names[] = {"x", "y", "sxx", "sxy", "syy"};
+    double* values[] = {&l.x_m, &l.y_m, &l.sxx, &l.sxy, &l.syy};
+    for (int k = 0; k < 5; ++k) {
+      GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[k + 1], names[k], values[k]));
+    }
+    out.push_back(l);
+  }
+  return out;
+}
+
+struct PoseErrors {
+  int64_t matched = 0;
+  int64_t unmatched = 0;  // truth times without an estimate
+  double position_rmse_m = 0;
+  double heading_rmse_rad = 0;
+  double max_position_m = 0;
+  double position_mse_mean_m2 = 0;      // mean over time of the squared position error
+  double position_mse_variance_m4 = 0;  // its variance over time
+};
+
+PoseErrors ComparePoses(const std::map<double, Pose2>& truth,
+                        const std::map<double, Pose2>& estimate) {
+  PoseErrors e;
+  std::vector<double> sq;
+  double heading_sq = 0;
+  for (const auto& [t, p] : truth) {
+    auto it = estimate.find(t);
+    if (it == estimate.end()) {
+      ++e.unmatched;
+      continue;
+    }
+    const double d2 = (it->second.x_m - p.x_m) * (it->second.x_m - p.x_m) +
+                      (it->second.y_m - p.y_m) * (it->second.y_m - p.y_m);
+    sq.push_back(d2);
+    const double dh = Wrap(it->second.heading_rad - p.heading_rad);
+    heading_sq += dh * dh;
+    e.max_position_m = std::max(e.max_position_m, std::sqrt(d2));
+  }
+  e.matched = static_cast<int64_t>(sq.size());
+  if (sq.empty()) return e;
+  double sum = 0;
+  for (double v : sq) sum += v;
+  const double mean = sum / sq.size();
+  double var = 0;
+  for (double v : sq) var += (v - mean) * (v - mean);
+  e.position_mse_mean_m2 = mean;
+  e.position_mse_variance_m4 = var / sq.size();
+  e.position_rmse_m = std::sqrt(mean);
+  e.heading_rmse_rad = std::sqrt(heading_sq / sq.size());
+  return e;
+}
+
+nlohmann::json PoseErrorsJson(const PoseErrors& e) {
+  return {{"matched", e.matched},
+          {"truth_without_estimate", e.unmatched},
+          {"position_rmse_m", e.position_rmse_m},
+          {"heading_rmse_rad", e.heading_rmse_rad},
+          {"max_position_error_m", e.max_position_m},
+          {"position_mse_mean_m2", e.position_mse_mean_m2},
+          {"position_mse_variance_m4", e.position_mse_variance_m4}};
+}
+
+nlohmann::json LandmarkErrorsJson(const std::vector<LandmarkEstimate>& estimates,
+                                  const std::map<int64_t, TruthLandmark>& truth) {
+  int64_t matched = 0, unknown = 0;
+  double sq = 0, worst = 0;
+  for (const LandmarkEstimate& l : estimates) {
+    auto it = truth.find(l.id);
+    if (it == truth.end()) {
+      ++unknown;
+      continue;
+    }
+    const double d = std::hypot(l.x_m - it->second.x_m, l.y_m - it->second.y_m);
+    sq += d * d;
+    worst = std::max(worst, d);
+    ++matched;
+  }
+  return {{"estimated", estimates.size()},
+          {"true", truth.size()},
+          {"matched", matched},
+          {"estimated_without_truth", unknown},
+          {"rmse_m", matched > 0 ? std::sqrt(sq / matched) : 0.0},
+          {"max_error_m", worst}};
+}
+
+nlohmann::json FastSlamSummaryJson(const FastSlamSummary& s) {
+  nlohmann::json j = FilterSummaryJson(s);
+  j["controls"] = s.controls;
+  j["scans"] = s.scans;
+  j["observations"] = s.observations;
+  j["predict_steps"] = s.predict_steps;
+  j["landmarks"] = s.landmarks;
+  j["map_memory"] = MemoryUseJson(s.map_memory);
+  j["trajectory_memory"] = MemoryUseJson(s.trajectory_memory);
+  return j;
+}
+
+class FastSlamJob final : public RunJob {
+ public:
+  FastSlamJob(const FastSlamConfig& config, const FastSlamRunOptions& options)
+      : config_(config), options_(options) {}
+
+  // Opens the inputs (their errors are input errors) and reads the optional truth.
+  Status Open() {
+    StatusOr<FastSlamInputReader> reader =
+        FastSlamInputReader::Open(options_.controls_path, options_.observations_path);
+    if (!reader.ok()) return reader.status();
+    reader_ = std::make_unique<FastSlamInputReader>(std::move(reader).value());
+    records_ = CountRegularFileLines(options_.controls_path) +
+               CountRegularFileLines(options_.observations_path);
+    if (!options_.truth_path.empty()) {
+      StatusOr<std::map<double, Pose2>> truth = ReadPoses(options_.truth_path);
+      if (!truth.ok()) return truth.status();
+      truth_ = std::move(truth).value();
+    }
+    if (!options_.landmarks_truth_path.empty()) {
+      StatusOr<std::map<int64_t, TruthLandmark>> l =
+          ReadTruthLandmarks(options_.landmarks_truth_path);
+      if (!l.ok()) return l.status();
+      landmarks_truth_ = std::move(l).value();
+    }
+    return Status::Ok();
+  }
+
+  std::vector<std::string> InputPaths() const override {
+    std::vector<std::string> paths = {options_.controls_path, options_.observations_path};
+    for (const std::string* p : {&options_.truth_path, &options_.landmarks_truth_path}) {
+      if (!p->empty()) paths.push_back(*p);
+    }
+    return paths;
+  }
+  std::vector<std::string> OutputNames() const override {
+    return {"trajectory.csv", "heaviest_trajectory.csv", "landmarks.csv", "map.png", "map.svg"};
+  }
+  std::string InputName() const override {
+    return options_.controls_path + " + " + options_.observations_path;
+  }
+  const char* RecordsName() const override { return "input rows"; }
+  int64_t ExpectedRecords() const override { return records_; }
+  int64_t particles() const override { return config_.particles; }
+  // A rough bound, not a calibrated model: 64 MiB fixed, 4 KiB per particle (state, its own map
+  // paths in two generations, path segments) and 256 bytes per input row (the step log, times
+  // and poses of the driver, the outputs built in memory).
+  int64_t PredictPeakBytes(int64_t records) const override {
+    return (int64_t{64} << 20) + config_.particles * 4096 + records * 256;
+  }
+  std::string DescribePrediction(int64_t records) const override {
+    return fmt::format("{} particles, {} input rows{}", config_.particles, records,
+                       records_ == 0 ? " (a stream: its length is not known before the run)" : "");
+  }
+
+  Status Create() override {
+    StatusOr<std::unique_ptr<FastSlam>> slam = FastSlam::Create(config_);
+    if (!slam.ok()) return slam.status();
+    slam_ = std::move(slam).value();
+    return Status::Ok();
+  }
+  Status Resume(std::string_view bytes, const std::string& name, std::string* user) override {
+    StatusOr<std::unique_ptr<FastSlam>> slam = FastSlam::Resume(config_, bytes, name, user);
+    if (!slam.ok()) return slam.status();
+    slam_ = std::move(slam).value();
+    return Status::Ok();
+  }
+  StatusOr<std::string> Checkpoint(std::string_view user_data) const override {
+    return slam_->Checkpoint(user_data);
+  }
+
+  StatusOr<bool> Read(std::string* digest_bytes) override {
+    StatusOr<bool> more = reader_->Next(&event_);
+    if (!more.ok() || !*more) return more;
+    if (event_.is_scan) {
+      const double t = event_.scan_t_s;
+      digest_bytes->append(reinterpret_cast<const char*>(&t), sizeof(t));
+      for (const LandmarkObservation& z : event_.scan) {
+        const double v[3] = {z.range_m, z.bearing_rad, static_cast<double>(z.id)};
+        digest_bytes->append(reinterpret_cast<const char*>(v), sizeof(v));
+      }
+    } else {
+      const double v[3] = {event_.control.t_s, event_.control.v_mps, event_.control.steer_rad};
+      digest_bytes->append(reinterpret_cast<const char*>(v), sizeof(v));
+    }
+    return true;
+  }
+  void Replay() override {}
+  Status Step() override {
+    if (event_.is_scan) {
+      Status s = slam_->Scan(event_.scan_t_s, event_.scan);
+      if (!s.ok()) {
+        return Status(s.code(), fmt::format("{}:{}: {}", reader_->observations_path(),
+                                            event_.scan_line, s.message()));
+      }
+      return Status::Ok();
+    }
+    Status s = slam_->Control(event_.control.t_s, event_.control.v_mps, event_.control.steer_rad);
+    if (!s.ok()) {
+      return Status(s.code(), fmt::format("{}:{}: {}", reader_->controls_path(),
+                                          event_.control.line, s.message()));
+    }
+    return Status::Ok();
+  }
+  int64_t steps() const override { return slam_->steps(); }
+
+  Status WriteOutputs(OutputSet* out, nlohmann::json* summary) override {
+    const std::vector<StampedPose>& mean = slam_->MeanTrajectory();
+    GROVE_RETURN_IF_ERROR(out->Add("trajectory.csv", TrajectoryCsv(mean)));
+    StatusOr<std::vector<StampedPose>> heaviest = slam_->HeaviestTrajectory();
+    if (!heaviest.ok()) return heaviest.status();
+    GROVE_RETURN_IF_ERROR(out->Add("heaviest_trajectory.csv", TrajectoryCsv(*heaviest)));
+    StatusOr<std::vector<LandmarkEstimate>> landmarks = slam_->HeaviestLandmarks();
+    if (!landmarks.ok()) return landmarks.status();
+    GROVE_RETURN_IF_ERROR(out->Add("landmarks.csv", LandmarksCsv(*landmarks)));
+    if (StopRequested()) return Status::Ok();
+    MapImage image;
+    for (const StampedPose& p : *heaviest) image.path.push_back({p.pose.x_m, p.pose.y_m});
+    for (const auto& [t, p] : truth_) image.truth.push_back({p.x_m, p.y_m});
+    for (const LandmarkEstimate& l : *landmarks) {
+      image.landmarks.push_back({l.x_m, l.y_m, l.sxx, l.sxy, l.syy});
+    }
+    for (const auto& [id, l] : landmarks_truth_) image.landmarks_truth.push_back({l.x_m, l.y_m});
+    image.title =
+        fmt::format("{}, {} particles: heaviest particle's path and landmarks",
+                    config_.filter == FastSlamFilter::kFastSlam1 ? "FastSLAM 1.0" : "FastSLAM 2.0",
+                    config_.particles);
+    StatusOr<std::string> png = RenderPng(image);
+    if (!png.ok()) return png.status();
+    GROVE_RETURN_IF_ERROR(out->Add("map.png", *png));
+    if (StopRequested()) return Status::Ok();
+    StatusOr<std::string> svg = RenderSvg(image);
+    if (!svg.ok()) return svg.status();
+    GROVE_RETURN_IF_ERROR(out->Add("map.svg", *svg));
+    summary->update(FastSlamSummaryJson(slam_->Summary()));
+    (*summary)["inputs"] = {{"controls", options_.controls_path},
+                            {"observations", options_.observations_path}};
+    if (!truth_.empty()) {
+      std::map<double, Pose2> estimate;
+      for (const StampedPose& p : mean) estimate[p.t_s] = p.pose;
+      (*summary)["accuracy"] = PoseErrorsJson(ComparePoses(truth_, estimate));
+    }
+    if (!landmarks_truth_.empty()) {
+      (*summary)["landmark_accuracy"] = LandmarkErrorsJson(*landmarks, landmarks_truth_);
+    }
+    return Status::Ok();
+  }
+  std::string BriefReport() const override { return slam_->Summary().BriefReport(); }
+
+ private:
+  FastSlamConfig config_;
+  FastSlamRunOptions options_;
+  std::unique_ptr<FastSlamInputReader> reader_;
+  int64_t records_ = 0;
+  std::unique_ptr<FastSlam> slam_;
+  FastSlamEvent event_;
+  std::map<double, Pose2> truth_;
+  std::map<int64_t, TruthLandmark> landmarks_truth_;
+};
+
+}  // namespace
+
+std::string LandmarksCsv(const std::vector<LandmarkEstimate>& landmarks) {
+  std::string out = "id,x,y,sxx,sxy,syy\n";
+  for (const LandmarkEstimate& l : landmarks) {
+    fmt::format_to(std::back_inserter(out), "{},{:.6f},{:.6f},{:.9g},{:.9g},{:.9g}\n", l.id, l.x_m,
+                   l.y_m, l.sxx, l.sxy, l.syy);
+  }
+  return out;
+}
+
+int RunFastSlamCommand(const FastSlamConfig& config, const FastSlamRunOptions& options) {
+  if (Status s = config.Validate(); !s.ok()) return Fail(kExitUsage, s.message());
+  FastSlamJob job(config, options);
+  if (Status s = job.Open(); !s.ok()) return Fail(kExitInput, s.message());
+  return RunCommand(&job, options.run, ConfigToJson(FastSlamConfigFields(), config));
+}
+
+int FastSlamEvaluateCommand(const std::string& truth_path, const std::string& trajectory_path,
+                            const std::string& landmarks_path,
+                            const std::string& landmarks_truth_path) {
+  StatusOr<std::map<double, Pose2>> truth = ReadPoses(truth_path);
+  if (!truth.ok()) return Fail(kExitInput, truth.status().message());
+  StatusOr<std::map<double, Pose2>> estimate = ReadPoses(trajectory_path);
+  if (!estimate.ok()) return Fail(kExitInput, estimate.status().message());
+  const PoseErrors e = ComparePoses(*truth, *estimate);
+  if (e.matched == 0) {
+    return Fail(kExitInput, fmt::format("{} and {} share no time", truth_path, trajectory_path));
+  }
+  nlohmann::json report = {{"pose", PoseErrorsJson(e)},
+                           {"nees", "not computed: the run writes no particle covariance"}};
+  if (!landmarks_path.empty()) {
+    if (landmarks_truth_path.empty()) {
+      return Fail(kExitUsage, "--landmarks needs --landmarks-truth");
+    }
+    StatusOr<std::vector<LandmarkEstimate>> l = ReadLandmarkEstimates(landmarks_path);
+    if (!l.ok()) return Fail(kExitInput, l.status().message());
+    StatusOr<std::map<int64_t, TruthLandmark>> t = ReadTruthLandmarks(landmarks_truth_path);
+    if (!t.ok()) return Fail(kExitInput, t.status().message());
+    report["landmarks"] = LandmarkErrorsJson(*l, *t);
+  }
+  std::printf("%s\n", report.dump(2).c_str());
+  return kExitOk;
+}
+
+}  // namespace grove::tools
