@@ -102,6 +102,10 @@ class FastSlamModel {
     pose_.assign(n_, start);
     unit_.assign(n_, Unit{std::cos(start.heading_rad), std::sin(start.heading_rad)});
     cov_.assign(n_, PoseCovariance{});
+    if (config.filter == FastSlamFilter::kFastSlam2) {
+      proposal_mu_.resize(n_);
+      proposal_sigma_.resize(n_);
+    }
     q_ << config.sigma_speed_mps * config.sigma_speed_mps, 0, 0,
         config.sigma_steer_rad * config.sigma_steer_rad;
   }
@@ -116,19 +120,27 @@ class FastSlamModel {
   // one computation of a prediction, for Predict() and for the replay of paths.
   VehiclePose PredictPose(const VehiclePose& p, const ControlStep& c, uint64_t step, uint32_t index,
                           bool* usable) const {
-    double v = c.v_mps, g = c.steer_rad;
-    if (config_.filter == FastSlamFilter::kFastSlam1) {
-      RandomStream rs(config_.seed, step + 1, index, StreamPurpose::kMotion);
-      if (config_.sigma_speed_mps > 0) v += config_.sigma_speed_mps * rs.NextNormal();
-      if (config_.sigma_steer_rad > 0) g += config_.sigma_steer_rad * rs.NextNormal();
+    if (config_.filter == FastSlamFilter::kFastSlam2) {
+      *usable = SteeringUsable(geometry_, c.steer_rad);
+      if (!*usable) return p;
+      return MoveVehicle(geometry_, ControlTermsOf(geometry_, c.v_mps, c.steer_rad, c.dt_s), p);
     }
-    *usable = SteeringUsable(geometry_, g);
+    ControlTerms u;
+    *usable = NoisyTerms(c, step, index, &u);
     if (!*usable) return p;
-    return MoveVehicle(geometry_, p, v, g, c.dt_s);
+    return MoveVehicle(geometry_, u, p);
   }
 
   Status Predict(const ControlStep& c, uint64_t step, size_t begin, size_t end, int slot) {
     const bool fs2 = config_.filter == FastSlamFilter::kFastSlam2;
+    // FastSLAM 2.0 moves every particle with the same control: its terms once per batch.
+    ControlTerms shared;
+    Unit turn{1, 0};
+    if (fs2) {
+      if (!SteeringUsable(geometry_, c.steer_rad)) return BadSteering(begin);
+      shared = ControlTermsOf(geometry_, c.v_mps, c.steer_rad, c.dt_s);
+      turn = Unit{std::cos(shared.turn_rad), std::sin(shared.turn_rad)};
+    }
     for (size_t i = begin; i < end; ++i) {
       const VehiclePose p = pose_[i];
       if (segment_start_) {
@@ -138,14 +150,11 @@ class FastSlamModel {
         if (node == nullptr) return NoMemory(i, "path");
         paths_[i] = node;
       }
-      bool usable = true;
-      const VehiclePose next = PredictPose(p, c, step, static_cast<uint32_t>(i), &usable);
-      if (!usable) {
-        return FailedPreconditionError(fmt::format(
-            "particle {}'s steering angle is outside what the {} model can use (|G| < pi/2 and "
-            "1 - tan(G) H / L > 0)",
-            i, FastSlamVehicleName(config_.vehicle)));
-      }
+      ControlTerms own;
+      if (!fs2 && !NoisyTerms(c, step, static_cast<uint32_t>(i), &own)) return BadSteering(i);
+      const ControlTerms& u = fs2 ? shared : own;
+      StepTrig trig;
+      const VehiclePose next = MoveVehicle(geometry_, u, p, &trig);
       if (!std::isfinite(next.x_m) || !std::isfinite(next.y_m) ||
           !std::isfinite(next.heading_rad)) {
         return FailedPreconditionError(fmt::format("particle {}'s pose ({}, {}, {}) is not finite",
@@ -154,13 +163,20 @@ class FastSlamModel {
       if (fs2) {
         Eigen::Matrix3d gv;
         Eigen::Matrix<double, 3, 2> gu;
-        VehicleJacobians(geometry_, p, c.v_mps, c.steer_rad, c.dt_s, &gv, &gu);
+        VehicleJacobians(geometry_, u, trig, &gv, &gu);
         const Eigen::Matrix3d sigma =
             gv * Covariance(i) * gv.transpose() + gu * q_ * gu.transpose();
         SetCovariance(i, sigma);
       }
       pose_[i] = next;
-      unit_[i] = Unit{std::cos(next.heading_rad), std::sin(next.heading_rad)};
+      if (fs2) {
+        // The heading turns by the same angle for every particle: rotate its unit vector (only
+        // the mean pose reads it) instead of a sine and cosine per particle.
+        const Unit& h = unit_[i];
+        unit_[i] = Unit{h.c * turn.c - h.s * turn.s, h.s * turn.c + h.c * turn.s};
+      } else {
+        unit_[i] = Unit{std::cos(next.heading_rad), std::sin(next.heading_rad)};
+      }
     }
     return Status::Ok();
   }
@@ -173,9 +189,9 @@ class FastSlamModel {
     for (size_t i = begin; i < end; ++i) {
       double lw = 0;
       if (config_.filter == FastSlamFilter::kFastSlam2) {
-        Eigen::Vector3d mu;
         Eigen::Matrix3d sigma;
-        GROVE_RETURN_IF_ERROR(Proposal(scan, i, &mu, &sigma, &lw));
+        GROVE_RETURN_IF_ERROR(Proposal(scan, i, &proposal_mu_[i], &sigma, &lw));
+        proposal_sigma_[i] = Upper(sigma);
       } else {
         GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &lw));
       }
@@ -184,17 +200,17 @@ class FastSlamModel {
     return Status::Ok();
   }
 
-  // FastSLAM 2.0, after resampling: the proposal again (for the particle's new index), the draw
-  // from it, then the landmark updates from the drawn pose. Nothing for FastSLAM 1.0.
+  // FastSLAM 2.0, after resampling: the draw from the proposal Advance() computed (a copy has
+  // its parent's), keyed by the particle's new index, then the landmark updates from the drawn
+  // pose. Nothing for FastSLAM 1.0.
   Status Complete(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot) {
     if (scan.observations.empty() || config_.filter != FastSlamFilter::kFastSlam2) {
       return Status::Ok();
     }
     for (size_t i = begin; i < end; ++i) {
-      Eigen::Vector3d mu;
-      Eigen::Matrix3d sigma;
-      double lw = 0;
-      GROVE_RETURN_IF_ERROR(Proposal(scan, i, &mu, &sigma, &lw));
+      // The proposal Advance() computed, gathered with the particle.
+      const Eigen::Vector3d& mu = proposal_mu_[i];
+      const Eigen::Matrix3d sigma = Full(proposal_sigma_[i]);
       RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), StreamPurpose::kProposal);
       const Eigen::Vector3d normals(rs.NextNormal(), rs.NextNormal(), rs.NextNormal());
       VehiclePose drawn;
@@ -215,6 +231,10 @@ class FastSlamModel {
     GatherValues(parents, workers, &pose_);
     GatherValues(parents, workers, &unit_);
     GatherValues(parents, workers, &cov_);
+    if (config_.filter == FastSlamFilter::kFastSlam2) {
+      GatherValues(parents, workers, &proposal_mu_);
+      GatherValues(parents, workers, &proposal_sigma_);
+    }
     maps_.Gather(parents, workers);
     paths_.Gather(parents, workers);
   }
@@ -232,6 +252,8 @@ class FastSlamModel {
   double x(size_t i) const { return pose_[i].x_m; }
   double y(size_t i) const { return pose_[i].y_m; }
   double heading(size_t i) const { return pose_[i].heading_rad; }
+  // The heading's unit vector: cos and sin of heading(i) to round-off (FastSLAM 2.0 turns it
+  // by rotation between scans).
   double cos_heading(size_t i) const { return unit_[i].c; }
   double sin_heading(size_t i) const { return unit_[i].s; }
   const VehiclePose& pose(size_t i) const { return pose_[i]; }
@@ -256,6 +278,7 @@ class FastSlamModel {
     w->Put<uint64_t>(n_);
     w->PutBytes(pose_.data(), n_ * sizeof(VehiclePose));
     w->PutBytes(cov_.data(), n_ * sizeof(PoseCovariance));
+    w->PutBytes(unit_.data(), n_ * sizeof(Unit));
     w->Put<uint8_t>(segment_start_ ? 1 : 0);
     trie_.Save(maps_.roots(), w);
     SegmentHistory::Save(paths_.roots(), w);
@@ -273,6 +296,13 @@ class FastSlamModel {
     std::vector<PoseCovariance> cov(n_);
     GROVE_RETURN_IF_ERROR(r->GetBytes("poses", pose.data(), n_ * sizeof(VehiclePose)));
     GROVE_RETURN_IF_ERROR(r->GetBytes("pose covariances", cov.data(), n_ * sizeof(PoseCovariance)));
+    std::vector<Unit> unit(n_);
+    GROVE_RETURN_IF_ERROR(r->GetBytes("heading vectors", unit.data(), n_ * sizeof(Unit)));
+    for (const Unit& u : unit) {
+      if (!(std::fabs(u.c * u.c + u.s * u.s - 1) < 1e-6)) {
+        return r->Error("heading vectors", "not a unit vector");
+      }
+    }
     for (size_t i = 0; i < n_; ++i) {
       if (!std::isfinite(pose[i].x_m) || !std::isfinite(pose[i].y_m) ||
           !(std::fabs(pose[i].heading_rad) <= 4)) {
@@ -313,9 +343,7 @@ class FastSlamModel {
     }
     pose_.swap(pose);
     cov_.swap(cov);
-    for (size_t i = 0; i < n_; ++i) {
-      unit_[i] = Unit{std::cos(pose_[i].heading_rad), std::sin(pose_[i].heading_rad)};
-    }
+    unit_.swap(unit);
     segment_start_ = segment == 1;
     maps_.Replace(std::move(roots));
     paths_.Replace(std::move(heads));
@@ -332,13 +360,33 @@ class FastSlamModel {
            std::isfinite(l.xy) && std::isfinite(l.yy) && l.xx >= 0 && l.yy >= 0;
   }
 
-  Eigen::Matrix3d Covariance(size_t i) const {
-    const PoseCovariance& c = cov_[i];
+  static Eigen::Matrix3d Full(const PoseCovariance& c) {
     return (Eigen::Matrix3d() << c.xx, c.xy, c.xh, c.xy, c.yy, c.yh, c.xh, c.yh, c.hh).finished();
   }
-  void SetCovariance(size_t i, const Eigen::Matrix3d& m) {
-    cov_[i] = PoseCovariance{m(0, 0), 0.5 * (m(0, 1) + m(1, 0)), 0.5 * (m(0, 2) + m(2, 0)),
-                             m(1, 1), 0.5 * (m(1, 2) + m(2, 1)), m(2, 2)};
+  static PoseCovariance Upper(const Eigen::Matrix3d& m) {
+    return PoseCovariance{m(0, 0), 0.5 * (m(0, 1) + m(1, 0)), 0.5 * (m(0, 2) + m(2, 0)),
+                          m(1, 1), 0.5 * (m(1, 2) + m(2, 1)), m(2, 2)};
+  }
+  Eigen::Matrix3d Covariance(size_t i) const { return Full(cov_[i]); }
+  void SetCovariance(size_t i, const Eigen::Matrix3d& m) { cov_[i] = Upper(m); }
+
+  // FastSLAM 1.0: particle `index`'s own control for step `step`, drawn from N(u, Q); false
+  // when the vehicle model cannot use the drawn steering angle.
+  bool NoisyTerms(const ControlStep& c, uint64_t step, uint32_t index, ControlTerms* u) const {
+    double v = c.v_mps, g = c.steer_rad;
+    RandomStream rs(config_.seed, step + 1, index, StreamPurpose::kMotion);
+    if (config_.sigma_speed_mps > 0) v += config_.sigma_speed_mps * rs.NextNormal();
+    if (config_.sigma_steer_rad > 0) g += config_.sigma_steer_rad * rs.NextNormal();
+    if (!SteeringUsable(geometry_, g)) return false;
+    *u = ControlTermsOf(geometry_, v, g, c.dt_s);
+    return true;
+  }
+
+  Status BadSteering(size_t i) const {
+    return FailedPreconditionError(fmt::format(
+        "particle {}'s steering angle is outside what the {} model can use (|G| < pi/2 and "
+        "1 - tan(G) H / L > 0)",
+        i, FastSlamVehicleName(config_.vehicle)));
   }
 
   // FastSLAM 2.0's proposal for particle i: its predicted pose refined by each observation of a
@@ -400,6 +448,9 @@ class FastSlamModel {
   std::vector<VehiclePose> pose_;
   std::vector<Unit> unit_;
   std::vector<PoseCovariance> cov_;
+  // FastSLAM 2.0: each particle's proposal of the current scan, from Advance() to Complete().
+  std::vector<Eigen::Vector3d> proposal_mu_;
+  std::vector<PoseCovariance> proposal_sigma_;
   bool segment_start_ = true;
 };
 

@@ -37,12 +37,37 @@ struct VehicleGeometry {
 // Guivant-Nebot's |steer| < pi/2 and 1 - tan(steer) H / L > 0 (the wheel speed's conversion).
 bool SteeringUsable(const VehicleGeometry& g, double steer_rad);
 
-// One Euler step of dt_s with speed v_mps and steering angle steer_rad.
+// What a step costs that does not depend on the pose: computed once per control and shared by
+// every particle that moves with it (FastSLAM 2.0 moves all of them with the same control).
+struct ControlTerms {
+  double v_mps = 0, steer_rad = 0, dt_s = 0;
+  double sin_g = 0, cos_g = 0;
+  double tan_g = 0, k = 1;  // Guivant-Nebot: tan G and 1 - tan(G) H / L
+  double turn_rad = 0;      // the heading change of the step
+};
 // REQUIRES: SteeringUsable(g, steer_rad).
-VehiclePose MoveVehicle(const VehicleGeometry& g, const VehiclePose& p, double v_mps,
-                        double steer_rad, double dt_s);
+ControlTerms ControlTermsOf(const VehicleGeometry& g, double v_mps, double steer_rad, double dt_s);
 
-// The Jacobians of MoveVehicle with respect to the pose (x, y, phi) and the control (V, G).
+// The cosine and sine a step computes from the pose, kept for the Jacobians.
+struct StepTrig {
+  double c = 1, s = 0;  // Bailey: of G + phi; Guivant-Nebot: of phi
+};
+
+// One Euler step with the control of `u` from p; *trig (may be null) gets what the Jacobians
+// need.
+VehiclePose MoveVehicle(const VehicleGeometry& g, const ControlTerms& u, const VehiclePose& p,
+                        StepTrig* trig = nullptr);
+// The same from the raw control. REQUIRES: SteeringUsable(g, steer_rad).
+inline VehiclePose MoveVehicle(const VehicleGeometry& g, const VehiclePose& p, double v_mps,
+                               double steer_rad, double dt_s) {
+  return MoveVehicle(g, ControlTermsOf(g, v_mps, steer_rad, dt_s), p);
+}
+
+// The Jacobians of MoveVehicle with respect to the pose (x, y, phi) and the control (V, G), at
+// the pose whose step gave `trig`.
+void VehicleJacobians(const VehicleGeometry& g, const ControlTerms& u, const StepTrig& trig,
+                      Eigen::Matrix3d* d_pose, Eigen::Matrix<double, 3, 2>* d_control);
+// The same from the raw control and pose.
 void VehicleJacobians(const VehicleGeometry& g, const VehiclePose& p, double v_mps,
                       double steer_rad, double dt_s, Eigen::Matrix3d* d_pose,
                       Eigen::Matrix<double, 3, 2>* d_control);
