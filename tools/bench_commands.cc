@@ -17,6 +17,7 @@
 #include "tools/atomic_file.h"
 #include "tools/chart.h"
 #include "tools/csv_reader.h"
+#include "tools/fastslam_simulator.h"
 #include "tools/footslam_run.h"
 #include "tools/report_tables.h"
 #include "tools/walk_simulator.h"
@@ -375,6 +376,212 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
   if (s.ok()) {
     s = WriteChart(particles_chart, dir + "/scaling_particles.png", dir + "/scaling_particles.svg");
   }
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  std::printf("%s", md.c_str());
+  return kExitOk;
+}
+
+namespace {
+
+// The webmap simulation of `seed` (Bailey's options).
+StatusOr<BaileySimulation> WebmapSimulation(uint64_t seed) {
+  StatusOr<BaileyMap> map = ParseBaileyMap(EmbeddedBaileyWebmapName(), EmbeddedBaileyWebmap());
+  if (!map.ok()) return map.status();
+  BaileySimOptions options = WebmapPreset();
+  options.seed = seed;
+  return SimulateBailey(*map, options);
+}
+
+struct FastSlamAccuracy {
+  double position_rmse_m = 0;
+  double heading_rmse_rad = 0;
+  double mse_mean_m2 = 0;
+  double mse_variance_m4 = 0;
+  double filter_s = 0;
+};
+
+// The mean pose after the last step at each truth time against the truth.
+FastSlamAccuracy ScoreAgainstTruth(const FastSlam& slam, const BaileySimulation& sim) {
+  std::map<double, Pose2> estimate;
+  for (const StampedPose& p : slam.MeanTrajectory()) estimate[p.t_s] = p.pose;
+  std::vector<double> sq;
+  double heading_sq = 0;
+  for (const BaileyPose& t : sim.truth) {
+    auto it = estimate.find(t.t_s);
+    if (it == estimate.end()) continue;
+    const double dx = it->second.x_m - t.x_m, dy = it->second.y_m - t.y_m;
+    sq.push_back(dx * dx + dy * dy);
+    const double dh = std::remainder(it->second.heading_rad - t.heading_rad, 2 * M_PI);
+    heading_sq += dh * dh;
+  }
+  FastSlamAccuracy a;
+  if (sq.empty()) return a;
+  double sum = 0;
+  for (double v : sq) sum += v;
+  a.mse_mean_m2 = sum / sq.size();
+  for (double v : sq) a.mse_variance_m4 += (v - a.mse_mean_m2) * (v - a.mse_mean_m2);
+  a.mse_variance_m4 /= sq.size();
+  a.position_rmse_m = std::sqrt(a.mse_mean_m2);
+  a.heading_rmse_rad = std::sqrt(heading_sq / sq.size());
+  return a;
+}
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty()      ? 0
+         : v.size() % 2 ? v[v.size() / 2]
+                        : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+}  // namespace
+
+int FastSlamAccuracyBenchCommand(const FastSlamAccuracyOptions& options) {
+  Status s = EnsureDirectory(options.out_dir);
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  const FastSlamFilter filters[] = {FastSlamFilter::kFastSlam1, FastSlamFilter::kFastSlam2};
+  std::vector<std::vector<std::string>> rows;
+  nlohmann::json runs = nlohmann::json::array();
+  // rmse[filter][particles] over seeds
+  std::map<std::pair<int, int64_t>, std::vector<double>> rmse;
+  for (int seed = 1; seed <= options.seeds; ++seed) {
+    StatusOr<BaileySimulation> sim = WebmapSimulation(static_cast<uint64_t>(seed));
+    if (!sim.ok()) return Fail(kExitRun, sim.status().message());
+    for (FastSlamFilter filter : filters) {
+      for (int64_t n : options.particles) {
+        FastSlamConfig config;
+        config.filter = filter;
+        config.particles = n;
+        config.seed = static_cast<uint64_t>(seed);
+        config.threads = options.threads;
+        auto slam = FastSlam::Create(config);
+        if (!slam.ok()) return Fail(kExitUsage, slam.status().message());
+        s = FeedSimulation(*sim, slam->get());
+        if (!s.ok()) return Fail(kExitRun, s.message());
+        const FastSlamAccuracy a = ScoreAgainstTruth(**slam, *sim);
+        const FastSlamSummary summary = (*slam)->Summary();
+        rmse[{static_cast<int>(filter), n}].push_back(a.position_rmse_m);
+        runs.push_back({{"seed", seed},
+                        {"filter", FastSlamFilterName(filter)},
+                        {"particles", n},
+                        {"position_rmse_m", a.position_rmse_m},
+                        {"heading_rmse_rad", a.heading_rmse_rad},
+                        {"position_mse_mean_m2", a.mse_mean_m2},
+                        {"position_mse_variance_m4", a.mse_variance_m4},
+                        {"resamplings", summary.resamplings},
+                        {"filter_time_s", summary.filter_s()}});
+        std::fprintf(stderr, "seed %d %s %lld particles: position RMSE %.2f m\n", seed,
+                     FastSlamFilterName(filter), static_cast<long long>(n), a.position_rmse_m);
+      }
+    }
+  }
+  std::vector<std::string> header = {"filter",  "particles", "mean RMSE (m)", "median (m)",
+                                     "min (m)", "max (m)",   "per seed (m)"};
+  for (FastSlamFilter filter : filters) {
+    for (int64_t n : options.particles) {
+      const std::vector<double>& v = rmse[{static_cast<int>(filter), n}];
+      double sum = 0;
+      std::string each;
+      for (double x : v) {
+        sum += x;
+        each += fmt::format("{}{:.2f}", each.empty() ? "" : " ", x);
+      }
+      rows.push_back({FastSlamFilterName(filter), std::to_string(n),
+                      fmt::format("{:.2f}", sum / v.size()), fmt::format("{:.2f}", Median(v)),
+                      fmt::format("{:.2f}", *std::min_element(v.begin(), v.end())),
+                      fmt::format("{:.2f}", *std::max_element(v.begin(), v.end())), each});
+    }
+  }
+  const std::string md = fmt::format(
+      "# FastSLAM accuracy on Bailey's webmap\n\nMachine: {}\n\nKnown association, Bailey's "
+      "webmap options (2 loops, scans every 0.2 s), position RMSE of the weighted-mean pose "
+      "against the truth at every control time (after the scan at a scan time), seeds 1..{} "
+      "(simulator and filter).\n\n{}",
+      MachineDescription(), options.seeds, MarkdownTable(header, rows));
+  s = WriteFileAtomically(
+      options.out_dir + "/fastslam_accuracy.json",
+      nlohmann::json{{"machine", MachineDescription()}, {"runs", runs}}.dump(2));
+  if (s.ok()) s = WriteFileAtomically(options.out_dir + "/fastslam_accuracy.md", md);
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  std::printf("%s", md.c_str());
+  return kExitOk;
+}
+
+int FastSlamSpeedBenchCommand(const FastSlamSpeedOptions& options) {
+  Status s = EnsureDirectory(options.out_dir);
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  StatusOr<BaileySimulation> sim = WebmapSimulation(1);
+  if (!sim.ok()) return Fail(kExitRun, sim.status().message());
+  // The whole webmap, FastSLAM 2.0, 100 particles, one thread.
+  std::vector<double> whole, filter_times;
+  for (int r = 0; r < options.repeats; ++r) {
+    FastSlamConfig config;
+    config.threads = 1;
+    auto slam = FastSlam::Create(config);
+    if (!slam.ok()) return Fail(kExitUsage, slam.status().message());
+    auto t0 = Clock::now();
+    s = FeedSimulation(*sim, slam->get());
+    whole.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+    if (!s.ok()) return Fail(kExitRun, s.message());
+    filter_times.push_back((*slam)->Summary().filter_s());
+  }
+  std::vector<std::vector<std::string>> rows;
+  nlohmann::json points = nlohmann::json::array();
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  std::map<int64_t, double> one_thread_rate;
+  for (int64_t n = 100; n <= options.max_particles; n *= 10) {
+    for (int threads = 1; threads <= cores; ++threads) {
+      FastSlamConfig config;
+      config.particles = n;
+      config.threads = threads;
+      config.batch = 64;
+      auto slam = FastSlam::Create(config);
+      if (!slam.ok()) return Fail(kExitUsage, slam.status().message());
+      FeedTimes times;
+      s = FeedSimulation(*sim, slam->get(), static_cast<size_t>(options.controls), &times);
+      if (!s.ok()) return Fail(kExitRun, s.message());
+      const FastSlamSummary summary = (*slam)->Summary();
+      const double control_rate = summary.controls * static_cast<double>(n) / times.control_s;
+      const double scan_rate = summary.scans * static_cast<double>(n) / times.scan_s;
+      const double total = (times.control_s + times.scan_s);
+      const double rate = static_cast<double>(summary.steps) * n / total;
+      if (threads == 1) one_thread_rate[n] = rate;
+      const double speedup = rate / one_thread_rate[n];
+      rows.push_back({std::to_string(n), std::to_string(threads),
+                      fmt::format("{:.3g}", control_rate), fmt::format("{:.3g}", scan_rate),
+                      fmt::format("{:.3g}", rate), fmt::format("{:.2f}", speedup),
+                      fmt::format("{:.2f}", total)});
+      points.push_back({{"particles", n},
+                        {"threads", threads},
+                        {"controls", summary.controls},
+                        {"scans", summary.scans},
+                        {"control_s", times.control_s},
+                        {"scan_s", times.scan_s},
+                        {"control_particle_steps_per_s", control_rate},
+                        {"scan_particle_steps_per_s", scan_rate},
+                        {"speedup_over_one_thread", speedup}});
+      std::fprintf(stderr, "%lld particles x %d threads: %.3g particle-steps/s\n",
+                   static_cast<long long>(n), threads, rate);
+    }
+  }
+  const std::string md = fmt::format(
+      "# FastSLAM speed\n\nMachine: {}\n\n## The whole webmap\n\nFastSLAM 2.0, 100 particles, one "
+      "thread, seed 1: {} control steps, {} scans. Wall time of the run (simulation excluded), "
+      "median of {}: **{:.3f} s** (filter phases: {:.3f} s).\n\n## Throughput\n\nFastSLAM 2.0 on "
+      "the first {} control rows of the webmap (seed 1). Particle-steps per second, control steps "
+      "(predictions) and scan steps (weighting, resampling, drawing and map updates) counted "
+      "apart; all: every filter step over the time of both.\n\n{}",
+      MachineDescription(), sim->controls.size(), sim->scan_times_s.size(), options.repeats,
+      Median(whole), Median(filter_times), options.controls,
+      MarkdownTable({"particles", "threads", "control steps/s", "scan steps/s", "all steps/s",
+                     "speed-up", "time (s)"},
+                    rows));
+  s = WriteFileAtomically(options.out_dir + "/fastslam_speed.json",
+                          nlohmann::json{{"machine", MachineDescription()},
+                                         {"whole_webmap_s", whole},
+                                         {"whole_webmap_filter_s", filter_times},
+                                         {"throughput", points}}
+                              .dump(2));
+  if (s.ok()) s = WriteFileAtomically(options.out_dir + "/fastslam_speed.md", md);
   if (!s.ok()) return Fail(kExitOutput, s.message());
   std::printf("%s", md.c_str());
   return kExitOk;

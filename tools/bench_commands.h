@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace grove::tools {
 
@@ -25,6 +26,29 @@ struct ScalingBenchOptions {
   int64_t thread_sweep_particles = 30000;
 };
 int ScalingBenchCommand(const ScalingBenchOptions& options);
+
+// `grove bench fastslam-accuracy`: position RMSE of the weighted-mean pose against the truth on
+// Bailey's webmap (known association), for FastSLAM 1.0 and 2.0, `seeds` simulator seeds (the
+// filter's seed equals the simulator's) and each particle count.
+struct FastSlamAccuracyOptions {
+  std::string out_dir;
+  int seeds = 10;
+  std::vector<int64_t> particles = {10, 100, 1000, 10000};
+  int threads = 0;
+};
+int FastSlamAccuracyBenchCommand(const FastSlamAccuracyOptions& options);
+
+// `grove bench fastslam-speed`: the whole webmap with FastSLAM 2.0 and 100 particles on one
+// thread (the median of `repeats` runs), then throughput (particle-steps/s, control and scan
+// steps apart) for 100 ... max_particles particles x 1 .. cores threads on the first
+// `controls` control rows.
+struct FastSlamSpeedOptions {
+  std::string out_dir;
+  int repeats = 5;
+  int64_t max_particles = 100000;
+  int64_t controls = 2000;
+};
+int FastSlamSpeedBenchCommand(const FastSlamSpeedOptions& options);
 
 }  // namespace grove::tools
 

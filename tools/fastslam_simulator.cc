@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iterator>
@@ -529,6 +530,37 @@ int FastSlamSimulateCommand(const std::string& map_path, const std::string& pres
                sim->scan_times_s.size(), sim->observations.size(), sim->landmarks.size(),
                options->loops, map->waypoints.size());
   return kExitOk;
+}
+
+Status FeedSimulation(const BaileySimulation& sim, FastSlam* slam, size_t controls,
+                      FeedTimes* times) {
+  using Clock = std::chrono::steady_clock;
+  auto seconds = [](Clock::duration d) { return std::chrono::duration<double>(d).count(); };
+  controls = std::min(controls, sim.controls.size());
+  size_t z = 0;
+  std::vector<LandmarkObservation> scan;
+  for (size_t k = 0; k < controls; ++k) {
+    const BaileyControl& c = sim.controls[k];
+    auto t0 = Clock::now();
+    Status s = slam->Control(c.t_s, c.speed_mps, c.steer_rad);
+    if (times != nullptr) times->control_s += seconds(Clock::now() - t0);
+    if (!s.ok()) return Status(s.code(), fmt::format("control {}: {}", k, s.message()));
+    const double upper = k + 1 < sim.controls.size() ? sim.controls[k + 1].t_s : INFINITY;
+    while (z < sim.observations.size() && sim.observations[z].t_s < c.t_s) ++z;
+    while (z < sim.observations.size() && sim.observations[z].t_s < upper) {
+      const double t = sim.observations[z].t_s;
+      scan.clear();
+      for (; z < sim.observations.size() && sim.observations[z].t_s == t; ++z) {
+        const BaileyObservation& o = sim.observations[z];
+        scan.push_back({o.range_m, o.bearing_rad, o.id});
+      }
+      t0 = Clock::now();
+      s = slam->Scan(t, scan);
+      if (times != nullptr) times->scan_s += seconds(Clock::now() - t0);
+      if (!s.ok()) return Status(s.code(), fmt::format("scan at t = {}: {}", t, s.message()));
+    }
+  }
+  return Status::Ok();
 }
 
 }  // namespace grove::tools

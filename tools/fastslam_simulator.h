@@ -59,11 +59,13 @@
 #ifndef GROVE_TOOLS_FASTSLAM_SIMULATOR_H_
 #define GROVE_TOOLS_FASTSLAM_SIMULATOR_H_
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "grove/fastslam.h"
 #include "grove/status.h"
 
 namespace grove::tools {
@@ -264,6 +266,18 @@ std::string BaileyObservationsCsv(const BaileySimulation& sim);
 std::string BaileyTruthCsv(const BaileySimulation& sim);
 // "id,x,y": the true landmarks.
 std::string BaileyLandmarksCsv(const BaileySimulation& sim);
+
+// Seconds spent in the engine's Control() and Scan() calls.
+struct FeedTimes {
+  double control_s = 0;
+  double scan_s = 0;
+};
+
+// Feeds the first `controls` control rows of `sim` into `slam`, each followed by the scans from
+// its time until the next row's (a control first at a shared time), as `grove fastslam run`
+// merges its files. The first error stops it (the message names the row). `times` may be null.
+Status FeedSimulation(const BaileySimulation& sim, FastSlam* slam, size_t controls = SIZE_MAX,
+                      FeedTimes* times = nullptr);
 
 // `grove fastslam simulate`: reads the map (the bundled webmap when map_path is empty), takes the
 // preset (empty: "webmap") with `seed`, simulates and writes controls.csv, observations.csv,

@@ -12,6 +12,7 @@
 #include "concurrency/worker_pool.h"
 #include "engine/fastslam/fastslam_model.h"
 #include "engine/fastslam/vehicle_model.h"
+#include "engine/version_set.h"
 #include "tools/fastslam_simulator.h"
 
 namespace grove {
@@ -31,29 +32,9 @@ BaileySimulation Simulate(tools::BaileySimOptions options) {
   return std::move(sim).value();
 }
 
-// Feeds the simulation's first `controls` control rows, each followed by the scans from its
-// time until the next row's (controls first at a shared time, as `grove fastslam run` merges
-// its files).
 void Feed(const BaileySimulation& sim, FastSlam* slam, size_t controls = SIZE_MAX) {
-  controls = std::min(controls, sim.controls.size());
-  size_t z = 0;
-  for (size_t k = 0; k < controls; ++k) {
-    const tools::BaileyControl& c = sim.controls[k];
-    Status s = slam->Control(c.t_s, c.speed_mps, c.steer_rad);
-    ASSERT_TRUE(s.ok()) << s.message();
-    const double upper = k + 1 < sim.controls.size() ? sim.controls[k + 1].t_s : INFINITY;
-    while (z < sim.observations.size() && sim.observations[z].t_s < c.t_s) ++z;
-    while (z < sim.observations.size() && sim.observations[z].t_s < upper) {
-      const double t = sim.observations[z].t_s;
-      std::vector<LandmarkObservation> scan;
-      for (; z < sim.observations.size() && sim.observations[z].t_s == t; ++z) {
-        const tools::BaileyObservation& o = sim.observations[z];
-        scan.push_back({o.range_m, o.bearing_rad, o.id});
-      }
-      s = slam->Scan(t, scan);
-      ASSERT_TRUE(s.ok()) << s.message();
-    }
-  }
+  Status s = tools::FeedSimulation(sim, slam, controls);
+  ASSERT_TRUE(s.ok()) << s.message();
 }
 
 tools::BaileySimOptions NoiseFree() {
@@ -383,6 +364,30 @@ TEST(FastSlamModelMaps, TreesGrowPastAnyHeight) {
   int count = 0;
   model.trie().ForEach(model.map(2), [&](uint64_t, const fastslam::Landmark&) { ++count; });
   EXPECT_EQ(count, 5);
+}
+
+// The maps' versions own every node: when the set of versions goes (as when a filter is
+// destroyed), every node of the tree is freed, shared or not, the dead generation's included.
+TEST(FastSlamModelMaps, EveryNodeIsFreedWithTheVersions) {
+  using Trie = fastslam::FastSlamModel<2>::Trie;
+  Trie trie(1, 1);
+  WorkerPool workers(1);
+  {
+    VersionSet<Trie> maps(&trie, 6);
+    for (uint64_t round = 0; round < 20; ++round) {
+      for (size_t i = 0; i < maps.size(); ++i) {
+        const uint64_t key = (round * 7919 + i * 104729) % 5000;
+        ASSERT_TRUE(
+            trie.Update(&maps[i], key, 0, [&](fastslam::Landmark& l, bool) { l.x_m += 1; }));
+      }
+      const uint32_t parents[] = {0, 0, 2, 2, 2, 5};
+      maps.Gather(parents, workers);
+      if (round < 19) maps.ReleaseDead(workers);  // the last round keeps a dead generation
+      ASSERT_TRUE(trie.CheckCounts(maps.AllReferences()).ok());
+      ASSERT_GT(trie.live_nodes(), 0);
+    }
+  }
+  EXPECT_EQ(trie.live_nodes(), 0);
 }
 
 }  // namespace

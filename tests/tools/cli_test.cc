@@ -650,4 +650,35 @@ TEST_F(CliTest, FastSlamBadInputsStopWithFileLineColumn) {
   }
 }
 
+// The generic run loop's checkpoints serve FastSLAM too: resuming from a periodic checkpoint,
+// at another thread count, gives the same outputs as the uninterrupted run.
+TEST_F(CliTest, FastSlamResumesFromAPeriodicCheckpoint) {
+  fs::path sim = dir_ / "sim";
+  ASSERT_EQ(Grove("fastslam simulate --seed 4 --out " + sim.string()).exit_code, 0);
+  const std::string run = "fastslam run --no-progress --particles 30 --controls " +
+                          (sim / "controls.csv").string() + " --observations " +
+                          (sim / "observations.csv").string() + " ";
+  fs::path full = dir_ / "full", part = dir_ / "part", resumed = dir_ / "resumed";
+  ASSERT_EQ(Grove(run + "--threads 2 --out " + full.string()).exit_code, 0);
+  Outcome o = Grove(run + "--threads 1 --checkpoint-every 7000 --out " + part.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  ASSERT_TRUE(fs::exists(part / "checkpoint.grove"));
+  fs::copy_file(part / "checkpoint.grove", dir_ / "cp.grove");
+  o = Grove(run + "--threads 2 --resume " + (dir_ / "cp.grove").string() + " --out " +
+            resumed.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  for (const char* f : {"trajectory.csv", "heaviest_trajectory.csv", "landmarks.csv", "map.png"}) {
+    EXPECT_TRUE(Slurp(full / f) == Slurp(resumed / f)) << f << " differs";
+  }
+  // A FootSLAM checkpoint is not a FastSLAM one.
+  ASSERT_EQ(Grove("footslam run --no-progress --particles 50 --checkpoint-every 100 --out " +
+                  (dir_ / "foot").string())
+                .exit_code,
+            0);
+  o = Grove(run + "--resume " + (dir_ / "foot" / "checkpoint.grove").string() + " --out " +
+            (dir_ / "wrong").string());
+  EXPECT_NE(o.exit_code, 0);
+  EXPECT_NE(o.err.find("footslam"), std::string::npos) << o.err;
+}
+
 }  // namespace

@@ -141,6 +141,29 @@ int Main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(int64_t{1}, int64_t{1} << 31));
 
+  CLI::App* fs_accuracy = bench->add_subcommand(
+      "fastslam-accuracy", "FastSLAM 1.0 and 2.0 RMSE on the webmap against particles and seeds");
+  gt::FastSlamAccuracyOptions fs_accuracy_options;
+  fs_accuracy->add_option("--out", fs_accuracy_options.out_dir, "Output directory")->required();
+  fs_accuracy->add_option("--seeds", fs_accuracy_options.seeds)
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
+  fs_accuracy->add_option("--particles", fs_accuracy_options.particles, "Particle counts")
+      ->check(CLI::Range(int64_t{1}, int64_t{1} << 31));
+  fs_accuracy->add_option("--threads", fs_accuracy_options.threads, "0 = all cores")
+      ->check(CLI::Range(0, 256));
+  CLI::App* fs_speed = bench->add_subcommand(
+      "fastslam-speed",
+      "FastSLAM run time on the webmap and throughput against particles and threads");
+  gt::FastSlamSpeedOptions fs_speed_options;
+  fs_speed->add_option("--out", fs_speed_options.out_dir, "Output directory")->required();
+  fs_speed->add_option("--max-particles", fs_speed_options.max_particles)
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{100}, int64_t{1} << 31));
+  fs_speed->add_option("--controls", fs_speed_options.controls, "Control rows per throughput point")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{1}, int64_t{100000000}));
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -168,6 +191,8 @@ int Main(int argc, char** argv) {
                                        fs_eval_landmarks_truth);
   }
   if (*paper) return gt::PaperBenchCommand(paper_options);
+  if (*fs_accuracy) return gt::FastSlamAccuracyBenchCommand(fs_accuracy_options);
+  if (*fs_speed) return gt::FastSlamSpeedBenchCommand(fs_speed_options);
   if (*scaling) return gt::ScalingBenchCommand(scaling_options);
   if (*simulate) {
     grove::FieldInfo seed_info{
