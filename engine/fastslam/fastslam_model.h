@@ -164,9 +164,7 @@ class FastSlamModel {
         Eigen::Matrix3d gv;
         Eigen::Matrix<double, 3, 2> gu;
         VehicleJacobians(geometry_, u, trig, &gv, &gu);
-        const Eigen::Matrix3d sigma =
-            gv * Covariance(i) * gv.transpose() + gu * q_ * gu.transpose();
-        SetCovariance(i, sigma);
+        PropagateCovariance(gv, gu, &cov_[i]);
       }
       pose_[i] = next;
       if (fs2) {
@@ -369,6 +367,27 @@ class FastSlamModel {
   }
   Eigen::Matrix3d Covariance(size_t i) const { return Full(cov_[i]); }
   void SetCovariance(size_t i, const Eigen::Matrix3d& m) { cov_[i] = Upper(m); }
+
+  // Sigma <- Gv Sigma Gv^T + Gu Q Gu^T on the upper triangle, for the Jacobians' shape: Gv is
+  // the identity but for its heading column (gv(0,2), gv(1,2)) and Q is diagonal. Writing
+  // Gv = I + a e_h^T with a = (gv(0,2), gv(1,2), 0) and c = Sigma e_h, the first term is
+  // Sigma + a c^T + c a^T + Sigma_hh a a^T; the second is q_v g_v g_v^T + q_g g_g g_g^T.
+  void PropagateCovariance(const Eigen::Matrix3d& gv, const Eigen::Matrix<double, 3, 2>& gu,
+                           PoseCovariance* p) const {
+    const double ax = gv(0, 2), ay = gv(1, 2);
+    const double cx = p->xh, cy = p->yh, ch = p->hh;
+    const double qv = q_(0, 0), qg = q_(1, 1);
+    const double v0 = gu(0, 0), v1 = gu(1, 0), v2 = gu(2, 0);
+    const double g0 = gu(0, 1), g1 = gu(1, 1), g2 = gu(2, 1);
+    PoseCovariance out;
+    out.xx = p->xx + 2 * ax * cx + ch * ax * ax + qv * v0 * v0 + qg * g0 * g0;
+    out.xy = p->xy + ax * cy + cx * ay + ch * ax * ay + qv * v0 * v1 + qg * g0 * g1;
+    out.xh = p->xh + ax * ch + qv * v0 * v2 + qg * g0 * g2;
+    out.yy = p->yy + 2 * ay * cy + ch * ay * ay + qv * v1 * v1 + qg * g1 * g1;
+    out.yh = p->yh + ay * ch + qv * v1 * v2 + qg * g1 * g2;
+    out.hh = p->hh + qv * v2 * v2 + qg * g2 * g2;
+    *p = out;
+  }
 
   // FastSLAM 1.0: particle `index`'s own control for step `step`, drawn from N(u, Q); false
   // when the vehicle model cannot use the drawn steering angle.
