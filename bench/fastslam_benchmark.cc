@@ -104,7 +104,7 @@ void BM_MapMemory(benchmark::State& state) {
   const int64_t particles = state.range(0), landmarks = state.range(1);
   double live = 0;
   for (auto _ : state) {
-    MapFixture<2> f(landmarks, particles);
+    MapFixture<3> f(landmarks, particles);
     std::mt19937_64 rng(1);
     for (int k = 0; k < 100; ++k) f.Scan(rng);
     live = static_cast<double>(f.model->map_memory().live_bytes);

@@ -29,7 +29,7 @@ constexpr char kCheckpointKind[] = "grove fastslam";
 constexpr uint32_t kFastSlamFormatVersion = 1;
 
 // The landmark trees' degree, 2^kLog2Degree (see the README for the measurement behind it).
-constexpr int kLog2Degree = 2;
+constexpr int kLog2Degree = 3;
 
 // What each filter step was: the replay of paths and the reported trajectory need it.
 enum StepKind : uint8_t {
