@@ -22,15 +22,6 @@
 namespace grove::tools {
 namespace {
 
-// Lines of a regular file; 0 for anything else (a pipe must be read once, by the run).
-int64_t CountRegularFileLines(const std::string& path) {
-  struct stat st;
-  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return 0;
-  std::ifstream in(path, std::ios::binary);
-  return static_cast<int64_t>(
-      std::count(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>(), '\n'));
-}
-
 double Wrap(double a) { return std::remainder(a, 2 * std::numbers::pi); }
 
 // A pose file `t,x,y,heading` (trajectory.csv, truth.csv), times non-decreasing; at a repeated
@@ -209,10 +200,10 @@ nlohmann::json FastSlamSummaryJson(const FastSlamSummary& s) {
   return j;
 }
 
-class FastSlamJob final : public RunJob {
+class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
  public:
   FastSlamJob(const FastSlamConfig& config, const FastSlamRunOptions& options)
-      : config_(config), options_(options) {}
+      : FacadeRunJob(config), options_(options) {}
 
   // Opens the inputs (their errors are input errors) and reads the optional truth.
   Status Open() {
@@ -251,7 +242,6 @@ class FastSlamJob final : public RunJob {
   }
   const char* RecordsName() const override { return "input rows"; }
   int64_t ExpectedRecords() const override { return records_; }
-  int64_t particles() const override { return config_.particles; }
   // A rough bound, not a calibrated model: 64 MiB fixed, 4 KiB per particle (state, its own map
   // paths in two generations, path segments) and 256 bytes per input row (the step log, times
   // and poses of the driver, the outputs built in memory).
@@ -261,22 +251,6 @@ class FastSlamJob final : public RunJob {
   std::string DescribePrediction(int64_t records) const override {
     return fmt::format("{} particles, {} input rows{}", config_.particles, records,
                        records_ == 0 ? " (a stream: its length is not known before the run)" : "");
-  }
-
-  Status Create() override {
-    StatusOr<std::unique_ptr<FastSlam>> slam = FastSlam::Create(config_);
-    if (!slam.ok()) return slam.status();
-    slam_ = std::move(slam).value();
-    return Status::Ok();
-  }
-  Status Resume(std::string_view bytes, const std::string& name, std::string* user) override {
-    StatusOr<std::unique_ptr<FastSlam>> slam = FastSlam::Resume(config_, bytes, name, user);
-    if (!slam.ok()) return slam.status();
-    slam_ = std::move(slam).value();
-    return Status::Ok();
-  }
-  StatusOr<std::string> Checkpoint(std::string_view user_data) const override {
-    return slam_->Checkpoint(user_data);
   }
 
   StatusOr<bool> Read(std::string* digest_bytes) override {
@@ -298,29 +272,28 @@ class FastSlamJob final : public RunJob {
   void Replay() override {}
   Status Step() override {
     if (event_.is_scan) {
-      Status s = slam_->Scan(event_.scan_t_s, event_.scan);
+      Status s = engine_->Scan(event_.scan_t_s, event_.scan);
       if (!s.ok()) {
         return Status(s.code(), fmt::format("{}:{}: {}", reader_->observations_path(),
                                             event_.scan_line, s.message()));
       }
       return Status::Ok();
     }
-    Status s = slam_->Control(event_.control.t_s, event_.control.v_mps, event_.control.steer_rad);
+    Status s = engine_->Control(event_.control.t_s, event_.control.v_mps, event_.control.steer_rad);
     if (!s.ok()) {
       return Status(s.code(), fmt::format("{}:{}: {}", reader_->controls_path(),
                                           event_.control.line, s.message()));
     }
     return Status::Ok();
   }
-  int64_t steps() const override { return slam_->steps(); }
 
   Status WriteOutputs(OutputSet* out, nlohmann::json* summary) override {
-    const std::vector<StampedPose>& mean = slam_->MeanTrajectory();
+    const std::vector<StampedPose>& mean = engine_->MeanTrajectory();
     GROVE_RETURN_IF_ERROR(out->Add("trajectory.csv", TrajectoryCsv(mean)));
-    StatusOr<std::vector<StampedPose>> heaviest = slam_->HeaviestTrajectory();
+    StatusOr<std::vector<StampedPose>> heaviest = engine_->HeaviestTrajectory();
     if (!heaviest.ok()) return heaviest.status();
     GROVE_RETURN_IF_ERROR(out->Add("heaviest_trajectory.csv", TrajectoryCsv(*heaviest)));
-    StatusOr<std::vector<LandmarkEstimate>> landmarks = slam_->HeaviestLandmarks();
+    StatusOr<std::vector<LandmarkEstimate>> landmarks = engine_->HeaviestLandmarks();
     if (!landmarks.ok()) return landmarks.status();
     GROVE_RETURN_IF_ERROR(out->Add("landmarks.csv", LandmarksCsv(*landmarks)));
     if (StopRequested()) return Status::Ok();
@@ -342,7 +315,7 @@ class FastSlamJob final : public RunJob {
     StatusOr<std::string> svg = RenderSvg(image);
     if (!svg.ok()) return svg.status();
     GROVE_RETURN_IF_ERROR(out->Add("map.svg", *svg));
-    summary->update(FastSlamSummaryJson(slam_->Summary()));
+    summary->update(FastSlamSummaryJson(engine_->Summary()));
     (*summary)["inputs"] = {{"controls", options_.controls_path},
                             {"observations", options_.observations_path}};
     if (!truth_.empty()) {
@@ -355,14 +328,11 @@ class FastSlamJob final : public RunJob {
     }
     return Status::Ok();
   }
-  std::string BriefReport() const override { return slam_->Summary().BriefReport(); }
 
  private:
-  FastSlamConfig config_;
   FastSlamRunOptions options_;
   std::unique_ptr<FastSlamInputReader> reader_;
   int64_t records_ = 0;
-  std::unique_ptr<FastSlam> slam_;
   FastSlamEvent event_;
   std::map<double, Pose2> truth_;
   std::map<int64_t, TruthLandmark> landmarks_truth_;

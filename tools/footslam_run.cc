@@ -18,28 +18,10 @@
 namespace grove::tools {
 namespace {
 
-int64_t CountLines(std::string_view text) {
-  return static_cast<int64_t>(std::count(text.begin(), text.end(), '\n'));
-}
-
-// Lines of a regular file; 0 for anything else (a pipe must be read once, by the run).
-int64_t CountRegularFileLines(const std::string& path) {
-  struct stat st;
-  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return 0;
-  std::ifstream in(path, std::ios::binary);
-  std::vector<char> buffer(1 << 20);
-  int64_t lines = 0;
-  while (in) {
-    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-    lines += CountLines(std::string_view(buffer.data(), static_cast<size_t>(in.gcount())));
-  }
-  return lines;
-}
-
-class FootSlamJob final : public RunJob {
+class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
  public:
   FootSlamJob(const FootSlamConfig& config, const FootSlamRunOptions& options)
-      : config_(config),
+      : FacadeRunJob(config),
         options_(options),
         steps_name_(options.steps_path.empty() ? EmbeddedWalkName() : options.steps_path),
         odometry_(Pose2{config.start_x_m, config.start_y_m, config.start_heading_rad}) {}
@@ -72,7 +54,6 @@ class FootSlamJob final : public RunJob {
   std::string InputName() const override { return steps_name_; }
   const char* RecordsName() const override { return "steps"; }
   int64_t ExpectedRecords() const override { return records_; }
-  int64_t particles() const override { return config_.particles; }
   int64_t PredictPeakBytes(int64_t records) const override {
     return FootSlam::EstimatePeakBytes(config_, records) + records * kCommandBytesPerStep;
   }
@@ -80,22 +61,6 @@ class FootSlamJob final : public RunJob {
     return fmt::format("{} particles, {} map, {} steps{}", config_.particles,
                        FootSlamMapKindName(config_.map), records,
                        records_ == 0 ? " (a stream: its length is not known before the run)" : "");
-  }
-
-  Status Create() override {
-    StatusOr<std::unique_ptr<FootSlam>> slam = FootSlam::Create(config_);
-    if (!slam.ok()) return slam.status();
-    slam_ = std::move(slam).value();
-    return Status::Ok();
-  }
-  Status Resume(std::string_view bytes, const std::string& name, std::string* user) override {
-    StatusOr<std::unique_ptr<FootSlam>> slam = FootSlam::Resume(config_, bytes, name, user);
-    if (!slam.ok()) return slam.status();
-    slam_ = std::move(slam).value();
-    return Status::Ok();
-  }
-  StatusOr<std::string> Checkpoint(std::string_view user_data) const override {
-    return slam_->Checkpoint(user_data);
   }
 
   StatusOr<bool> Read(std::string* digest_bytes) override {
@@ -107,36 +72,36 @@ class FootSlamJob final : public RunJob {
   }
   void Replay() override { odometry_.Add(step_.dx_m, step_.dy_m); }
   Status Step() override {
-    if (slam_->steps() == 0) {
-      Status st = slam_->SetStartTime(reader_->start_time_s());
+    if (engine_->steps() == 0) {
+      Status st = engine_->SetStartTime(reader_->start_time_s());
       if (!st.ok()) return Status(st.code(), fmt::format("{}: {}", steps_name_, st.message()));
     }
-    Status s = slam_->Step(step_.t_s, step_.dx_m, step_.dy_m);
+    Status s = engine_->Step(step_.t_s, step_.dx_m, step_.dy_m);
     if (!s.ok()) {
       return Status(s.code(), fmt::format("{}:{}: {}", steps_name_, step_.line, s.message()));
     }
     odometry_.Add(step_.dx_m, step_.dy_m);
     return Status::Ok();
   }
-  int64_t steps() const override { return slam_->steps(); }
 
   Status WriteOutputs(OutputSet* out, nlohmann::json* summary) override {
-    StatusOr<std::vector<HexCounts>> cumulative = slam_->CumulativeMap();
+    StatusOr<std::vector<HexCounts>> cumulative = engine_->CumulativeMap();
     if (!cumulative.ok()) return cumulative.status();
     GROVE_RETURN_IF_ERROR(out->Add("map.csv", MapCsv(*cumulative, false)));
-    StatusOr<std::vector<HexCounts>> best = slam_->HeaviestMap();
+    StatusOr<std::vector<HexCounts>> best = engine_->HeaviestMap();
     if (!best.ok()) return best.status();
     GROVE_RETURN_IF_ERROR(out->Add("map_best.csv", MapCsv(*best, true)));
-    StatusOr<std::vector<StampedPose>> trajectory = slam_->HeaviestTrajectory();
+    StatusOr<std::vector<StampedPose>> trajectory = engine_->HeaviestTrajectory();
     if (!trajectory.ok()) return trajectory.status();
     GROVE_RETURN_IF_ERROR(out->Add("trajectory.csv", TrajectoryCsv(*trajectory)));
-    GROVE_RETURN_IF_ERROR(out->Add("mean_trajectory.csv", TrajectoryCsv(slam_->MeanTrajectory())));
+    GROVE_RETURN_IF_ERROR(
+        out->Add("mean_trajectory.csv", TrajectoryCsv(engine_->MeanTrajectory())));
     if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
     MapImage image = FootSlamImage(
         config_.hex_radius_m, *cumulative, *trajectory, odometry_.points(),
         fmt::format("FootSLAM, {} particles, {} steps: cumulative map, heaviest particle's path, "
                     "raw odometry",
-                    config_.particles, slam_->steps()));
+                    config_.particles, engine_->steps()));
     StatusOr<std::string> png = RenderPng(image);
     if (!png.ok()) return png.status();
     GROVE_RETURN_IF_ERROR(out->Add("map.png", *png));
@@ -144,21 +109,18 @@ class FootSlamJob final : public RunJob {
     StatusOr<std::string> svg = RenderSvg(image);
     if (!svg.ok()) return svg.status();
     GROVE_RETURN_IF_ERROR(out->Add("map.svg", *svg));
-    const FootSlamSummary s = slam_->Summary();
+    const FootSlamSummary s = engine_->Summary();
     summary->update(FootSlamSummaryJson(s));
-    (*summary)["inputs"] = {{"steps", steps_name_}, {"steps_read", slam_->steps()}};
+    (*summary)["inputs"] = {{"steps", steps_name_}, {"steps_read", engine_->steps()}};
     (*summary)["hexagons"] = {{"cumulative", cumulative->size()}, {"heaviest", best->size()}};
     return Status::Ok();
   }
-  std::string BriefReport() const override { return slam_->Summary().BriefReport(); }
 
  private:
-  FootSlamConfig config_;
   FootSlamRunOptions options_;
   std::string steps_name_;
   std::unique_ptr<StepReader> reader_;
   int64_t records_ = 0;
-  std::unique_ptr<FootSlam> slam_;
   StepRecord step_;
   OdometryPath odometry_;
 };

@@ -14,6 +14,8 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <string>
+#include <vector>
 
 #include "grove/checksum.h"
 #include "tools/atomic_file.h"
@@ -442,6 +444,23 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
   std::fprintf(stderr, "%s\nwrote %s/{%ssummary.json}\n", job->BriefReport().c_str(),
                options.out_dir.c_str(), names.c_str());
   return kExitOk;
+}
+
+int64_t CountLines(std::string_view text) {
+  return static_cast<int64_t>(std::count(text.begin(), text.end(), '\n'));
+}
+
+int64_t CountRegularFileLines(const std::string& path) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return 0;
+  std::ifstream in(path, std::ios::binary);
+  std::vector<char> buffer(1 << 20);
+  int64_t lines = 0;
+  while (in) {
+    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    lines += CountLines(std::string_view(buffer.data(), static_cast<size_t>(in.gcount())));
+  }
+  return lines;
 }
 
 }  // namespace grove::tools

@@ -11,6 +11,7 @@
 #define GROVE_TOOLS_RUN_LOOP_H_
 
 #include <cstdint>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
@@ -106,6 +107,42 @@ class RunJob {
   // One paragraph for the terminal after a run.
   virtual std::string BriefReport() const = 0;
 };
+
+// The part of a RunJob every model writes alike: its engine made, resumed and checkpointed
+// through its facade (FootSlam, FastSlam: Create, Resume, Checkpoint, steps).
+template <typename Facade, typename Config>
+class FacadeRunJob : public RunJob {
+ public:
+  explicit FacadeRunJob(const Config& config) : config_(config) {}
+
+  int64_t particles() const override { return config_.particles; }
+  Status Create() override {
+    StatusOr<std::unique_ptr<Facade>> engine = Facade::Create(config_);
+    if (!engine.ok()) return engine.status();
+    engine_ = std::move(engine).value();
+    return Status::Ok();
+  }
+  Status Resume(std::string_view bytes, const std::string& name, std::string* user) override {
+    StatusOr<std::unique_ptr<Facade>> engine = Facade::Resume(config_, bytes, name, user);
+    if (!engine.ok()) return engine.status();
+    engine_ = std::move(engine).value();
+    return Status::Ok();
+  }
+  StatusOr<std::string> Checkpoint(std::string_view user_data) const override {
+    return engine_->Checkpoint(user_data);
+  }
+  int64_t steps() const override { return engine_->steps(); }
+  std::string BriefReport() const override { return engine_->Summary().BriefReport(); }
+
+ protected:
+  Config config_;
+  std::unique_ptr<Facade> engine_;
+};
+
+// Newlines in `text`, and in a regular file (0 for anything else: a pipe must be read once, by
+// the run): the record counts behind progress and memory predictions.
+int64_t CountLines(std::string_view text);
+int64_t CountRegularFileLines(const std::string& path);
 
 // Runs `job` as `options` say; `config` is the effective configuration for summary.json.
 // Returns the exit code after printing any error on stderr as one line.
