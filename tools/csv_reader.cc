@@ -273,6 +273,18 @@ Status ParseFiniteNumber(std::string_view path, int64_t line, const CsvField& fi
                    fmt::format("{}: {} is not a number", name, QuotedField(field.text)));
 }
 
+Status ParseCsvId(std::string_view path, int64_t line, const CsvField& field, std::string_view name,
+                  int32_t* value) {
+  int32_t v = 0;
+  if (ParseCsvInt32(field.text, &v) != NumberParse::kOk || v < 0) {
+    return LineError(
+        path, line, field.column,
+        fmt::format("{}: {} is not an integer in [0, 2^31)", name, QuotedField(field.text)));
+  }
+  *value = v;
+  return Status::Ok();
+}
+
 StatusOr<CsvTableReader> CsvTableReader::Open(
     const std::string& path, const std::vector<std::vector<std::string>>& headers) {
   StatusOr<LineReader> lines = LineReader::Open(path, 64 * 1024);

@@ -121,6 +121,11 @@ NumberParse ParseCsvInt32(std::string_view text, int32_t* value);
 Status ParseFiniteNumber(std::string_view path, int64_t line, const CsvField& field,
                          std::string_view name, double* value);
 
+// Parses field as an integer in [0, 2^31) named `name` (a landmark id):
+// "path:line:column: name: \"text\" is not an integer in [0, 2^31)" otherwise.
+Status ParseCsvId(std::string_view path, int64_t line, const CsvField& field, std::string_view name,
+                  int32_t* value);
+
 // A CSV table: a header row naming the columns, then rows of as many fields. Comment and blank
 // lines are skipped anywhere; a last line without a line end is an error (the file may still be
 // being written). The model-specific readers (controls, observations) check the fields.

@@ -78,12 +78,7 @@ StatusOr<bool> ObservationReader::Next(ObservationRecord* out) {
   }
   if (has_ids()) {
     int32_t id = 0;
-    const CsvField& field = (*f)[3];
-    if (ParseCsvInt32(field.text, &id) != NumberParse::kOk || id < 0) {
-      return LineError(
-          path, line, field.column,
-          fmt::format("id: {} is not an integer in [0, 2^31)", QuotedField(field.text)));
-    }
+    GROVE_RETURN_IF_ERROR(ParseCsvId(path, line, (*f)[3], "id", &id));
     r.z.id = id;
   }
   if (has_previous_ && r.t_s < previous_s_) {

@@ -70,10 +70,7 @@ StatusOr<std::map<int64_t, TruthLandmark>> ReadTruthLandmarks(const std::string&
     if (!*more) break;
     const int64_t line = table->line_number();
     int32_t id = 0;
-    if (ParseCsvInt32((*f)[0].text, &id) != NumberParse::kOk || id < 0) {
-      return LineError(path, line, (*f)[0].column,
-                       fmt::format("id: {} is not an integer >= 0", QuotedField((*f)[0].text)));
-    }
+    GROVE_RETURN_IF_ERROR(ParseCsvId(path, line, (*f)[0], "id", &id));
     TruthLandmark l{};
     GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[1], "x", &l.x_m));
     GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[2], "y", &l.y_m));
@@ -97,10 +94,7 @@ StatusOr<std::vector<LandmarkEstimate>> ReadLandmarkEstimates(const std::string&
     if (!*more) break;
     const int64_t line = table->line_number();
     int32_t id = 0;
-    if (ParseCsvInt32((*f)[0].text, &id) != NumberParse::kOk || id < 0) {
-      return LineError(path, line, (*f)[0].column,
-                       fmt::format("id: {} is not an integer >= 0", QuotedField((*f)[0].text)));
-    }
+    GROVE_RETURN_IF_ERROR(ParseCsvId(path, line, (*f)[0], "id", &id));
     LandmarkEstimate l;
     l.id = id;
     const char* names[] = {"x", "y", "sxx", "sxy", "syy"};
