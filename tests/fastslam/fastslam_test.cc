@@ -10,6 +10,7 @@
 #include <numbers>
 #include <vector>
 
+#include "alloc/node_pool.h"
 #include "concurrency/worker_pool.h"
 #include "engine/checkpoint_io.h"
 #include "engine/fastslam/fastslam_model.h"
@@ -440,6 +441,32 @@ TEST_P(ByFilter, CorruptedCheckpointBodiesAreRefusedOrSafe) {
     auto r = FastSlam::Resume(config, SealCheckpoint(body.substr(0, cut), version), "cp", nullptr);
     EXPECT_FALSE(r.ok()) << cut;
   }
+}
+
+// An allocation failure injected at the k-th node allocation of a run: the call returns
+// ResourceExhausted, the engine is latched failed, every shared node is still counted right, and
+// destroying it frees everything (LeakSanitizer checks that in the sanitizer build).
+TEST_P(ByFilter, AnAllocationFailureStopsTheEngineCleanly) {
+  tools::BaileySimOptions o = tools::WebmapPreset();
+  o.loops = 1;
+  const BaileySimulation sim = Simulate(o);
+  int failures = 0;
+  for (int64_t k = 0; k < 20000; k = k * 3 / 2 + 5) {
+    SCOPED_TRACE(::testing::Message() << "fail after " << k);
+    auto slam = FastSlam::Create(Config(GetParam(), 40, 2));
+    ASSERT_TRUE(slam.ok());
+    FailAllocationsAfter(k);
+    Status s = tools::FeedSimulation(sim, slam->get(), 1500);
+    FailAllocationsAfter(-1);
+    if (s.ok()) continue;  // the run needed fewer than k nodes
+    ++failures;
+    EXPECT_EQ(s.code(), StatusCode::kResourceExhausted) << s.ToString();
+    EXPECT_EQ((*slam)->Control(1e6, 1, 0).code(), StatusCode::kFailedPrecondition);
+    EXPECT_EQ((*slam)->Checkpoint().status().code(), StatusCode::kFailedPrecondition);
+    Status counts = (*slam)->CheckInvariants();
+    EXPECT_TRUE(counts.ok()) << counts.ToString();
+  }
+  EXPECT_GT(failures, 5);
 }
 
 }  // namespace
