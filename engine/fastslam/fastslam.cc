@@ -129,6 +129,12 @@ class FastSlam::Impl {
           fmt::format("scan at t = {} is before the previous time {}: times must not decrease", t_s,
                       driver_.times().back()));
     }
+    if (!log_.empty() && log_.back().kind == kScanUpdate && t_s == driver_.times().back()) {
+      return InvalidArgumentError(fmt::format(
+          "scan at t = {} follows the scan at the same time: the detections of one time are "
+          "one scan",
+          t_s));
+    }
     for (size_t k = 0; k < z.size(); ++k) {
       Status s = CheckObservation(k, z[k]);
       if (!s.ok()) return Status(s.code(), fmt::format("scan at t = {}: {}", t_s, s.message()));

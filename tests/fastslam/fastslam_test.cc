@@ -259,8 +259,10 @@ TEST(FastSlamInput, BadInputLeavesTheEngineUnchanged) {
   EXPECT_EQ((*slam)->Control(0.03, nan, 0).code(), StatusCode::kInvalidArgument);
   EXPECT_EQ(*(*slam)->Checkpoint(), before);
   ASSERT_TRUE((*slam)->Scan(0.05, good).ok());
-  // A control before the scan's time is refused too.
+  // A control before the scan's time is refused too, and so is a second scan at its time.
   EXPECT_EQ((*slam)->Control(0.04, 3, 0).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ((*slam)->Scan(0.05, good).code(), StatusCode::kInvalidArgument);
+  EXPECT_TRUE((*slam)->Control(0.05, 3, 0).ok());  // a control at the scan's time is not
 }
 
 TEST(FastSlamConfigTest, ValidateNamesTheField) {

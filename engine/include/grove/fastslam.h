@@ -155,7 +155,8 @@ class FastSlam {
 
   // A scan at t_s (at or after the last time): predicts to t_s with the held control, then
   // updates every particle with the observations. InvalidArgument, the engine unchanged, before
-  // the first control, for a bad time, or for an observation that is not finite, has a negative
+  // the first control, for a bad time (before the last, or the time of the scan just before: one
+  // time's detections are one scan), or for an observation that is not finite, has a negative
   // range, a bearing outside (-pi, pi] or a negative id (the message names its index).
   // FailedPrecondition when the filter degenerated; the engine must then not be used again.
   Status Scan(double t_s, std::span<const LandmarkObservation> observations);
