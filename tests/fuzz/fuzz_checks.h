@@ -43,6 +43,7 @@
 #include "grove/footslam.h"
 #include "grove/status.h"
 #include "tools/config_json.h"
+#include "tools/fastslam_inputs.h"
 #include "tools/output_readers.h"
 #include "tools/step_reader.h"
 #include "tools/trajectory_metrics.h"
@@ -337,6 +338,51 @@ inline std::string CheckCsvReadersUnguarded(const std::string& path, std::string
       }
     }
   }
+
+  // FastSLAM's inputs: every row as its reader returns it, or the reader's error.
+  if (StatusOr<tools::ControlReader> controls = tools::ControlReader::Open(path); !controls.ok()) {
+    std::string failure = CheckError(controls.status(), path, text);
+    if (!failure.empty()) return "ControlReader::Open: " + failure;
+  } else {
+    tools::ControlRecord c, previous;
+    for (bool first = true;; first = false) {
+      StatusOr<bool> more = controls->Next(&c);
+      if (!more.ok()) {
+        std::string failure = CheckError(more.status(), path, text);
+        if (!failure.empty()) return "ControlReader::Next: " + failure;
+        break;
+      }
+      if (!*more) break;
+      if (!Finite(c.t_s, c.v_mps, c.steer_rad) || (!first && !(c.t_s > previous.t_s))) {
+        return fmt::format("ControlReader: row ({}, {}, {}) after t = {}", c.t_s, c.v_mps,
+                           c.steer_rad, previous.t_s);
+      }
+      previous = c;
+    }
+  }
+  if (StatusOr<tools::ObservationReader> observations = tools::ObservationReader::Open(path);
+      !observations.ok()) {
+    std::string failure = CheckError(observations.status(), path, text);
+    if (!failure.empty()) return "ObservationReader::Open: " + failure;
+  } else {
+    tools::ObservationRecord o, previous;
+    for (bool first = true;; first = false) {
+      StatusOr<bool> more = observations->Next(&o);
+      if (!more.ok()) {
+        std::string failure = CheckError(more.status(), path, text);
+        if (!failure.empty()) return "ObservationReader::Next: " + failure;
+        break;
+      }
+      if (!*more) break;
+      const bool bearing_ok = o.z.bearing_rad > -M_PI && o.z.bearing_rad <= M_PI;
+      if (!Finite(o.t_s, o.z.range_m, o.z.bearing_rad) || o.z.range_m < 0 || !bearing_ok ||
+          o.z.id < 0 || (!first && o.t_s < previous.t_s)) {
+        return fmt::format("ObservationReader: row ({}, {}, {}, {}) after t = {}", o.t_s,
+                           o.z.range_m, o.z.bearing_rad, o.z.id, previous.t_s);
+      }
+      previous = o;
+    }
+  }
   return "";
 }
 
@@ -470,8 +516,8 @@ inline std::string CheckConfigJson(const uint8_t* data, size_t size) {
       [&] { return fuzz_internal::CheckConfigJsonUnguarded(data, size); });
 }
 
-// Writes the input to CsvInputPath() and reads it with ReadMapCsv, ReadPathCsv and
-// ReadTimedPoints; removes the file afterwards.
+// Writes the input to CsvInputPath() and reads it with ReadMapCsv, ReadPathCsv, ReadTimedPoints,
+// ControlReader and ObservationReader; removes the file afterwards.
 inline std::string CheckCsvReaders(const uint8_t* data, size_t size) {
   const std::string path = fuzz_internal::CsvInputPath();
   std::string failure = fuzz_internal::Guarded([&] {
