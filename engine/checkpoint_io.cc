@@ -140,4 +140,14 @@ StatusOr<UnsealedCheckpoint> UnsealCheckpoint(std::string_view file, const std::
   return UnsealedCheckpoint{version, body};
 }
 
+Status ReadParticleCount(ByteReader* r, uint64_t expected) {
+  uint64_t n = 0;
+  GROVE_RETURN_IF_ERROR(r->Get("particle count", &n));
+  if (n != expected) {
+    return r->Error("particle count", std::to_string(n) + " does not match the configuration's " +
+                                          std::to_string(expected));
+  }
+  return Status::Ok();
+}
+
 }  // namespace grove

@@ -212,6 +212,9 @@ Status ReadCheckpointHead(ByteReader* r, std::string_view kind, const char* mode
                           std::string* user_data);
 
 // The whole file: header and `body`.
+// Reads a model body's particle count: DataLoss naming both counts unless it is `expected`.
+Status ReadParticleCount(ByteReader* r, uint64_t expected);
+
 std::string SealCheckpoint(std::string_view body, uint32_t format_version);
 
 struct UnsealedCheckpoint {

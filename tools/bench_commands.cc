@@ -17,6 +17,7 @@
 #include "tools/atomic_file.h"
 #include "tools/chart.h"
 #include "tools/csv_reader.h"
+#include "tools/fastslam_run.h"
 #include "tools/fastslam_simulator.h"
 #include "tools/footslam_run.h"
 #include "tools/report_tables.h"
@@ -392,38 +393,12 @@ StatusOr<BaileySimulation> WebmapSimulation(uint64_t seed) {
   return SimulateBailey(*map, options);
 }
 
-struct FastSlamAccuracy {
-  double position_rmse_m = 0;
-  double heading_rmse_rad = 0;
-  double mse_mean_m2 = 0;
-  double mse_variance_m4 = 0;
-  double filter_s = 0;
-};
-
 // The mean pose after the last step at each truth time against the truth.
-FastSlamAccuracy ScoreAgainstTruth(const FastSlam& slam, const BaileySimulation& sim) {
-  std::map<double, Pose2> estimate;
+PoseErrors ScoreAgainstTruth(const FastSlam& slam, const BaileySimulation& sim) {
+  std::map<double, Pose2> truth, estimate;
+  for (const BaileyPose& t : sim.truth) truth[t.t_s] = Pose2{t.x_m, t.y_m, t.heading_rad};
   for (const StampedPose& p : slam.MeanTrajectory()) estimate[p.t_s] = p.pose;
-  std::vector<double> sq;
-  double heading_sq = 0;
-  for (const BaileyPose& t : sim.truth) {
-    auto it = estimate.find(t.t_s);
-    if (it == estimate.end()) continue;
-    const double dx = it->second.x_m - t.x_m, dy = it->second.y_m - t.y_m;
-    sq.push_back(dx * dx + dy * dy);
-    const double dh = std::remainder(it->second.heading_rad - t.heading_rad, 2 * M_PI);
-    heading_sq += dh * dh;
-  }
-  FastSlamAccuracy a;
-  if (sq.empty()) return a;
-  double sum = 0;
-  for (double v : sq) sum += v;
-  a.mse_mean_m2 = sum / sq.size();
-  for (double v : sq) a.mse_variance_m4 += (v - a.mse_mean_m2) * (v - a.mse_mean_m2);
-  a.mse_variance_m4 /= sq.size();
-  a.position_rmse_m = std::sqrt(a.mse_mean_m2);
-  a.heading_rmse_rad = std::sqrt(heading_sq / sq.size());
-  return a;
+  return ComparePoses(truth, estimate);
 }
 
 double Median(std::vector<double> v) {
@@ -457,7 +432,7 @@ int FastSlamAccuracyBenchCommand(const FastSlamAccuracyOptions& options) {
         if (!slam.ok()) return Fail(kExitUsage, slam.status().message());
         s = FeedSimulation(*sim, slam->get());
         if (!s.ok()) return Fail(kExitRun, s.message());
-        const FastSlamAccuracy a = ScoreAgainstTruth(**slam, *sim);
+        const PoseErrors a = ScoreAgainstTruth(**slam, *sim);
         const FastSlamSummary summary = (*slam)->Summary();
         rmse[{static_cast<int>(filter), n}].push_back(a.position_rmse_m);
         runs.push_back({{"seed", seed},
@@ -465,8 +440,8 @@ int FastSlamAccuracyBenchCommand(const FastSlamAccuracyOptions& options) {
                         {"particles", n},
                         {"position_rmse_m", a.position_rmse_m},
                         {"heading_rmse_rad", a.heading_rmse_rad},
-                        {"position_mse_mean_m2", a.mse_mean_m2},
-                        {"position_mse_variance_m4", a.mse_variance_m4},
+                        {"position_mse_mean_m2", a.position_mse_mean_m2},
+                        {"position_mse_variance_m4", a.position_mse_variance_m4},
                         {"resamplings", summary.resamplings},
                         {"filter_time_s", summary.filter_s()}});
         std::fprintf(stderr, "seed %d %s %lld particles: position RMSE %.2f m\n", seed,

@@ -140,6 +140,17 @@ class CsvTableReader {
   size_t header() const { return header_; }
   // The next row's fields (as many as the header's): false at the end of the file.
   StatusOr<bool> Next(const std::vector<CsvField>** fields);
+  // Calls row(fields, line) -> Status for every row to the end; the first error stops it.
+  template <typename F>
+  Status ForEachRow(F&& row) {
+    for (;;) {
+      const std::vector<CsvField>* fields = nullptr;
+      StatusOr<bool> more = Next(&fields);
+      if (!more.ok()) return more.status();
+      if (!*more) return Status::Ok();
+      GROVE_RETURN_IF_ERROR(row(*fields, line_number()));
+    }
+  }
   int64_t line_number() const { return lines_.line_number(); }
   const std::string& path() const { return lines_.path(); }
 

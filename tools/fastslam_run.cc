@@ -31,25 +31,22 @@ StatusOr<std::map<double, Pose2>> ReadPoses(const std::string& path) {
   if (!table.ok()) return table.status();
   std::map<double, Pose2> poses;
   double last = -INFINITY;
-  for (;;) {
-    const std::vector<CsvField>* f = nullptr;
-    StatusOr<bool> more = table->Next(&f);
-    if (!more.ok()) return more.status();
-    if (!*more) break;
-    const int64_t line = table->line_number();
-    double t = 0;
-    Pose2 p;
-    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[0], "t", &t));
-    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[1], "x", &p.x_m));
-    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[2], "y", &p.y_m));
-    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[3], "heading", &p.heading_rad));
-    if (t < last) {
-      return LineError(path, line, (*f)[0].column,
-                       fmt::format("t = {} is before the previous time {}", t, last));
-    }
-    last = t;
-    poses[t] = p;
-  }
+  GROVE_RETURN_IF_ERROR(
+      table->ForEachRow([&](const std::vector<CsvField>& f, int64_t line) -> Status {
+        double t = 0;
+        Pose2 p;
+        GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[0], "t", &t));
+        GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[1], "x", &p.x_m));
+        GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[2], "y", &p.y_m));
+        GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[3], "heading", &p.heading_rad));
+        if (t < last) {
+          return LineError(path, line, f[0].column,
+                           fmt::format("t = {} is before the previous time {}", t, last));
+        }
+        last = t;
+        poses[t] = p;
+        return Status::Ok();
+      }));
   if (poses.empty()) return InvalidArgumentError(fmt::format("{}: no poses", path));
   return poses;
 }
@@ -63,21 +60,18 @@ StatusOr<std::map<int64_t, TruthLandmark>> ReadTruthLandmarks(const std::string&
   StatusOr<CsvTableReader> table = CsvTableReader::Open(path, {{"id", "x", "y"}});
   if (!table.ok()) return table.status();
   std::map<int64_t, TruthLandmark> out;
-  for (;;) {
-    const std::vector<CsvField>* f = nullptr;
-    StatusOr<bool> more = table->Next(&f);
-    if (!more.ok()) return more.status();
-    if (!*more) break;
-    const int64_t line = table->line_number();
-    int32_t id = 0;
-    GROVE_RETURN_IF_ERROR(ParseCsvId(path, line, (*f)[0], "id", &id));
-    TruthLandmark l{};
-    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[1], "x", &l.x_m));
-    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[2], "y", &l.y_m));
-    if (!out.emplace(id, l).second) {
-      return LineError(path, line, (*f)[0].column, fmt::format("id {} appears twice", id));
-    }
-  }
+  GROVE_RETURN_IF_ERROR(
+      table->ForEachRow([&](const std::vector<CsvField>& f, int64_t line) -> Status {
+        int32_t id = 0;
+        GROVE_RETURN_IF_ERROR(ParseCsvId(path, line, f[0], "id", &id));
+        TruthLandmark l{};
+        GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[1], "x", &l.x_m));
+        GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[2], "y", &l.y_m));
+        if (!out.emplace(id, l).second) {
+          return LineError(path, line, f[0].column, fmt::format("id {} appears twice", id));
+        }
+        return Status::Ok();
+      }));
   return out;
 }
 
@@ -87,66 +81,21 @@ StatusOr<std::vector<LandmarkEstimate>> ReadLandmarkEstimates(const std::string&
       CsvTableReader::Open(path, {{"id", "x", "y", "sxx", "sxy", "syy"}});
   if (!table.ok()) return table.status();
   std::vector<LandmarkEstimate> out;
-  for (;;) {
-    const std::vector<CsvField>* f = nullptr;
-    StatusOr<bool> more = table->Next(&f);
-    if (!more.ok()) return more.status();
-    if (!*more) break;
-    const int64_t line = table->line_number();
-    int32_t id = 0;
-    GROVE_RETURN_IF_ERROR(ParseCsvId(path, line, (*f)[0], "id", &id));
-    LandmarkEstimate l;
-    l.id = id;
-    const char* names[] = {"x", "y", "sxx", "sxy", "syy"};
-    double* values[] = {&l.x_m, &l.y_m, &l.sxx, &l.sxy, &l.syy};
-    for (int k = 0; k < 5; ++k) {
-      GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[k + 1], names[k], values[k]));
-    }
-    out.push_back(l);
-  }
+  GROVE_RETURN_IF_ERROR(
+      table->ForEachRow([&](const std::vector<CsvField>& f, int64_t line) -> Status {
+        int32_t id = 0;
+        GROVE_RETURN_IF_ERROR(ParseCsvId(path, line, f[0], "id", &id));
+        LandmarkEstimate l;
+        l.id = id;
+        const char* names[] = {"x", "y", "sxx", "sxy", "syy"};
+        double* values[] = {&l.x_m, &l.y_m, &l.sxx, &l.sxy, &l.syy};
+        for (int k = 0; k < 5; ++k) {
+          GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[k + 1], names[k], values[k]));
+        }
+        out.push_back(l);
+        return Status::Ok();
+      }));
   return out;
-}
-
-struct PoseErrors {
-  int64_t matched = 0;
-  int64_t unmatched = 0;  // truth times without an estimate
-  double position_rmse_m = 0;
-  double heading_rmse_rad = 0;
-  double max_position_m = 0;
-  double position_mse_mean_m2 = 0;      // mean over time of the squared position error
-  double position_mse_variance_m4 = 0;  // its variance over time
-};
-
-PoseErrors ComparePoses(const std::map<double, Pose2>& truth,
-                        const std::map<double, Pose2>& estimate) {
-  PoseErrors e;
-  std::vector<double> sq;
-  double heading_sq = 0;
-  for (const auto& [t, p] : truth) {
-    auto it = estimate.find(t);
-    if (it == estimate.end()) {
-      ++e.unmatched;
-      continue;
-    }
-    const double d2 = (it->second.x_m - p.x_m) * (it->second.x_m - p.x_m) +
-                      (it->second.y_m - p.y_m) * (it->second.y_m - p.y_m);
-    sq.push_back(d2);
-    const double dh = Wrap(it->second.heading_rad - p.heading_rad);
-    heading_sq += dh * dh;
-    e.max_position_m = std::max(e.max_position_m, std::sqrt(d2));
-  }
-  e.matched = static_cast<int64_t>(sq.size());
-  if (sq.empty()) return e;
-  double sum = 0;
-  for (double v : sq) sum += v;
-  const double mean = sum / sq.size();
-  double var = 0;
-  for (double v : sq) var += (v - mean) * (v - mean);
-  e.position_mse_mean_m2 = mean;
-  e.position_mse_variance_m4 = var / sq.size();
-  e.position_rmse_m = std::sqrt(mean);
-  e.heading_rmse_rad = std::sqrt(heading_sq / sq.size());
-  return e;
 }
 
 nlohmann::json PoseErrorsJson(const PoseErrors& e) {
@@ -302,13 +251,8 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
         fmt::format("{}, {} particles: heaviest particle's path and landmarks",
                     config_.filter == FastSlamFilter::kFastSlam1 ? "FastSLAM 1.0" : "FastSLAM 2.0",
                     config_.particles);
-    StatusOr<std::string> png = RenderPng(image);
-    if (!png.ok()) return png.status();
-    GROVE_RETURN_IF_ERROR(out->Add("map.png", *png));
-    if (StopRequested()) return Status::Ok();
-    StatusOr<std::string> svg = RenderSvg(image);
-    if (!svg.ok()) return svg.status();
-    GROVE_RETURN_IF_ERROR(out->Add("map.svg", *svg));
+    GROVE_RETURN_IF_ERROR(AddMapImages(out, image));
+    if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
     summary->update(FastSlamSummaryJson(engine_->Summary()));
     (*summary)["inputs"] = {{"controls", options_.controls_path},
                             {"observations", options_.observations_path}};
@@ -333,6 +277,38 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
 };
 
 }  // namespace
+
+PoseErrors ComparePoses(const std::map<double, Pose2>& truth,
+                        const std::map<double, Pose2>& estimate) {
+  PoseErrors e;
+  std::vector<double> sq;
+  double heading_sq = 0;
+  for (const auto& [t, p] : truth) {
+    auto it = estimate.find(t);
+    if (it == estimate.end()) {
+      ++e.unmatched;
+      continue;
+    }
+    const double d2 = (it->second.x_m - p.x_m) * (it->second.x_m - p.x_m) +
+                      (it->second.y_m - p.y_m) * (it->second.y_m - p.y_m);
+    sq.push_back(d2);
+    const double dh = Wrap(it->second.heading_rad - p.heading_rad);
+    heading_sq += dh * dh;
+    e.max_position_m = std::max(e.max_position_m, std::sqrt(d2));
+  }
+  e.matched = static_cast<int64_t>(sq.size());
+  if (sq.empty()) return e;
+  double sum = 0;
+  for (double v : sq) sum += v;
+  const double mean = sum / sq.size();
+  double var = 0;
+  for (double v : sq) var += (v - mean) * (v - mean);
+  e.position_mse_mean_m2 = mean;
+  e.position_mse_variance_m4 = var / sq.size();
+  e.position_rmse_m = std::sqrt(mean);
+  e.heading_rmse_rad = std::sqrt(heading_sq / sq.size());
+  return e;
+}
 
 std::string LandmarksCsv(const std::vector<LandmarkEstimate>& landmarks) {
   std::string out = "id,x,y,sxx,sxy,syy\n";

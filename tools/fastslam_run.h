@@ -2,6 +2,8 @@
 #ifndef GROVE_TOOLS_FASTSLAM_RUN_H_
 #define GROVE_TOOLS_FASTSLAM_RUN_H_
 
+#include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -25,6 +27,20 @@ int RunFastSlamCommand(const FastSlamConfig& config, const FastSlamRunOptions& o
 int FastSlamEvaluateCommand(const std::string& truth_path, const std::string& trajectory_path,
                             const std::string& landmarks_path,
                             const std::string& landmarks_truth_path);
+
+// Errors of estimated poses against the truth at the truth's times (an estimate at the same
+// time; truth times without one are counted, not matched).
+struct PoseErrors {
+  int64_t matched = 0;
+  int64_t unmatched = 0;  // truth times without an estimate
+  double position_rmse_m = 0;
+  double heading_rmse_rad = 0;
+  double max_position_m = 0;
+  double position_mse_mean_m2 = 0;      // mean over time of the squared position error
+  double position_mse_variance_m4 = 0;  // its variance over time
+};
+PoseErrors ComparePoses(const std::map<double, Pose2>& truth,
+                        const std::map<double, Pose2>& estimate);
 
 // `id,x,y,sxx,sxy,syy`, one landmark a row.
 std::string LandmarksCsv(const std::vector<LandmarkEstimate>& landmarks);

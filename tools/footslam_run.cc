@@ -102,13 +102,8 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
         fmt::format("FootSLAM, {} particles, {} steps: cumulative map, heaviest particle's path, "
                     "raw odometry",
                     config_.particles, engine_->steps()));
-    StatusOr<std::string> png = RenderPng(image);
-    if (!png.ok()) return png.status();
-    GROVE_RETURN_IF_ERROR(out->Add("map.png", *png));
-    if (StopRequested()) return Status::Ok();
-    StatusOr<std::string> svg = RenderSvg(image);
-    if (!svg.ok()) return svg.status();
-    GROVE_RETURN_IF_ERROR(out->Add("map.svg", *svg));
+    GROVE_RETURN_IF_ERROR(AddMapImages(out, image));
+    if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
     const FootSlamSummary s = engine_->Summary();
     summary->update(FootSlamSummaryJson(s));
     (*summary)["inputs"] = {{"steps", steps_name_}, {"steps_read", engine_->steps()}};

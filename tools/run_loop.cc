@@ -463,4 +463,15 @@ int64_t CountRegularFileLines(const std::string& path) {
   return lines;
 }
 
+Status AddMapImages(OutputSet* out, const MapImage& image) {
+  if (StopRequested()) return Status::Ok();
+  StatusOr<std::string> png = RenderPng(image);
+  if (!png.ok()) return png.status();
+  GROVE_RETURN_IF_ERROR(out->Add("map.png", *png));
+  if (StopRequested()) return Status::Ok();
+  StatusOr<std::string> svg = RenderSvg(image);
+  if (!svg.ok()) return svg.status();
+  return out->Add("map.svg", *svg);
+}
+
 }  // namespace grove::tools

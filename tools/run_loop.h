@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "grove/status.h"
+#include "tools/map_render.h"
 #include "tools/output_set.h"
 
 namespace grove::tools {
@@ -150,6 +151,10 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
 
 // True when SIGINT or SIGTERM asked the current run to stop.
 bool StopRequested();
+
+// Renders `image` as map.png and map.svg into `out`, stopping early (Ok, with what is done)
+// when StopRequested().
+Status AddMapImages(OutputSet* out, const MapImage& image);
 
 }  // namespace grove::tools
 

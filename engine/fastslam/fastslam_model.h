@@ -114,7 +114,6 @@ class FastSlamModel {
 
   // The next Predict() is the first of a path segment (after the start or a scan).
   void set_segment_start(bool v) { segment_start_ = v; }
-  bool segment_start() const { return segment_start_; }
 
   // The pose particle `index` reaches from `p` by the prediction of filter step `step`: the
   // one computation of a prediction, for Predict() and for the replay of paths.
@@ -249,7 +248,6 @@ class FastSlamModel {
 
   double x(size_t i) const { return pose_[i].x_m; }
   double y(size_t i) const { return pose_[i].y_m; }
-  double heading(size_t i) const { return pose_[i].heading_rad; }
   // The heading's unit vector: cos and sin of heading(i) to round-off (FastSLAM 2.0 turns it
   // by rotation between scans).
   double cos_heading(size_t i) const { return unit_[i].c; }
@@ -284,12 +282,7 @@ class FastSlamModel {
 
   // Replaces the state of a new model with a saved one taken after step `steps`.
   Status Load(ByteReader* r, uint64_t steps) {
-    uint64_t n = 0;
-    GROVE_RETURN_IF_ERROR(r->Get("particle count", &n));
-    if (n != n_) {
-      return r->Error("particle count", std::to_string(n) + " does not match the configuration's " +
-                                            std::to_string(n_));
-    }
+    GROVE_RETURN_IF_ERROR(ReadParticleCount(r, n_));
     std::vector<VehiclePose> pose(n_);
     std::vector<PoseCovariance> cov(n_);
     GROVE_RETURN_IF_ERROR(r->GetBytes("poses", pose.data(), n_ * sizeof(VehiclePose)));

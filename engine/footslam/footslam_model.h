@@ -230,12 +230,7 @@ class FootSlamModel {
 
   // Replaces the state of a new model with a saved one taken after step `steps`.
   Status Load(ByteReader* r, uint64_t steps) {
-    uint64_t n = 0;
-    GROVE_RETURN_IF_ERROR(r->Get("particle count", &n));
-    if (n != n_) {
-      return r->Error("particle count", std::to_string(n) + " does not match the configuration's " +
-                                            std::to_string(n_));
-    }
+    GROVE_RETURN_IF_ERROR(ReadParticleCount(r, n_));
     const char* names[] = {"x", "y", "heading", "heading error", "scale"};
     std::vector<double>* vectors[] = {&x_, &y_, &heading_, &heading_error_, &scale_};
     for (int k = 0; k < 5; ++k) {
