@@ -210,6 +210,40 @@ class PersistentTrie {
     return true;
   }
 
+  // Removes the leaf under `key` from the version *root (nothing when it is absent), copying
+  // the shared nodes on its path as Update() does and freeing the nodes left empty (the empty
+  // map is nullptr; the version keeps its height otherwise). O(height). Returns false when a
+  // node could not be allocated: *root then holds the same contents.
+  [[nodiscard]] bool Erase(Node** root, uint64_t key, int slot) {
+    if (Find(*root, key) == nullptr) return true;
+    if (!Update(root, key, slot, [](Leaf&, bool) {})) return false;  // the path is now ours
+    std::array<Node**, kMaxHeight> links;
+    int depth = 0;
+    Node** link = root;
+    while ((*link)->level > 0) {
+      links[depth++] = link;
+      link = &static_cast<Inner*>(*link)->child[Digit(key, (*link)->level)];
+    }
+    Bottom* b = static_cast<Bottom*>(*link);
+    const int d = Digit(key, 0);
+    b->present[d >> 6] &= ~(uint64_t{1} << (d & 63));
+    for (uint64_t w : b->present) {
+      if (w != 0) return true;
+    }
+    FreeNode(b, slot);
+    *link = nullptr;
+    while (depth > 0) {  // free the inner nodes the removal emptied, bottom up
+      Node** up = links[--depth];
+      Inner* n = static_cast<Inner*>(*up);
+      for (Node* c : n->child) {
+        if (c != nullptr) return true;
+      }
+      FreeNode(n, slot);
+      *up = nullptr;
+    }
+    return true;
+  }
+
   // Drops one reference to a version, freeing every node no other version reaches. Iterative
   // with an explicit stack: a chain of any length cannot overflow the call stack.
   void Release(Node* root, int slot) {
@@ -302,6 +336,47 @@ class PersistentTrie {
         const Bottom* b = static_cast<const Bottom*>(item.node);
         for (int i = 0; i < kDegree; ++i) {
           if (b->Has(i)) f((item.prefix << kLog2Degree) | i, b->leaf[i]);
+        }
+      }
+    }
+  }
+
+  // Calls f(key, const Leaf&) in increasing key order for the leaves of one version whose
+  // subtrees the filter admits: may_contain(lo, hi) is asked for the key range [lo, hi] of each
+  // node's subtree (and of each leaf, lo == hi) and a false prunes it. A range query (a spatial
+  // one when keys encode positions) costs the nodes it admits, not the size of the map.
+  template <typename P, typename F>
+  void ForEachIf(const Node* root, P&& may_contain, F&& f) const {
+    if (root == nullptr) return;
+    struct Item {
+      const Node* node;
+      uint64_t prefix;
+    };
+    std::array<Item, (kDegree - 1) * kMaxHeight + 1> stack;
+    int top = 0;
+    auto admits = [&](uint64_t prefix, int level) {
+      const int shift = kLog2Degree * level;
+      const uint64_t lo = shift >= 64 ? 0 : prefix << shift;
+      const uint64_t span = shift >= 64 ? ~uint64_t{0} : (uint64_t{1} << shift) - 1;
+      return may_contain(lo, lo + span);
+    };
+    if (!admits(0, root->level + 1)) return;
+    stack[top++] = {root, 0};
+    while (top > 0) {
+      const Item item = stack[--top];
+      if (item.node->level > 0) {
+        const Inner* n = static_cast<const Inner*>(item.node);
+        for (int i = kDegree - 1; i >= 0; --i) {  // pushed in reverse: popped in key order
+          const uint64_t prefix = (item.prefix << kLog2Degree) | i;
+          if (n->child[i] != nullptr && admits(prefix, item.node->level)) {
+            stack[top++] = {n->child[i], prefix};
+          }
+        }
+      } else {
+        const Bottom* b = static_cast<const Bottom*>(item.node);
+        for (int i = 0; i < kDegree; ++i) {
+          const uint64_t key = (item.prefix << kLog2Degree) | i;
+          if (b->Has(i) && may_contain(key, key)) f(key, b->leaf[i]);
         }
       }
     }

@@ -80,6 +80,8 @@ StatusOr<bool> ObservationReader::Next(ObservationRecord* out) {
     int32_t id = 0;
     GROVE_RETURN_IF_ERROR(ParseCsvId(path, line, (*f)[3], "id", &id));
     r.z.id = id;
+  } else {
+    r.z.id = -1;
   }
   if (has_previous_ && r.t_s < previous_s_) {
     return LineError(path, line, (*f)[0].column,
@@ -98,12 +100,6 @@ StatusOr<FastSlamInputReader> FastSlamInputReader::Open(const std::string& contr
   if (!c.ok()) return c.status();
   StatusOr<ObservationReader> o = ObservationReader::Open(observations_path);
   if (!o.ok()) return o.status();
-  if (!o->has_ids()) {
-    return InvalidArgumentError(fmt::format(
-        "{}:1:1: the header has no id column: unknown data association is not supported yet; "
-        "give \"t,range,bearing,id\"",
-        observations_path));
-  }
   return FastSlamInputReader(std::move(c).value(), std::move(o).value());
 }
 

@@ -5,7 +5,8 @@
 //   observations.csv  `t,range,bearing` or `t,range,bearing,id`: one detection a row, rows with
 //                     the same t one scan, t non-decreasing; range >= 0 (m), bearing in
 //                     (-pi, pi] (rad, counter-clockwise from the heading), id an integer >= 0
-//                     naming the landmark (known association).
+//                     naming the landmark (known association; without the column, or under
+//                     --association ml, the association is unknown and ids only tag).
 // The CSV syntax and the "FILE:LINE:COLUMN: what" errors are those of tools/csv_reader.h.
 //
 // FastSlamInputReader merges the two files into the order the filter takes them: each control,
@@ -75,14 +76,26 @@ struct FastSlamEvent {
   std::vector<LandmarkObservation> scan;
 };
 
-class FastSlamInputReader {
+// Where the run loop takes FastSLAM's events from: the CSV files, or a dataset's reader.
+class FastSlamEventSource {
  public:
-  // Observations without ids are refused until unknown association exists (InvalidArgument
-  // naming the file).
+  virtual ~FastSlamEventSource() = default;
+  // The next event; false at the end.
+  virtual StatusOr<bool> Next(FastSlamEvent* out) = 0;
+  // The files the events' lines are in, for error messages.
+  virtual std::string ControlSource() const = 0;
+  virtual std::string ScanSource() const = 0;
+};
+
+class FastSlamInputReader final : public FastSlamEventSource {
+ public:
   static StatusOr<FastSlamInputReader> Open(const std::string& controls_path,
                                             const std::string& observations_path);
-  // The next event; false at the end of both files.
-  StatusOr<bool> Next(FastSlamEvent* out);
+  // The next event; false at the end of both files. Without an id column the ids are -1.
+  StatusOr<bool> Next(FastSlamEvent* out) override;
+  std::string ControlSource() const override { return controls_.path(); }
+  std::string ScanSource() const override { return observations_.path(); }
+  bool has_ids() const { return observations_.has_ids(); }
   const std::string& controls_path() const { return controls_.path(); }
   const std::string& observations_path() const { return observations_.path(); }
 

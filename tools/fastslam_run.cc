@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -18,6 +19,7 @@
 #include "tools/fastslam_inputs.h"
 #include "tools/filter_outputs.h"
 #include "tools/map_render.h"
+#include "tools/victoria_park.h"
 
 namespace grove::tools {
 namespace {
@@ -75,18 +77,33 @@ StatusOr<std::map<int64_t, TruthLandmark>> ReadTruthLandmarks(const std::string&
   return out;
 }
 
-// landmarks.csv: `id,x,y,sxx,sxy,syy`.
+// An integer field in [lo, 2^63).
+Status ParseInt64(const std::string& path, int64_t line, const CsvField& f, const char* name,
+                  int64_t lo, int64_t* value) {
+  const char* end = f.text.data() + f.text.size();
+  auto [ptr, ec] = std::from_chars(f.text.data(), end, *value);
+  if (ec != std::errc() || ptr != end || *value < lo) {
+    return LineError(
+        path, line, f.column,
+        fmt::format("{}: {} is not an integer in [{}, 2^63)", name, QuotedField(f.text), lo));
+  }
+  return Status::Ok();
+}
+
+// landmarks.csv: `id,x,y,sxx,sxy,syy[,source_id]`.
 StatusOr<std::vector<LandmarkEstimate>> ReadLandmarkEstimates(const std::string& path) {
-  StatusOr<CsvTableReader> table =
-      CsvTableReader::Open(path, {{"id", "x", "y", "sxx", "sxy", "syy"}});
+  StatusOr<CsvTableReader> table = CsvTableReader::Open(
+      path,
+      {{"id", "x", "y", "sxx", "sxy", "syy"}, {"id", "x", "y", "sxx", "sxy", "syy", "source_id"}});
   if (!table.ok()) return table.status();
+  const bool sources = table->header() == 1;
   std::vector<LandmarkEstimate> out;
   GROVE_RETURN_IF_ERROR(
       table->ForEachRow([&](const std::vector<CsvField>& f, int64_t line) -> Status {
-        int32_t id = 0;
-        GROVE_RETURN_IF_ERROR(ParseCsvId(path, line, f[0], "id", &id));
         LandmarkEstimate l;
-        l.id = id;
+        GROVE_RETURN_IF_ERROR(ParseInt64(path, line, f[0], "id", 0, &l.id));
+        if (sources)
+          GROVE_RETURN_IF_ERROR(ParseInt64(path, line, f[6], "source_id", -1, &l.source_id));
         const char* names[] = {"x", "y", "sxx", "sxy", "syy"};
         double* values[] = {&l.x_m, &l.y_m, &l.sxx, &l.sxy, &l.syy};
         for (int k = 0; k < 5; ++k) {
@@ -108,27 +125,42 @@ nlohmann::json PoseErrorsJson(const PoseErrors& e) {
           {"position_mse_variance_m4", e.position_mse_variance_m4}};
 }
 
+// Estimates matched to the truth by id, or under unknown association by the id of the
+// detection that created them (source_id): then several estimates of one true landmark are
+// duplicates (associations the filter missed) and true landmarks without one are missing.
 nlohmann::json LandmarkErrorsJson(const std::vector<LandmarkEstimate>& estimates,
                                   const std::map<int64_t, TruthLandmark>& truth) {
   int64_t matched = 0, unknown = 0;
   double sq = 0, worst = 0;
+  const bool by_source = std::any_of(estimates.begin(), estimates.end(),
+                                     [](const LandmarkEstimate& l) { return l.source_id >= 0; });
+  std::map<int64_t, int64_t> per_truth;
   for (const LandmarkEstimate& l : estimates) {
-    auto it = truth.find(l.id);
+    auto it = truth.find(by_source ? l.source_id : l.id);
     if (it == truth.end()) {
       ++unknown;
       continue;
     }
+    ++per_truth[it->first];
     const double d = std::hypot(l.x_m - it->second.x_m, l.y_m - it->second.y_m);
     sq += d * d;
     worst = std::max(worst, d);
     ++matched;
   }
-  return {{"estimated", estimates.size()},
-          {"true", truth.size()},
-          {"matched", matched},
-          {"estimated_without_truth", unknown},
-          {"rmse_m", matched > 0 ? std::sqrt(sq / matched) : 0.0},
-          {"max_error_m", worst}};
+  nlohmann::json j = {{"estimated", estimates.size()},
+                      {"true", truth.size()},
+                      {"matched", matched},
+                      {"estimated_without_truth", unknown},
+                      {"rmse_m", matched > 0 ? std::sqrt(sq / matched) : 0.0},
+                      {"max_error_m", worst}};
+  if (by_source) {
+    int64_t duplicates = 0;
+    for (const auto& [id, n] : per_truth) duplicates += n - 1;
+    j["matched_by"] = "source_id";
+    j["duplicates"] = duplicates;
+    j["true_without_estimate"] = static_cast<int64_t>(truth.size() - per_truth.size());
+  }
+  return j;
 }
 
 nlohmann::json FastSlamSummaryJson(const FastSlamSummary& s) {
@@ -138,9 +170,43 @@ nlohmann::json FastSlamSummaryJson(const FastSlamSummary& s) {
   j["observations"] = s.observations;
   j["predict_steps"] = s.predict_steps;
   j["landmarks"] = s.landmarks;
+  const AssociationCounts& a = s.association;
+  if (a.associated + a.created + a.ignored > 0) {
+    j["association"] = {
+        {"associated", a.associated},
+        {"created", a.created},
+        {"ignored", a.ignored},
+        {"removed", a.removed},
+        {"dropped", a.dropped},
+        {"tagged", a.tagged},
+        {"wrong", a.wrong},
+        {"error_rate", a.tagged > 0 ? nlohmann::json(static_cast<double>(a.wrong) / a.tagged)
+                                    : nlohmann::json(nullptr)}};
+  }
   j["map_memory"] = MemoryUseJson(s.map_memory);
   j["trajectory_memory"] = MemoryUseJson(s.trajectory_memory);
   return j;
+}
+
+nlohmann::json GpsErrorsJson(const GpsErrors& e) {
+  return {{"fixes", e.fixes.size()},
+          {"mean_m", e.mean_m},
+          {"median_m", e.median_m},
+          {"rmse_m", e.rmse_m},
+          {"max_m", e.max_m},
+          {"alignment_rotation_rad", e.alignment.rotation_rad},
+          {"alignment_translation_m", {e.alignment.translation_x_m, e.alignment.translation_y_m}},
+          {"gps_jumps_over_10_mps", e.jumps},
+          {"gps_gaps_over_5_s", e.gaps}};
+}
+
+std::string GpsErrorCsv(const GpsErrors& e) {
+  std::string out = "t,gps_x,gps_y,x,y,error\n";
+  for (const AlignedPointError& f : e.fixes) {
+    fmt::format_to(std::back_inserter(out), "{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f}\n", f.t_s,
+                   f.truth_x_m, f.truth_y_m, f.estimate_x_m, f.estimate_y_m, f.error_m);
+  }
+  return out;
 }
 
 class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
@@ -148,12 +214,30 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
   FastSlamJob(const FastSlamConfig& config, const FastSlamRunOptions& options)
       : FacadeRunJob(config), options_(options) {}
 
-  // Opens the inputs (their errors are input errors) and reads the optional truth.
+  const FastSlamConfig& config() const { return config_; }
+
+  // Opens the inputs (their errors are input errors) and reads the optional truth. Observations
+  // without ids select unknown association (config() says which ran).
   Status Open() {
+    if (!options_.victoria_park_dir.empty()) {
+      StatusOr<VictoriaParkData> data =
+          ReadVictoriaPark(options_.victoria_park_dir, options_.until_s);
+      if (!data.ok()) return data.status();
+      park_ = std::make_unique<VictoriaParkData>(std::move(data).value());
+      park_events_ = new VictoriaParkEvents(park_.get());
+      source_.reset(park_events_);
+      records_ = static_cast<int64_t>(park_->controls.size() + park_->observations.size());
+      return Status::Ok();
+    }
     StatusOr<FastSlamInputReader> reader =
         FastSlamInputReader::Open(options_.controls_path, options_.observations_path);
     if (!reader.ok()) return reader.status();
-    reader_ = std::make_unique<FastSlamInputReader>(std::move(reader).value());
+    if (!reader->has_ids() && config_.association == FastSlamAssociation::kKnown) {
+      std::fprintf(stderr, "%s has no id column: unknown association (association = ml)\n",
+                   options_.observations_path.c_str());
+      config_.association = FastSlamAssociation::kMaximumLikelihood;
+    }
+    source_ = std::make_unique<FastSlamInputReader>(std::move(reader).value());
     records_ = CountRegularFileLines(options_.controls_path) +
                CountRegularFileLines(options_.observations_path);
     if (!options_.truth_path.empty()) {
@@ -171,6 +255,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
   }
 
   std::vector<std::string> InputPaths() const override {
+    if (park_ != nullptr) return {park_->controls_path, park_->observations_path, park_->gps_path};
     std::vector<std::string> paths = {options_.controls_path, options_.observations_path};
     for (const std::string* p : {&options_.truth_path, &options_.landmarks_truth_path}) {
       if (!p->empty()) paths.push_back(*p);
@@ -178,9 +263,13 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
     return paths;
   }
   std::vector<std::string> OutputNames() const override {
-    return {"trajectory.csv", "heaviest_trajectory.csv", "landmarks.csv", "map.png", "map.svg"};
+    std::vector<std::string> names = {"trajectory.csv", "heaviest_trajectory.csv", "landmarks.csv",
+                                      "map.png", "map.svg"};
+    if (park_ != nullptr) names.push_back("gps_error.csv");
+    return names;
   }
   std::string InputName() const override {
+    if (park_ != nullptr) return "Victoria Park (" + options_.victoria_park_dir + ")";
     return options_.controls_path + " + " + options_.observations_path;
   }
   const char* RecordsName() const override { return "input rows"; }
@@ -197,7 +286,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
   }
 
   StatusOr<bool> Read(std::string* digest_bytes) override {
-    StatusOr<bool> more = reader_->Next(&event_);
+    StatusOr<bool> more = source_->Next(&event_);
     if (!more.ok() || !*more) return more;
     if (event_.is_scan) {
       const double t = event_.scan_t_s;
@@ -217,14 +306,14 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
     if (event_.is_scan) {
       Status s = engine_->Scan(event_.scan_t_s, event_.scan);
       if (!s.ok()) {
-        return Status(s.code(), fmt::format("{}:{}: {}", reader_->observations_path(),
-                                            event_.scan_line, s.message()));
+        return Status(s.code(), fmt::format("{}:{}: {}", source_->ScanSource(), event_.scan_line,
+                                            s.message()));
       }
       return Status::Ok();
     }
     Status s = engine_->Control(event_.control.t_s, event_.control.v_mps, event_.control.steer_rad);
     if (!s.ok()) {
-      return Status(s.code(), fmt::format("{}:{}: {}", reader_->controls_path(),
+      return Status(s.code(), fmt::format("{}:{}: {}", source_->ControlSource(),
                                           event_.control.line, s.message()));
     }
     return Status::Ok();
@@ -247,15 +336,48 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
       image.landmarks.push_back({l.x_m, l.y_m, l.sxx, l.sxy, l.syy});
     }
     for (const auto& [id, l] : landmarks_truth_) image.landmarks_truth.push_back({l.x_m, l.y_m});
-    image.title =
-        fmt::format("{}, {} particles: heaviest particle's path and landmarks",
-                    config_.filter == FastSlamFilter::kFastSlam1 ? "FastSLAM 1.0" : "FastSLAM 2.0",
-                    config_.particles);
+    const char* filter =
+        config_.filter == FastSlamFilter::kFastSlam1 ? "FastSLAM 1.0" : "FastSLAM 2.0";
+    image.title = fmt::format("{}, {} particles: heaviest particle's path and landmarks", filter,
+                              config_.particles);
+    StatusOr<GpsErrors> gps_mean = InvalidArgumentError("no GPS"), gps_heaviest = gps_mean;
+    if (park_ != nullptr) {
+      gps_mean = CompareWithGps(mean, park_->gps);
+      gps_heaviest = CompareWithGps(*heaviest, park_->gps);
+      if (gps_mean.ok() && gps_heaviest.ok()) {
+        GROVE_RETURN_IF_ERROR(out->Add("gps_error.csv", GpsErrorCsv(*gps_mean)));
+        // The GPS drawn in the filter's frame: the inverse of the heaviest path's alignment.
+        const TrajectoryError& a = gps_heaviest->alignment;
+        const double c = std::cos(a.rotation_rad), s = std::sin(a.rotation_rad);
+        for (const TimedPoint& g : park_->gps) {
+          const double dx = g.x_m - a.translation_x_m, dy = g.y_m - a.translation_y_m;
+          image.truth.push_back({c * dx + s * dy, -s * dx + c * dy});
+        }
+        image.truth_label = "GPS (rigidly aligned)";
+      } else {
+        GROVE_RETURN_IF_ERROR(out->Add("gps_error.csv", "t,gps_x,gps_y,x,y,error\n"));
+      }
+      image.title = fmt::format("Victoria Park, {}, {} particles: heaviest path, landmarks, GPS",
+                                filter, config_.particles);
+    }
     GROVE_RETURN_IF_ERROR(AddMapImages(out, image));
     if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
     summary->update(FastSlamSummaryJson(engine_->Summary()));
-    (*summary)["inputs"] = {{"controls", options_.controls_path},
-                            {"observations", options_.observations_path}};
+    if (park_ != nullptr) {
+      (*summary)["inputs"] = {
+          {"victoria_park", options_.victoria_park_dir},
+          {"until_s", std::isfinite(options_.until_s) ? nlohmann::json(options_.until_s)
+                                                      : nlohmann::json(nullptr)},
+          {"scans_before_the_first_control", park_events_->skipped_scans()}};
+      (*summary)["gps"] =
+          gps_mean.ok() ? GpsErrorsJson(*gps_mean) : nlohmann::json(gps_mean.status().message());
+      (*summary)["gps_heaviest"] = gps_heaviest.ok()
+                                       ? GpsErrorsJson(*gps_heaviest)
+                                       : nlohmann::json(gps_heaviest.status().message());
+    } else {
+      (*summary)["inputs"] = {{"controls", options_.controls_path},
+                              {"observations", options_.observations_path}};
+    }
     if (!truth_.empty()) {
       std::map<double, Pose2> estimate;
       for (const StampedPose& p : mean) estimate[p.t_s] = p.pose;
@@ -269,7 +391,9 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
 
  private:
   FastSlamRunOptions options_;
-  std::unique_ptr<FastSlamInputReader> reader_;
+  std::unique_ptr<FastSlamEventSource> source_;
+  std::unique_ptr<VictoriaParkData> park_;
+  VictoriaParkEvents* park_events_ = nullptr;  // source_, for Victoria Park
   int64_t records_ = 0;
   FastSlamEvent event_;
   std::map<double, Pose2> truth_;
@@ -311,10 +435,10 @@ PoseErrors ComparePoses(const std::map<double, Pose2>& truth,
 }
 
 std::string LandmarksCsv(const std::vector<LandmarkEstimate>& landmarks) {
-  std::string out = "id,x,y,sxx,sxy,syy\n";
+  std::string out = "id,x,y,sxx,sxy,syy,source_id\n";
   for (const LandmarkEstimate& l : landmarks) {
-    fmt::format_to(std::back_inserter(out), "{},{:.6f},{:.6f},{:.9g},{:.9g},{:.9g}\n", l.id, l.x_m,
-                   l.y_m, l.sxx, l.sxy, l.syy);
+    fmt::format_to(std::back_inserter(out), "{},{:.6f},{:.6f},{:.9g},{:.9g},{:.9g},{}\n", l.id,
+                   l.x_m, l.y_m, l.sxx, l.sxy, l.syy, l.source_id);
   }
   return out;
 }
@@ -323,7 +447,7 @@ int RunFastSlamCommand(const FastSlamConfig& config, const FastSlamRunOptions& o
   if (Status s = config.Validate(); !s.ok()) return Fail(kExitUsage, s.message());
   FastSlamJob job(config, options);
   if (Status s = job.Open(); !s.ok()) return Fail(kExitInput, s.message());
-  return RunCommand(&job, options.run, ConfigToJson(FastSlamConfigFields(), config));
+  return RunCommand(&job, options.run, ConfigToJson(FastSlamConfigFields(), job.config()));
 }
 
 int FastSlamEvaluateCommand(const std::string& truth_path, const std::string& trajectory_path,

@@ -2,6 +2,7 @@
 #ifndef GROVE_TOOLS_FASTSLAM_RUN_H_
 #define GROVE_TOOLS_FASTSLAM_RUN_H_
 
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -18,6 +19,10 @@ struct FastSlamRunOptions {
   std::string observations_path;
   std::string truth_path;            // optional: truth.csv (t,x,y,heading), scored and drawn
   std::string landmarks_truth_path;  // optional: landmarks_truth.csv (id,x,y), drawn and scored
+  // Victoria Park instead of the CSV files (tools/victoria_park.h): its directory, and the
+  // records up to until_s only. Adds gps_error.csv and the GPS errors to summary.json.
+  std::string victoria_park_dir;
+  double until_s = INFINITY;
 };
 
 // Runs FastSLAM and writes every output; returns an exit code after printing any error.
@@ -42,7 +47,7 @@ struct PoseErrors {
 PoseErrors ComparePoses(const std::map<double, Pose2>& truth,
                         const std::map<double, Pose2>& estimate);
 
-// `id,x,y,sxx,sxy,syy`, one landmark a row.
+// `id,x,y,sxx,sxy,syy,source_id`, one landmark a row (source_id: -1 under known association).
 std::string LandmarksCsv(const std::vector<LandmarkEstimate>& landmarks);
 
 }  // namespace grove::tools

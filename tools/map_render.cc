@@ -292,7 +292,7 @@ void DrawHeader(cairo_t* cr, const MapImage& image, const MapLayout& layout,
   const LineStyle landmark_truth_style{kTruthColour, truth_style.width_px, true};
   const Entry entries[] = {{&image.path, "path (heaviest particle)", &path_style},
                            {&image.odometry, "odometry", &odometry_style},
-                           {&image.truth, "ground truth", &truth_style},
+                           {&image.truth, image.truth_label.c_str(), &truth_style},
                            {&landmarks_mark, "landmarks, 2-sigma ellipses", &landmark_style},
                            {&image.landmarks_truth, "true landmarks", &landmark_truth_style}};
   cairo_set_font_size(cr, layout.font_px);

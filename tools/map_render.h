@@ -41,6 +41,7 @@ struct MapImage {
   std::vector<RenderPoint> path;             // heaviest particle's path: solid dark red
   std::vector<RenderPoint> odometry;         // raw odometry: thin dashed blue
   std::vector<RenderPoint> truth;            // optional ground truth: green
+  std::string truth_label = "ground truth";  // its legend entry
   std::vector<RenderLandmark> landmarks;     // estimated landmarks: orange, 2-sigma ellipses
   std::vector<RenderPoint> landmarks_truth;  // true landmarks: green crosses
   std::string title;

@@ -89,13 +89,14 @@ StatusOr<std::vector<TimedPoint>> ReadTimedPoints(const std::string& path) {
 }
 
 StatusOr<TrajectoryError> CompareTrajectories(const std::vector<TimedPoint>& truth,
-                                              const std::vector<TimedPoint>& estimate) {
+                                              const std::vector<TimedPoint>& estimate,
+                                              std::vector<AlignedPointError>* points) {
   GROVE_RETURN_IF_ERROR(CheckPoints(truth, "truth"));
   GROVE_RETURN_IF_ERROR(CheckPoints(estimate, "estimate"));
 
   // Pairs (truth, estimate at the truth's time); both lists are sorted, so one forward pass.
   struct Pair {
-    double tx, ty, ex, ey;
+    double tx, ty, ex, ey, t;
   };
   std::vector<Pair> pairs;
   size_t j = 0;
@@ -104,12 +105,13 @@ StatusOr<TrajectoryError> CompareTrajectories(const std::vector<TimedPoint>& tru
     while (j + 1 < estimate.size() && estimate[j + 1].t_s <= p.t_s) ++j;
     const TimedPoint& a = estimate[j];
     if (p.t_s == a.t_s) {
-      pairs.push_back({p.x_m, p.y_m, a.x_m, a.y_m});
+      pairs.push_back({p.x_m, p.y_m, a.x_m, a.y_m, p.t_s});
       continue;
     }
     const TimedPoint& b = estimate[j + 1];  // exists: a.t_s < p.t_s <= back().t_s
     const double f = (p.t_s - a.t_s) / (b.t_s - a.t_s);
-    pairs.push_back({p.x_m, p.y_m, a.x_m + f * (b.x_m - a.x_m), a.y_m + f * (b.y_m - a.y_m)});
+    pairs.push_back(
+        {p.x_m, p.y_m, a.x_m + f * (b.x_m - a.x_m), a.y_m + f * (b.y_m - a.y_m), p.t_s});
   }
   if (pairs.size() < 2) {
     return InvalidArgumentError(fmt::format(
@@ -156,12 +158,14 @@ StatusOr<TrajectoryError> CompareTrajectories(const std::vector<TimedPoint>& tru
   error.translation_x_m = truth_cx - (c * estimate_cx - s * estimate_cy);
   error.translation_y_m = truth_cy - (s * estimate_cx + c * estimate_cy);
   double aligned_squared = 0;
+  if (points != nullptr) points->clear();
   for (const Pair& q : pairs) {
     const double ex = c * q.ex - s * q.ey + error.translation_x_m;
     const double ey = s * q.ex + c * q.ey + error.translation_y_m;
     const double d2 = (q.tx - ex) * (q.tx - ex) + (q.ty - ey) * (q.ty - ey);
     aligned_squared += d2;
     error.aligned_max_m = std::max(error.aligned_max_m, std::sqrt(d2));
+    if (points != nullptr) points->push_back({q.t, q.tx, q.ty, ex, ey, std::sqrt(d2)});
   }
   error.aligned_rmse_m = std::sqrt(aligned_squared / n);
   return error;

@@ -42,8 +42,16 @@ struct TrajectoryError {
 // Both inputs need finite values and strictly increasing times. Returns InvalidArgument when
 // fewer than 2 points match. If the matched estimate points all coincide the rotation is 0.
 // Alignment: closed-form 2D Kabsch/Umeyama (Umeyama 1991, without the scale).
+// `points` (may be null) gets each matched truth point with its aligned error.
+struct AlignedPointError {
+  double t_s = 0;
+  double truth_x_m = 0, truth_y_m = 0;
+  double estimate_x_m = 0, estimate_y_m = 0;  // interpolated and aligned
+  double error_m = 0;
+};
 StatusOr<TrajectoryError> CompareTrajectories(const std::vector<TimedPoint>& truth,
-                                              const std::vector<TimedPoint>& estimate);
+                                              const std::vector<TimedPoint>& estimate,
+                                              std::vector<AlignedPointError>* points = nullptr);
 
 // The fields of `error` as a pretty-printed JSON object, named as in the struct.
 std::string TrajectoryErrorJson(const TrajectoryError& error);

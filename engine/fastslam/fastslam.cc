@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <numbers>
 #include <thread>
@@ -26,7 +27,7 @@ namespace {
 
 constexpr char kCheckpointKind[] = "grove fastslam";
 // FastSLAM's checkpoint body layout; bumped whenever it changes.
-constexpr uint32_t kFastSlamFormatVersion = 1;
+constexpr uint32_t kFastSlamFormatVersion = 2;
 
 // The landmark trees' degree, 2^kLog2Degree (see the README for the measurement behind it).
 constexpr int kLog2Degree = 3;
@@ -44,7 +45,7 @@ struct StepRecord {
   uint8_t unused[7] = {};
 };
 
-Status CheckObservation(size_t k, const LandmarkObservation& z) {
+Status CheckObservation(size_t k, const LandmarkObservation& z, bool known) {
   if (!std::isfinite(z.range_m) || !std::isfinite(z.bearing_rad)) {
     return InvalidArgumentError(fmt::format(
         "observation {}: range = {}, bearing = {}: must be finite", k, z.range_m, z.bearing_rad));
@@ -57,8 +58,14 @@ Status CheckObservation(size_t k, const LandmarkObservation& z) {
     return InvalidArgumentError(
         fmt::format("observation {}: bearing = {}: must be in (-pi, pi]", k, z.bearing_rad));
   }
-  if (z.id < 0) {
-    return InvalidArgumentError(fmt::format("observation {}: id = {}: must be >= 0", k, z.id));
+  if (known && z.id < 0) {
+    return InvalidArgumentError(
+        fmt::format("observation {}: id = {}: must be >= 0 under known association", k, z.id));
+  }
+  if (!known && !(z.id >= -1 && z.id <= INT32_MAX)) {
+    return InvalidArgumentError(fmt::format(
+        "observation {}: id = {}: must be -1 (none) or in [0, 2^31) under unknown association", k,
+        z.id));
   }
   return Status::Ok();
 }
@@ -136,7 +143,7 @@ class FastSlam::Impl {
           t_s));
     }
     for (size_t k = 0; k < z.size(); ++k) {
-      Status s = CheckObservation(k, z[k]);
+      Status s = CheckObservation(k, z[k], !model_.unknown_association());
       if (!s.ok()) return Status(s.code(), fmt::format("scan at t = {}: {}", t_s, s.message()));
     }
     GROVE_RETURN_IF_ERROR(driver_.CheckNotFailed("cannot take another scan"));
@@ -145,6 +152,7 @@ class FastSlam::Impl {
       StepRecord record;
       record.kind = kScanUpdate;
       log_.push_back(record);
+      model_.NoteScan(ScanStep{z});
       Status s = driver_.Update(t_s, ScanStep{z});
       if (!s.ok()) {
         log_.pop_back();
@@ -206,10 +214,11 @@ class FastSlam::Impl {
 
   std::vector<LandmarkEstimate> HeaviestLandmarks() const {
     std::vector<LandmarkEstimate> out;
-    model_.trie().ForEach(
-        model_.map(driver_.filter().heaviest()), [&](uint64_t id, const fastslam::Landmark& l) {
-          out.push_back({static_cast<int64_t>(id), l.x_m, l.y_m, l.xx, l.xy, l.yy});
-        });
+    model_.trie().ForEach(model_.map(driver_.filter().heaviest()),
+                          [&](uint64_t id, const fastslam::Landmark& l) {
+                            out.push_back({static_cast<int64_t>(id), l.x_m, l.y_m, l.xx, l.xy, l.yy,
+                                           model_.unknown_association() ? l.tag : -1});
+                          });
     return out;
   }
 
@@ -224,6 +233,7 @@ class FastSlam::Impl {
     model_.trie().ForEach(model_.map(driver_.filter().heaviest()),
                           [&](uint64_t, const fastslam::Landmark&) { ++landmarks; });
     s.landmarks = landmarks;
+    if (model_.unknown_association()) s.association = model_.counts(driver_.filter().heaviest());
     s.map_memory = model_.map_memory();
     s.trajectory_memory = model_.path_memory();
     return s;

@@ -1,7 +1,9 @@
 // FastSlamConfig's field table, its validation, the names of its enums and the summary's report.
 #include <fmt/format.h>
 
+#include <cmath>
 #include <numbers>
+#include <utility>
 
 #include "grove/fastslam.h"
 
@@ -47,6 +49,25 @@ const std::vector<ConfigField<FastSlamConfig>>& FastSlamConfigFields() {
                   "Resampling scheme"),
       RealField("resample_threshold", &C::resample_threshold, I::LeftOpen(0, 1), kChangesResults,
                 "Resample after a scan when ESS/N is below this; 1 resamples every scan"),
+      ChoiceField("association", &C::association, {"known", "ml", "ml_exclusive"}, kChangesResults,
+                  "Data association: known (observation ids), ml (maximum likelihood with "
+                  "gates), ml_exclusive (ml, one landmark per detection in a scan)"),
+      RealField("reject_gate", &C::reject_gate, I::LeftOpen(0, 1e6), kChangesResults,
+                "ml: associate inside this gate (gate_unit)"),
+      RealField("augment_gate", &C::augment_gate, I::LeftOpen(0, 1e6), kChangesResults,
+                "ml: a new landmark beyond this gate of every landmark (gate_unit)"),
+      ChoiceField("gate_unit", &C::gate_unit, {"distance2", "probability"}, kChangesResults,
+                  "ml: gates as squared Mahalanobis distances or chi-square probabilities"),
+      ChoiceField("evidence", &C::evidence, {"off", "on"}, kChangesResults,
+                  "ml: remove landmarks in view and not seen (existence evidence)"),
+      IntegerField("evidence_threshold", &C::evidence_threshold, -1000000, 1000000, kChangesResults,
+                   "ml: remove a landmark when its evidence falls below this"),
+      RealField("sensor_range_m", &C::sensor_range_m, I::LeftOpen(0, 1e6), kChangesResults,
+                "ml evidence: a landmark is in view within this range, metres"),
+      RealField("sensor_fov_rad", &C::sensor_fov_rad, I::LeftOpen(0, 2 * kPi), kChangesResults,
+                "ml evidence: ... and within this field of view, radians"),
+      RealField("index_cell_m", &C::index_cell_m, I::Closed(0.05, 1e4), kChangesResults,
+                "ml: cell side of the landmark index, metres (8 landmarks a cell)"),
       IntegerField("threads", &C::threads, 0, 256, kChangesSpeedOnly,
                    "Worker threads; 0: one per hardware thread"),
       IntegerField("batch", &C::batch, 1, int64_t{1} << 31, kChangesSpeedOnly,
@@ -63,7 +84,23 @@ Status FastSlamConfig::Validate() const {
         "encoder_offset_m = {}: must be below wheelbase_m = {} for the guivant_nebot vehicle",
         encoder_offset_m, wheelbase_m));
   }
+  if (gate_unit == FastSlamGateUnit::kProbability) {
+    for (auto [name, v] : {std::pair{"reject_gate", reject_gate}, {"augment_gate", augment_gate}}) {
+      if (!(v < 1)) {
+        return InvalidArgumentError(
+            fmt::format("{} = {}: must be below 1 for gate_unit = probability", name, v));
+      }
+    }
+  }
+  if (!(augment_gate >= reject_gate)) {
+    return InvalidArgumentError(fmt::format("augment_gate = {}: must be at least reject_gate = {}",
+                                            augment_gate, reject_gate));
+  }
   return Status::Ok();
+}
+
+double FastSlamGateDistance2(double gate, FastSlamGateUnit unit) {
+  return unit == FastSlamGateUnit::kDistance2 ? gate : -2 * std::log1p(-gate);
 }
 
 const char* FastSlamFilterName(FastSlamFilter filter) {
@@ -80,7 +117,14 @@ std::string FastSlamSummary::BriefReport() const {
              "live nodes ({:.1f} MiB, peak {:.1f} MiB), paths {} live nodes ({:.1f} MiB).",
              controls, scans, observations, landmarks, map_memory.live_nodes,
              map_memory.live_bytes / 1048576.0, map_memory.peak_live_bytes / 1048576.0,
-             trajectory_memory.live_nodes, trajectory_memory.live_bytes / 1048576.0);
+             trajectory_memory.live_nodes, trajectory_memory.live_bytes / 1048576.0) +
+         (association.associated + association.created + association.ignored == 0
+              ? std::string()
+              : fmt::format(" Association (heaviest particle): {} associated, {} new, {} "
+                            "ignored, {} removed, {} dropped; {} of {} tagged associations wrong.",
+                            association.associated, association.created, association.ignored,
+                            association.removed, association.dropped, association.wrong,
+                            association.tagged));
 }
 
 }  // namespace grove

@@ -18,6 +18,16 @@
 //     drawn pose. Copies of one parent draw distinct poses (Bailey's order: resample, then
 //     sample). Both filters initialise new landmarks from the pose.
 //
+// Unknown association (config.association != kKnown): the map is keyed by SpatialKey (a
+// landmark's cell and a slot in it) instead of by id. At a scan each particle finds the
+// candidates of every detection with a range query of its own trie, decides with the gates
+// (data_association.h), adds the associated detections' likelihoods and p0 for the others, and
+// then (FastSLAM 1.0 in Advance, 2.0 in Complete from the drawn pose) updates the associated
+// landmarks, lowers the evidence of those in view and not seen (removing the ones below the
+// threshold), moves an updated landmark whose mean left its cell to a slot of its new cell, and
+// adds the new landmarks. FastSLAM 2.0 decides from the predicted pose mean (Bailey's order);
+// the matches Advance() found are kept per particle and gathered with it for Complete().
+//
 // Paths: a particle does not store a pose per step. Its history holds one entry per path
 // segment: the pose and particle index at the first prediction after the start or a scan.
 // Within a segment a particle keeps its index (resampling happens only at scans), so its poses
@@ -31,6 +41,7 @@
 #include <fmt/format.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <span>
@@ -41,6 +52,7 @@
 #include "concurrency/worker_pool.h"
 #include "engine/ancestry.h"
 #include "engine/checkpoint_io.h"
+#include "engine/fastslam/data_association.h"
 #include "engine/fastslam/landmark_math.h"
 #include "engine/fastslam/vehicle_model.h"
 #include "engine/generation.h"
@@ -96,7 +108,15 @@ class FastSlamModel {
         trie_(1, slots),
         history_(slots),
         maps_(&trie_, n_),
-        paths_(&history_, n_) {
+        paths_(&history_, n_),
+        ml_(config.association != FastSlamAssociation::kKnown),
+        params_{FastSlamGateDistance2(config.reject_gate, config.gate_unit),
+                FastSlamGateDistance2(config.augment_gate, config.gate_unit),
+                config.association == FastSlamAssociation::kExclusive, config.index_cell_m, noise_},
+        log_p0_(NewLandmarkLogLikelihood(noise_, params_.augment_gate)),
+        counts_(ml_ ? n_ : 0),
+        pending_(ml_ && config.filter == FastSlamFilter::kFastSlam2 ? n_ : 0),
+        scratch_(slots) {
     const VehiclePose start{config.start_x_m, config.start_y_m,
                             WrapAngle(config.start_heading_rad)};
     pose_.assign(n_, start);
@@ -111,6 +131,15 @@ class FastSlamModel {
   }
 
   size_t size() const { return n_; }
+
+  // Before each scan's update: the longest range so far bounds the landmarks' covariances
+  // (SearchRadius()).
+  void NoteScan(const ScanStep& scan) {
+    for (const LandmarkObservation& z : scan.observations)
+      max_range_ = std::max(max_range_, z.range_m);
+  }
+  bool unknown_association() const { return ml_; }
+  const AssociationCounts& counts(size_t i) const { return counts_[i]; }
 
   // The next Predict() is the first of a path segment (after the start or a scan).
   void set_segment_start(bool v) { segment_start_ = v; }
@@ -182,6 +211,7 @@ class FastSlamModel {
   // of the observations of known landmarks); Complete() draws and updates after resampling.
   Status Advance(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot,
                  double* log_w) {
+    if (ml_) return AdvanceUnknown(scan, begin, end, slot, log_w);
     if (scan.observations.empty()) return Status::Ok();
     for (size_t i = begin; i < end; ++i) {
       double lw = 0;
@@ -218,6 +248,14 @@ class FastSlamModel {
       pose_[i] = drawn;
       unit_[i] = Unit{std::cos(drawn.heading_rad), std::sin(drawn.heading_rad)};
       cov_[i] = PoseCovariance{};
+      if (ml_) {
+        // The matches Advance() found from the predicted mean (a copy has its parent's).
+        Scratch& sc = scratch_[slot];
+        sc.matches = pending_[i];
+        Decide(sc.matches, scan.observations.size(), params_, &sc.decisions);
+        GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
+        continue;
+      }
       double unused = 0;
       GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &unused));
     }
@@ -232,6 +270,8 @@ class FastSlamModel {
       GatherValues(parents, workers, &proposal_mu_);
       GatherValues(parents, workers, &proposal_sigma_);
     }
+    if (ml_) GatherValues(parents, workers, &counts_);
+    if (!pending_.empty()) GatherValues(parents, workers, &pending_);
     maps_.Gather(parents, workers);
     paths_.Gather(parents, workers);
   }
@@ -276,6 +316,8 @@ class FastSlamModel {
     w->PutBytes(cov_.data(), n_ * sizeof(PoseCovariance));
     w->PutBytes(unit_.data(), n_ * sizeof(Unit));
     w->Put<uint8_t>(segment_start_ ? 1 : 0);
+    w->Put<double>(max_range_);
+    w->PutBytes(counts_.data(), counts_.size() * sizeof(AssociationCounts));
     trie_.Save(maps_.roots(), w);
     SegmentHistory::Save(paths_.roots(), w);
   }
@@ -310,6 +352,20 @@ class FastSlamModel {
     uint8_t segment = 0;
     GROVE_RETURN_IF_ERROR(r->Get("segment flag", &segment));
     if (segment > 1) return r->Error("segment flag", "not 0 or 1");
+    double max_range = 0;
+    GROVE_RETURN_IF_ERROR(r->Get("longest range", &max_range));
+    if (!(max_range >= 0) || !std::isfinite(max_range)) {
+      return r->Error("longest range", "negative or not finite");
+    }
+    std::vector<AssociationCounts> counts(counts_.size());
+    GROVE_RETURN_IF_ERROR(r->GetBytes("association counts", counts.data(),
+                                      counts.size() * sizeof(AssociationCounts)));
+    for (const AssociationCounts& c : counts) {
+      for (int64_t v :
+           {c.associated, c.created, c.ignored, c.removed, c.dropped, c.tagged, c.wrong}) {
+        if (v < 0) return r->Error("association counts", "a count is negative");
+      }
+    }
     std::vector<typename Trie::Node*> roots;
     GROVE_RETURN_IF_ERROR(trie_.Load(r, n_, 0, &ValidLandmark, &roots));
     if (steps >= UINT32_MAX) {
@@ -336,6 +392,8 @@ class FastSlamModel {
     cov_.swap(cov);
     unit_.swap(unit);
     segment_start_ = segment == 1;
+    max_range_ = max_range;
+    counts_.swap(counts);
     maps_.Replace(std::move(roots));
     paths_.Replace(std::move(heads));
     return Status::Ok();
@@ -348,7 +406,7 @@ class FastSlamModel {
 
   static bool ValidLandmark(const Landmark& l) {
     return std::isfinite(l.x_m) && std::isfinite(l.y_m) && std::isfinite(l.xx) &&
-           std::isfinite(l.xy) && std::isfinite(l.yy) && l.xx >= 0 && l.yy >= 0;
+           std::isfinite(l.xy) && std::isfinite(l.yy) && l.xx >= 0 && l.yy >= 0 && l.tag >= -1;
   }
 
   static Eigen::Matrix3d Full(const PoseCovariance& c) {
@@ -441,6 +499,186 @@ class FastSlamModel {
     return Status::Ok();
   }
 
+  // ---- Unknown association ----
+
+  struct alignas(kFalseSharingBytes) Scratch {
+    std::vector<Match> matches;
+    std::vector<Decision> decisions;
+    std::vector<uint64_t> keys;
+  };
+
+  // Matches and decisions of particle i's scan seen from `pose`, into sc.
+  Status DecideScan(const ScanStep& scan, size_t i, const VehiclePose& pose, Scratch* sc) const {
+    sc->matches.clear();
+    Status s = FindMatches(trie_, maps_[i], pose, scan.observations, params_, max_range_,
+                           /*use_index=*/true, &sc->matches);
+    if (!s.ok()) return Status(s.code(), fmt::format("particle {}, {}", i, s.message()));
+    Decide(sc->matches, scan.observations.size(), params_, &sc->decisions);
+    return Status::Ok();
+  }
+
+  Status AdvanceUnknown(const ScanStep& scan, size_t begin, size_t end, int slot, double* log_w) {
+    Scratch& sc = scratch_[slot];
+    if (scan.observations.empty()) {
+      // Nothing to weigh or draw; the evidence of what is in view still falls.
+      if (config_.evidence == FastSlamEvidence::kOff) return Status::Ok();
+      sc.matches.clear();
+      sc.decisions.clear();
+      for (size_t i = begin; i < end; ++i) GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
+      return Status::Ok();
+    }
+    const bool fs2 = config_.filter == FastSlamFilter::kFastSlam2;
+    for (size_t i = begin; i < end; ++i) {
+      GROVE_RETURN_IF_ERROR(DecideScan(scan, i, pose_[i], &sc));
+      double lw = 0;
+      Eigen::Vector3d mu;
+      Eigen::Matrix3d sigma;
+      if (fs2) {
+        mu = ToVector(pose_[i]);
+        sigma = Covariance(i);
+      }
+      for (size_t j = 0; j < sc.decisions.size(); ++j) {
+        const Decision& d = sc.decisions[j];
+        if (d.kind != Decision::kAssociated) {
+          lw += log_p0_;
+        } else if (!fs2) {
+          lw += d.log_likelihood;
+        } else {
+          const LandmarkObservation& z = scan.observations[j];
+          const Landmark* l = trie_.Find(maps_[i], d.key);
+          double w = 0;
+          Status s =
+              ProposalStep(&mu, &sigma, *l, RangeBearing{z.range_m, z.bearing_rad}, noise_, &w);
+          if (!s.ok()) return ParticleError(i, z, s);
+          lw += w;
+        }
+      }
+      if (fs2) {
+        proposal_mu_[i] = mu;
+        proposal_sigma_[i] = Upper(sigma);
+        pending_[i] = sc.matches;
+      } else {
+        GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
+      }
+      log_w[i] += lw;
+    }
+    return Status::Ok();
+  }
+
+  // The first free slot of `cell` in particle i's map, or -1.
+  int FreeSlot(size_t i, const Cell& cell) const {
+    for (int k = 0; k < kSlotsPerCell; ++k) {
+      if (trie_.Find(maps_[i], SpatialKey(cell, k)) == nullptr) return k;
+    }
+    return -1;
+  }
+
+  // Stores `l` in a free slot of the cell of its mean; counts a drop when the cell is full.
+  Status Insert(size_t i, int slot, const Landmark& l) {
+    Cell cell;
+    if (!CellOf(l.x_m, l.y_m, params_.cell_m, &cell)) {
+      return FailedPreconditionError(fmt::format(
+          "particle {}: a landmark at ({}, {}) is outside the landmark index (|x|, |y| < {} m)", i,
+          l.x_m, l.y_m, static_cast<double>(kMaxCell) * params_.cell_m));
+    }
+    const int k = FreeSlot(i, cell);
+    if (k < 0) {
+      ++counts_[i].dropped;
+      return Status::Ok();
+    }
+    if (!trie_.Update(&maps_[i], SpatialKey(cell, k), slot,
+                      [&](Landmark& leaf, bool) { leaf = l; })) {
+      return NoMemory(i, "map");
+    }
+    return Status::Ok();
+  }
+
+  // Applies particle i's decisions in sc from its pose now (see the file comment).
+  Status ApplyScan(const ScanStep& scan, size_t i, int slot, Scratch* sc) {
+    const VehiclePose pose = pose_[i];
+    AssociationCounts& counts = counts_[i];
+    std::vector<uint64_t>& touched = sc->keys;
+    touched.clear();
+    // 1. Updates of the associated landmarks.
+    for (size_t j = 0; j < sc->decisions.size(); ++j) {
+      const Decision& d = sc->decisions[j];
+      const LandmarkObservation& z = scan.observations[j];
+      if (d.kind == Decision::kIgnored) ++counts.ignored;
+      if (d.kind != Decision::kAssociated) continue;
+      Status s;
+      int32_t tag = -1;
+      const bool ok = trie_.Update(&maps_[i], d.key, slot, [&](Landmark& l, bool) {
+        s = UpdateLandmark(pose, RangeBearing{z.range_m, z.bearing_rad}, noise_, &l, nullptr);
+        if (l.evidence < (1 << 30)) ++l.evidence;
+        tag = l.tag;
+      });
+      if (!ok) return NoMemory(i, "map");
+      if (!s.ok()) return ParticleError(i, z, s);
+      ++counts.associated;
+      if (z.id >= 0 && tag >= 0) {
+        ++counts.tagged;
+        counts.wrong += tag != z.id;
+      }
+      touched.push_back(d.key);
+    }
+    // 2. Evidence of the landmarks in view and not seen: near no detection's augment gate.
+    if (config_.evidence == FastSlamEvidence::kOn) {
+      std::vector<Match>& near = sc->matches;  // every pair within an augment gate
+      std::sort(near.begin(), near.end(),
+                [](const Match& a, const Match& b) { return a.key < b.key; });
+      const CellRect rect = CellsAround(pose.x_m, pose.y_m, config_.sensor_range_m, params_.cell_m);
+      const size_t first_missed = touched.size();
+      trie_.ForEachIf(
+          maps_[i], [&](uint64_t lo, uint64_t hi) { return KeyRangeMayHit(lo, hi, rect); },
+          [&](uint64_t key, const Landmark& l) {
+            const RangeBearing rb = Observe(pose, l.x_m, l.y_m);
+            if (!(rb.range_m <= config_.sensor_range_m) ||
+                !(std::fabs(rb.bearing_rad) <= 0.5 * config_.sensor_fov_rad)) {
+              return;
+            }
+            auto it = std::lower_bound(near.begin(), near.end(), key,
+                                       [](const Match& m, uint64_t k) { return m.key < k; });
+            if (it != near.end() && it->key == key) return;
+            touched.push_back(key);
+          });
+      for (size_t k = first_missed; k < touched.size(); ++k) {
+        bool remove = false;
+        if (!trie_.Update(&maps_[i], touched[k], slot, [&](Landmark& l, bool) {
+              --l.evidence;
+              remove = l.evidence < config_.evidence_threshold;
+            })) {
+          return NoMemory(i, "map");
+        }
+        if (remove) {
+          if (!trie_.Erase(&maps_[i], touched[k], slot)) return NoMemory(i, "map");
+          ++counts.removed;
+        }
+      }
+      touched.resize(first_missed);
+    }
+    // 3. An updated landmark whose mean left its cell moves to a slot of its new cell.
+    std::sort(touched.begin(), touched.end());
+    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+    for (uint64_t key : touched) {
+      const Landmark l = *trie_.Find(maps_[i], key);
+      Cell cell;
+      if (CellOf(l.x_m, l.y_m, params_.cell_m, &cell) && cell == CellOfKey(key)) continue;
+      if (!trie_.Erase(&maps_[i], key, slot)) return NoMemory(i, "map");
+      GROVE_RETURN_IF_ERROR(Insert(i, slot, l));
+    }
+    // 4. New landmarks.
+    for (size_t j = 0; j < sc->decisions.size(); ++j) {
+      if (sc->decisions[j].kind != Decision::kNew) continue;
+      const LandmarkObservation& z = scan.observations[j];
+      Landmark l = InitLandmark(pose, RangeBearing{z.range_m, z.bearing_rad}, noise_);
+      l.evidence = 1;
+      l.tag = z.id >= 0 ? static_cast<int32_t>(z.id) : -1;
+      GROVE_RETURN_IF_ERROR(Insert(i, slot, l));
+      ++counts.created;
+    }
+    return Status::Ok();
+  }
+
   static Status NoMemory(size_t i, const char* what) {
     return ResourceExhaustedError(fmt::format("out of memory for particle {}'s {}", i, what));
   }
@@ -464,6 +702,15 @@ class FastSlamModel {
   std::vector<Eigen::Vector3d> proposal_mu_;
   std::vector<PoseCovariance> proposal_sigma_;
   bool segment_start_ = true;
+  // Unknown association.
+  const bool ml_;
+  const AssociationParams params_;
+  const double log_p0_;
+  double max_range_ = 0;                   // the longest detection range so far
+  std::vector<AssociationCounts> counts_;  // per particle, along its ancestry
+  // FastSLAM 2.0: each particle's matches of the current scan, from Advance() to Complete().
+  std::vector<std::vector<Match>> pending_;
+  std::vector<Scratch> scratch_;  // per worker slot
 };
 
 }  // namespace grove::fastslam

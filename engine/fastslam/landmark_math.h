@@ -37,6 +37,7 @@
 #define GROVE_ENGINE_FASTSLAM_LANDMARK_MATH_H_
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <type_traits>
 
 #include "grove/status.h"
@@ -74,9 +75,12 @@ inline constexpr double kPsdTolerance = 1e-10;
 // A 3x3 covariance counts as symmetric when |A(i,j) - A(j,i)| <= kSymmetryTolerance * max |A(k,k)|.
 inline constexpr double kSymmetryTolerance = 1e-9;
 
-// A landmark's 2-D Gaussian: the leaf of the persistent landmark trie. 40 bytes, trivially
-// copyable. The three slots (xx, xy, yy) hold one of two readings, fixed by the filter that owns
-// the map (every leaf of one map uses the same reading, so no tag is stored):
+// A landmark's 2-D Gaussian: the leaf of the persistent landmark trie. 48 bytes, trivially
+// copyable. Under unknown association it also carries its existence evidence (raised when the
+// landmark is seen, lowered when it is in view and not seen) and a tag: the id an observation
+// that created it carried (a simulator's truth, for the association error rate), or -1. The three
+// slots (xx, xy, yy) hold one of two readings, fixed by the filter that owns the map (every leaf of
+// one map uses the same reading, so no tag is stored):
 //   - covariance (FastSLAM 1.0/2.0, U-FastSLAM): P = [xx xy; xy yy], m^2. Covariance() and
 //     SetCovariance() read and write it; every function below uses this reading.
 //   - square root (the SRCD filters of issue 12): the lower Cholesky factor L of P = L L^T,
@@ -87,8 +91,10 @@ struct Landmark {
   double xx = 0;
   double xy = 0;
   double yy = 0;
+  int32_t evidence = 0;
+  int32_t tag = -1;
 };
-static_assert(std::is_trivially_copyable_v<Landmark> && sizeof(Landmark) == 40);
+static_assert(std::is_trivially_copyable_v<Landmark> && sizeof(Landmark) == 48);
 
 inline Eigen::Vector2d Mean(const Landmark& l) { return {l.x_m, l.y_m}; }
 inline Eigen::Matrix2d Covariance(const Landmark& l) {

@@ -8,6 +8,8 @@
 #include <cstring>
 #include <map>
 #include <numbers>
+#include <string>
+#include <tuple>
 #include <vector>
 
 #include "alloc/node_pool.h"
@@ -145,18 +147,47 @@ std::vector<double> Fingerprint(const FastSlam& slam) {
     v.insert(v.end(), {p.pose.x_m, p.pose.y_m, p.pose.heading_rad});
   }
   for (const LandmarkEstimate& l : *landmarks) {
-    v.insert(v.end(), {static_cast<double>(l.id), l.x_m, l.y_m, l.sxx, l.sxy, l.syy});
+    v.insert(v.end(), {static_cast<double>(l.id), l.x_m, l.y_m, l.sxx, l.sxy, l.syy,
+                       static_cast<double>(l.source_id)});
   }
+  const AssociationCounts c = slam.Summary().association;
+  v.insert(v.end(), {static_cast<double>(c.associated), static_cast<double>(c.created),
+                     static_cast<double>(c.ignored), static_cast<double>(c.removed),
+                     static_cast<double>(c.wrong)});
   return v;
 }
 
-TEST_P(ByFilter, SameResultAtAnyThreadCount) {
+std::string FilterAndAssociationName(const std::tuple<FastSlamFilter, FastSlamAssociation>& p) {
+  const char* names[] = {"known", "ml", "ml_exclusive"};
+  return std::string(FastSlamFilterName(std::get<0>(p))) + "_" +
+         names[static_cast<int>(std::get<1>(p))];
+}
+
+// Both filters under known and unknown association.
+using FilterAndAssociation = std::tuple<FastSlamFilter, FastSlamAssociation>;
+class ByFilterAndAssociation : public ::testing::TestWithParam<FilterAndAssociation> {
+ protected:
+  static FastSlamConfig ConfigFor(int64_t particles, int threads = 1) {
+    FastSlamConfig c = Config(std::get<0>(GetParam()), particles, threads);
+    c.association = std::get<1>(GetParam());
+    return c;
+  }
+};
+INSTANTIATE_TEST_SUITE_P(
+    Filters, ByFilterAndAssociation,
+    ::testing::Combine(::testing::Values(FastSlamFilter::kFastSlam1, FastSlamFilter::kFastSlam2),
+                       ::testing::Values(FastSlamAssociation::kKnown,
+                                         FastSlamAssociation::kMaximumLikelihood,
+                                         FastSlamAssociation::kExclusive)),
+    [](const auto& info) { return FilterAndAssociationName(info.param); });
+
+TEST_P(ByFilterAndAssociation, SameResultAtAnyThreadCount) {
   tools::BaileySimOptions o = tools::WebmapPreset();
   o.loops = 1;
   const BaileySimulation sim = Simulate(o);
   std::vector<double> first;
   for (int threads : {1, 2, 4}) {
-    auto slam = FastSlam::Create(Config(GetParam(), 200, threads));
+    auto slam = FastSlam::Create(ConfigFor(200, threads));
     ASSERT_TRUE(slam.ok());
     Feed(sim, slam->get(), 2000);
     EXPECT_GT((*slam)->Summary().resamplings, 0);
@@ -175,11 +206,11 @@ TEST_P(ByFilter, SameResultAtAnyThreadCount) {
   }
 }
 
-TEST_P(ByFilter, CheckpointResumeIsBitIdentical) {
+TEST_P(ByFilterAndAssociation, CheckpointResumeIsBitIdentical) {
   tools::BaileySimOptions o = tools::WebmapPreset();
   o.loops = 1;
   const BaileySimulation sim = Simulate(o);
-  const FastSlamConfig config = Config(GetParam(), 50);
+  const FastSlamConfig config = ConfigFor(50);
   auto whole = FastSlam::Create(config);
   ASSERT_TRUE(whole.ok());
   Feed(sim, whole->get(), 1600);
@@ -469,6 +500,45 @@ TEST_P(ByFilter, AnAllocationFailureStopsTheEngineCleanly) {
     EXPECT_TRUE(counts.ok()) << counts.ToString();
   }
   EXPECT_GT(failures, 5);
+}
+
+// Unknown association on the simulated webmap (one loop, known noise, seed 1): the ids tag the
+// landmarks only. FastSLAM 2.0 with 100 particles: measured 0 wrong of 1,060 tagged
+// associations, 32 landmarks created for 30 in view, and a position RMSE of
+// 5.26 m (known association: 5.34 m). The bounds (1 % wrong, 40 created, 7.5 m) leave room for
+// another compiler's round-off, not for a regression.
+TEST(UnknownAssociationAccuracy, FastSlam2OnTheWebmapStaysWithinItsBounds) {
+  tools::BaileySimOptions o = tools::WebmapPreset();
+  o.loops = 1;
+  const BaileySimulation sim = Simulate(o);
+  double rmse[2] = {0, 0};  // known, ml
+  for (FastSlamAssociation a :
+       {FastSlamAssociation::kKnown, FastSlamAssociation::kMaximumLikelihood}) {
+    FastSlamConfig config = Config(FastSlamFilter::kFastSlam2, 100, 2);
+    config.association = a;
+    auto slam = FastSlam::Create(config);
+    ASSERT_TRUE(slam.ok());
+    Feed(sim, slam->get());
+    double sq = 0;
+    size_t n = 0;
+    std::map<double, Pose2> estimate;
+    for (const StampedPose& p : (*slam)->MeanTrajectory()) estimate[p.t_s] = p.pose;
+    for (const tools::BaileyPose& t : sim.truth) {
+      auto it = estimate.find(t.t_s);
+      if (it == estimate.end()) continue;
+      sq += std::pow(it->second.x_m - t.x_m, 2) + std::pow(it->second.y_m - t.y_m, 2);
+      ++n;
+    }
+    ASSERT_GT(n, sim.truth.size() / 2);
+    rmse[a == FastSlamAssociation::kKnown ? 0 : 1] = std::sqrt(sq / n);
+    if (a == FastSlamAssociation::kMaximumLikelihood) {
+      const AssociationCounts c = (*slam)->Summary().association;
+      EXPECT_GT(c.tagged, 900);
+      EXPECT_LE(c.wrong, c.tagged / 100);  // at most 1 %
+      EXPECT_LE(c.created, 40);
+    }
+  }
+  EXPECT_LT(rmse[1], 7.5);
 }
 
 }  // namespace

@@ -260,7 +260,7 @@ TEST(ObserveTest, LinearizationAtTheSensorPositionIsReported) {
 TEST(LandmarkTest, IsASmallTriviallyCopyableLeaf) {
   static_assert(std::is_trivially_copyable_v<Landmark>);
   static_assert(std::is_trivially_destructible_v<Landmark>);
-  EXPECT_EQ(sizeof(Landmark), 40u);
+  EXPECT_EQ(sizeof(Landmark), 48u);
 }
 
 TEST(LandmarkTest, CovarianceAndCholeskyReadingsRoundTrip) {

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 
@@ -589,7 +590,7 @@ TEST_F(CliTest, FastSlamSimulateRunAndEvaluate) {
                         "map.svg", "summary.json"}) {
     EXPECT_TRUE(fs::exists(a / f)) << f;
   }
-  EXPECT_EQ(Slurp(a / "landmarks.csv").rfind("id,x,y,sxx,sxy,syy\n", 0), 0u);
+  EXPECT_EQ(Slurp(a / "landmarks.csv").rfind("id,x,y,sxx,sxy,syy,source_id\n", 0), 0u);
   const std::string summary = Slurp(a / "summary.json");
   EXPECT_NE(summary.find("\"position_rmse_m\""), std::string::npos);
   EXPECT_NE(summary.find("\"landmark_accuracy\""), std::string::npos);
@@ -631,8 +632,6 @@ TEST_F(CliTest, FastSlamBadInputsStopWithFileLineColumn) {
        "2:1:", "before the first control"},
       {good_controls, "t,range,bearing,id\n0.025,inf,0.5,1\n", "observations",
        "2:", "must be finite"},
-      {good_controls, "t,range,bearing\n0.025,10,0.5\n", "observations",
-       "1:1:", "unknown data association"},
       {"t,v\n0,3\n", good_observations, "controls", "1:1:", "unknown header"},
   };
   for (const Case& c : cases) {
@@ -679,6 +678,107 @@ TEST_F(CliTest, FastSlamResumesFromAPeriodicCheckpoint) {
             (dir_ / "wrong").string());
   EXPECT_NE(o.exit_code, 0);
   EXPECT_NE(o.err.find("footslam"), std::string::npos) << o.err;
+}
+
+// Observations without an id column run under unknown association; with ids and --association
+// ml the ids only tag, and the summary and evaluate report the association against them.
+TEST_F(CliTest, FastSlamUnknownAssociationFromTheFileOrTheFlag) {
+  fs::path sim = dir_ / "sim";
+  ASSERT_EQ(Grove("fastslam simulate --out " + sim.string()).exit_code, 0);
+  std::istringstream with_ids(Slurp(sim / "observations.csv"));
+  std::string line, without_ids;
+  while (std::getline(with_ids, line)) without_ids += line.substr(0, line.rfind(',')) + "\n";
+  ASSERT_EQ(without_ids.rfind("t,range,bearing\n", 0), 0u);
+  const std::string observations = Write("no_ids.csv", without_ids);
+  const std::string controls = " --controls " + (sim / "controls.csv").string();
+  fs::path a = dir_ / "a", b = dir_ / "b";
+  Outcome o = Grove("fastslam run --no-progress --particles 20" + controls + " --observations " +
+                    observations + " --out " + a.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.err.find("no id column"), std::string::npos) << o.err;
+  std::string summary = Slurp(a / "summary.json");
+  EXPECT_NE(summary.find("\"association\": \"ml\""), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"created\""), std::string::npos) << summary;
+  o = Grove("fastslam run --no-progress --particles 20 --association ml" + controls +
+            " --observations " + (sim / "observations.csv").string() + " --out " + b.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  summary = Slurp(b / "summary.json");
+  EXPECT_NE(summary.find("\"error_rate\": 0"), std::string::npos) << summary;
+  // Same decisions with and without the tags: the trajectories agree.
+  EXPECT_EQ(Slurp(a / "trajectory.csv"), Slurp(b / "trajectory.csv"));
+  o = Grove("fastslam evaluate --truth " + (sim / "truth.csv").string() + " --trajectory " +
+            (b / "trajectory.csv").string() + " --landmarks " + (b / "landmarks.csv").string() +
+            " --landmarks-truth " + (sim / "landmarks_truth.csv").string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.out.find("\"matched_by\": \"source_id\""), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("\"duplicates\""), std::string::npos) << o.out;
+}
+
+// The bundled Victoria Park dataset end to end on its first two minutes.
+TEST_F(CliTest, VictoriaParkRunsAShortSegment) {
+  fs::path out = dir_ / "park";
+  Outcome o = Grove("fastslam victoria-park --no-progress --particles 30 --until 120 --out " +
+                    out.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  for (const char* f : {"trajectory.csv", "heaviest_trajectory.csv", "landmarks.csv",
+                        "gps_error.csv", "map.png", "map.svg", "summary.json"}) {
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  }
+  const nlohmann::json summary = nlohmann::json::parse(Slurp(out / "summary.json"));
+  EXPECT_EQ(summary["config"]["vehicle"], "guivant_nebot");
+  EXPECT_EQ(summary["config"]["association"], "ml");
+  const double mean = summary["gps"]["mean_m"].get<double>();
+  // The documented bound for this segment (README, "Victoria Park"): 2 m.
+  EXPECT_LT(mean, 2.0) << summary["gps"].dump();
+  EXPECT_GT(summary["gps"]["fixes"].get<int>(), 250);
+  EXPECT_GT(summary["landmarks"].get<int>(), 20);
+  EXPECT_EQ(summary["inputs"]["scans_before_the_first_control"], 1);
+}
+
+// A bad or truncated dataset file: file:line:column (or the file and what is wrong), exit 3,
+// no output directory.
+TEST_F(CliTest, VictoriaParkBadDataStopsWithTheFileAndLine) {
+  const fs::path data = dir_ / "data";
+  fs::create_directories(data);
+  for (const char* f : {"inputs.dat.gz", "measurements.dat.gz", "gps.dat.gz"}) {
+    fs::copy_file(fs::path(GROVE_SOURCE_DIR) / "tools/data/victoria_park" / f, data / f);
+  }
+  fs::path out = dir_ / "out";
+  auto run = [&] {
+    return Grove("fastslam victoria-park --no-progress --particles 5 --until 10 --data " +
+                 data.string() + " --out " + out.string());
+  };
+  ASSERT_EQ(run().exit_code, 0);
+  fs::remove_all(out);
+  // A plain file beside the compressed one is read first.
+  std::ofstream(data / "measurements.dat") << "     0.852   20.46202    0.88575    0.35404\n"
+                                           << "     0.900   abc    0.88575    0.35404\n";
+  Outcome o = run();
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find((data / "measurements.dat").string() + ":2:14:"), std::string::npos)
+      << o.err;
+  EXPECT_NE(o.err.find("range"), std::string::npos) << o.err;
+  EXPECT_FALSE(fs::exists(out));
+  std::ofstream(data / "measurements.dat") << "     0.852   20.46202    4.5    0.35404\n";
+  o = run();
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find(":1:26: bearing = 4.5: must be in [0, pi]"), std::string::npos) << o.err;
+  std::ofstream(data / "measurements.dat") << "     0.852   20.46202\n";
+  o = run();
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find("2 numbers where 4 are expected"), std::string::npos) << o.err;
+  fs::remove(data / "measurements.dat");
+  // A truncated gzip file.
+  const std::string gz = Slurp(data / "inputs.dat.gz");
+  std::ofstream(data / "inputs.dat.gz", std::ios::binary) << gz.substr(0, gz.size() / 2);
+  o = run();
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find("inputs.dat.gz"), std::string::npos) << o.err;
+  EXPECT_FALSE(fs::exists(out));
+  fs::remove(data / "gps.dat.gz");
+  o = run();
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_FALSE(fs::exists(out));
 }
 
 }  // namespace

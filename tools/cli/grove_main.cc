@@ -1,6 +1,6 @@
 // grove: the command-line front end. Subcommands:
 //   grove footslam run|simulate|evaluate|render ...
-//   grove fastslam run|simulate|evaluate ...
+//   grove fastslam run|victoria-park|simulate|evaluate ...
 //   grove bench paper|scaling ...
 #include <fmt/format.h>
 
@@ -17,6 +17,7 @@
 #include "tools/fastslam_run.h"
 #include "tools/fastslam_simulator.h"
 #include "tools/footslam_run.h"
+#include "tools/victoria_park.h"
 
 namespace {
 
@@ -90,6 +91,22 @@ int Main(int argc, char** argv) {
       fs_run->add_option("--landmarks-truth", fs_run_options.landmarks_truth_path,
                          "landmarks_truth.csv (id,x,y): scored and drawn");
   gt::RunFlags<grove::FastSlamConfig> fs_run_flags(fs_run, grove::FastSlamConfigFields());
+  CLI::App* fs_park = fastslam->add_subcommand(
+      "victoria-park",
+      "Run FastSLAM on the bundled Victoria Park dataset (unknown association) and score it "
+      "against GPS");
+  gt::FastSlamRunOptions fs_park_options;
+  fs_park_options.victoria_park_dir = gt::BundledVictoriaParkDir();
+  CLI::Option* fs_park_data =
+      fs_park
+          ->add_option("--data", fs_park_options.victoria_park_dir,
+                       "Directory holding inputs.dat, measurements.dat and gps.dat (or .gz)")
+          ->capture_default_str();
+  fs_park
+      ->add_option("--until", fs_park_options.until_s,
+                   "Use the records up to this time, seconds (default: the whole run)")
+      ->check(CLI::NonNegativeNumber);
+  gt::RunFlags<grove::FastSlamConfig> fs_park_flags(fs_park, grove::FastSlamConfigFields());
   CLI::App* fs_evaluate =
       fastslam->add_subcommand("evaluate", "Pose and landmark errors against the truth");
   std::string fs_eval_truth, fs_eval_trajectory, fs_eval_landmarks, fs_eval_landmarks_truth;
@@ -185,6 +202,13 @@ int Main(int argc, char** argv) {
                                            {fs_landmarks_truth, "--landmarks-truth"}});
     if (code >= 0) return code;
     return gt::RunFastSlamCommand(config, fs_run_options);
+  }
+  if (*fs_park) {
+    grove::FastSlamConfig config = gt::VictoriaParkConfig();
+    const int code =
+        fs_park_flags.Prepare(&config, &fs_park_options.run, {{fs_park_data, "--data"}});
+    if (code >= 0) return code;
+    return gt::RunFastSlamCommand(config, fs_park_options);
   }
   if (*fs_evaluate) {
     return gt::FastSlamEvaluateCommand(fs_eval_truth, fs_eval_trajectory, fs_eval_landmarks,

@@ -56,6 +56,27 @@ enum class FastSlamVehicle {
   kGuivantNebot,
 };
 
+enum class FastSlamAssociation {
+  // Each observation names its landmark (LandmarkObservation::id).
+  kKnown,
+  // Unknown association, per particle: maximum likelihood inside the reject gate, a new
+  // landmark beyond the augment gate of every landmark, the detection ignored in between
+  // (engine/fastslam/data_association.h). Observation ids, when given (>= 0), only tag the
+  // landmarks they create, for the association error rate.
+  kMaximumLikelihood,
+  // As kMaximumLikelihood, and within a scan one landmark per detection and one detection per
+  // landmark (greedy by likelihood).
+  kExclusive,
+};
+
+// How the gates are given.
+enum class FastSlamGateUnit {
+  kDistance2,    // squared Mahalanobis distances (Bailey's 4 and 25)
+  kProbability,  // chi-square (2 degrees of freedom) probabilities: d2 = -2 ln(1 - p)
+};
+
+enum class FastSlamEvidence { kOff, kOn };
+
 struct FastSlamConfig {
   // ---- Options that change results ----
 
@@ -94,6 +115,29 @@ struct FastSlamConfig {
   // NEFFECTIVE = 0.75 * NPARTICLES).
   double resample_threshold = 0.75;
 
+  // ---- Unknown data association (association != kKnown) ----
+
+  // Default: kKnown.
+  FastSlamAssociation association = FastSlamAssociation::kKnown;
+  // Gates, in gate_unit. Range: (0, 1e6] (probabilities: (0, 1)); augment >= reject.
+  // Defaults: Bailey's 4 and 25 (squared Mahalanobis distances).
+  double reject_gate = 4.0;
+  double augment_gate = 25.0;
+  FastSlamGateUnit gate_unit = FastSlamGateUnit::kDistance2;
+  // Landmark existence evidence (Montemerlo): a new landmark starts at 1, gains 1 at each scan
+  // that associates it and loses 1 at each scan that has it in view (range <= sensor_range_m,
+  // |bearing| <= sensor_fov_rad / 2) without a detection inside its augment gate; it is removed
+  // when its evidence falls below evidence_threshold. Default: on, threshold 0.
+  FastSlamEvidence evidence = FastSlamEvidence::kOn;
+  int64_t evidence_threshold = 0;
+  // The sensor's view for the evidence. Range: (0, 1e6] m and (0, 2 pi]. Defaults: Bailey's
+  // MAX_RANGE 30 m and the front half-plane.
+  double sensor_range_m = 30;
+  double sensor_fov_rad = 3.141592653589793;
+  // Side of the spatial index's cells, metres (at most 8 landmarks a cell: a ninth is dropped
+  // and counted). Range: [0.05, 1e4]. Default: 5.
+  double index_cell_m = 5;
+
   // ---- Options that change only speed ----
 
   // Worker threads; 0 means one per hardware thread. Range: 0..256. Default: 0.
@@ -105,6 +149,9 @@ struct FastSlamConfig {
   Status Validate() const;
 };
 
+// A gate as a squared Mahalanobis distance.
+double FastSlamGateDistance2(double gate, FastSlamGateUnit unit);
+
 const char* FastSlamFilterName(FastSlamFilter filter);     // "fastslam1", "fastslam2"
 const char* FastSlamVehicleName(FastSlamVehicle vehicle);  // "bailey", "guivant_nebot"
 
@@ -112,14 +159,17 @@ const char* FastSlamVehicleName(FastSlamVehicle vehicle);  // "bailey", "guivant
 const std::vector<ConfigField<FastSlamConfig>>& FastSlamConfigFields();
 
 // One detection of a scan: range (m, >= 0), bearing (rad, in (-pi, pi], counter-clockwise from
-// the heading) and the landmark's id (>= 0; known association).
+// the heading) and the landmark's id (known association: >= 0; unknown: -1 for none, or a
+// simulator's truth below 2^31 that only tags the landmarks it creates).
 struct LandmarkObservation {
   double range_m = 0;
   double bearing_rad = 0;
   int64_t id = 0;
 };
 
-// A landmark of a particle's map: its id, mean (m) and covariance (m^2).
+// A landmark of a particle's map: its id (under unknown association its spatial key), mean (m)
+// and covariance (m^2), and under unknown association the id the observation that created it
+// carried (-1 for none).
 struct LandmarkEstimate {
   int64_t id = 0;
   double x_m = 0;
@@ -127,14 +177,27 @@ struct LandmarkEstimate {
   double sxx = 0;
   double sxy = 0;
   double syy = 0;
+  int64_t source_id = -1;
+};
+
+// What unknown association did along one particle's ancestry, over the whole run.
+struct AssociationCounts {
+  int64_t associated = 0;  // detections that updated a landmark
+  int64_t created = 0;     // detections that started a landmark
+  int64_t ignored = 0;     // detections between the gates
+  int64_t removed = 0;     // landmarks removed by their existence evidence
+  int64_t dropped = 0;     // landmarks not stored: their cell of the index was full
+  int64_t tagged = 0;      // associations of a detection and a landmark that both carry an id
+  int64_t wrong = 0;       // ... whose ids differ
 };
 
 struct FastSlamSummary : FilterSummary {
-  int64_t controls = 0;       // Control() calls
-  int64_t scans = 0;          // Scan() calls
-  int64_t observations = 0;   // detections over all scans
-  int64_t predict_steps = 0;  // filter steps that only predicted
-  int64_t landmarks = 0;      // in the heaviest particle's map
+  int64_t controls = 0;           // Control() calls
+  int64_t scans = 0;              // Scan() calls
+  int64_t observations = 0;       // detections over all scans
+  int64_t predict_steps = 0;      // filter steps that only predicted
+  int64_t landmarks = 0;          // in the heaviest particle's map
+  AssociationCounts association;  // the heaviest particle's (unknown association)
   MemoryUse map_memory;
   MemoryUse trajectory_memory;
   // One paragraph for a terminal.

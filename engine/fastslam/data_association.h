@@ -1,0 +1,166 @@
+// Unknown data association for landmark FastSLAM, per particle and scan: maximum likelihood
+// with a reject and an augment gate (Bailey's data_associate; Montemerlo's thesis, ch. 4).
+//
+// For detection z and a landmark of the particle's map, v = z - h(landmark) from the particle's
+// pose, S = Hl P Hl^T + R, d2 = v^T S^-1 v and l = log N(v; 0, S) (ObservationLogLikelihood).
+//   - Associated: among the landmarks with d2 < reject_gate, the one of largest l.
+//   - New: d2 > augment_gate for every landmark; the detection starts a landmark.
+//   - Ignored: otherwise (an ambiguous detection updates nothing).
+// Exclusive association (optional): one landmark per detection and one detection per landmark
+// within a scan, pairs inside the reject gate taken greedily by l (ties: detection, then key).
+//
+// Weight. A detection that updates no landmark (new or ignored) contributes the new-feature
+// likelihood p0 to the particle's weight (Montemerlo's p0, the threshold for a new feature):
+// the density of a detection at the augment gate of a landmark just created from it, whose
+// innovation covariance is S = Hl (G R G^T) Hl^T + R = 2R:
+//   log p0 = -augment_gate / 2 - log(2 pi) - log(det(2R)) / 2.
+//
+// Candidates. The landmarks compared with a detection come from the particle's spatial trie
+// (spatial_key.h): those whose mean lies within SearchRadius() of the detection's point. The
+// radius is a bound, not a tuning: every landmark with d2 <= augment_gate lies inside it, so the
+// decisions equal those of a scan over the whole map (tested). Derivation, with D the distance
+// between the detection's point and the landmark's mean, r_l the landmark's range, dr and db the
+// innovation's range and bearing parts: D <= |dr| + r_l |db| (an arc then a radial segment);
+// with T = diag(1, r_l), T S T = Rot P Rot^T + diag(sr^2, r_l^2 sb^2), so
+// d2 >= (dr^2 + r_l^2 db^2) / (lP + sr^2 + r_l^2 sb^2) >= D^2 / (2 (lP + sr^2 + r_l^2 sb^2)),
+// where lP bounds the largest eigenvalue of any landmark's P. An EKF update never grows P, and
+// a landmark starts at G R G^T, whose eigenvalues are sr^2 and (r sb)^2 for its first range r;
+// so lP = max(sr^2, (r_max sb)^2) with r_max the longest range of any detection so far. With
+// r_l <= r + D and k = 2 augment_gate, d2 > augment_gate whenever
+//   (1 - a) D^2 - 2 a r D - a r^2 - k (lP + sr^2) > 0,   a = k sb^2,
+// i.e. beyond the positive root of that quadratic. When a >= 1 there is no such bound and the
+// radius is infinite (every landmark is a candidate).
+#ifndef GROVE_ENGINE_FASTSLAM_DATA_ASSOCIATION_H_
+#define GROVE_ENGINE_FASTSLAM_DATA_ASSOCIATION_H_
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "engine/fastslam/landmark_math.h"
+#include "engine/fastslam/spatial_key.h"
+#include "grove/fastslam.h"
+#include "grove/status.h"
+
+namespace grove::fastslam {
+
+struct AssociationParams {
+  double reject_gate = 4;    // squared Mahalanobis distance
+  double augment_gate = 25;  // squared Mahalanobis distance, >= reject_gate
+  bool exclusive = false;
+  double cell_m = 5;  // the spatial keys' cell side
+  SensorNoise noise;
+};
+
+// log p0 above.
+double NewLandmarkLogLikelihood(const SensorNoise& noise, double augment_gate);
+
+// The candidate radius above for a detection at range_m, when no detection so far had a range
+// beyond max_range_m; +infinity when the bound does not exist.
+double SearchRadius(double range_m, double max_range_m, const SensorNoise& noise,
+                    double augment_gate);
+
+// A detection and a landmark within its augment gate.
+struct Match {
+  uint32_t detection = 0;
+  uint64_t key = 0;
+  double log_likelihood = 0;
+  double d2 = 0;
+};
+
+struct Decision {
+  enum Kind : uint8_t { kAssociated, kNew, kIgnored };
+  Kind kind = kNew;
+  uint64_t key = 0;           // kAssociated: the landmark
+  double log_likelihood = 0;  // kAssociated: its l
+};
+
+// The decisions for `detections` detections from their matches (every pair with
+// d2 <= augment_gate, in any order; reordered).
+void Decide(std::span<Match> matches, size_t detections, const AssociationParams& params,
+            std::vector<Decision>* out);
+
+// The detection's point in the plane from `pose`.
+inline void DetectionPoint(const VehiclePose& pose, const LandmarkObservation& z, double* x,
+                           double* y) {
+  const double a = pose.heading_rad + z.bearing_rad;
+  *x = pose.x_m + z.range_m * std::cos(a);
+  *y = pose.y_m + z.range_m * std::sin(a);
+}
+
+// Appends the matches of every detection of `scan` against the map `root` of `trie` (keyed by
+// SpatialKey) seen from `pose`. use_index: candidates from the spatial range query; false: from
+// every landmark of the map, unfiltered (the reference the index and the radius are tested
+// against). Errors: those of
+// ObservationLogLikelihood, naming the detection.
+template <typename Trie>
+Status FindMatches(const Trie& trie, const typename Trie::Node* root, const VehiclePose& pose,
+                   std::span<const LandmarkObservation> scan, const AssociationParams& params,
+                   double max_range_m, bool use_index, std::vector<Match>* out) {
+  const Eigen::Matrix2d r = SensorCovariance(params.noise);
+  const double sr2 = r(0, 0), sb2 = r(1, 1);
+  // Each detection's point and candidate radius, and the box around all of them: one range
+  // query per scan, each landmark in it tested against every detection.
+  struct Probe {
+    double x, y, radius2;
+  };
+  thread_local std::vector<Probe> probes;
+  probes.clear();
+  double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+  bool bounded = true;
+  for (const LandmarkObservation& z : scan) {
+    Probe p;
+    DetectionPoint(pose, z, &p.x, &p.y);
+    const double radius = SearchRadius(z.range_m, max_range_m, params.noise, params.augment_gate);
+    bounded = bounded && std::isfinite(radius) && std::isfinite(p.x) && std::isfinite(p.y);
+    p.radius2 = radius * radius;
+    probes.push_back(p);
+    x0 = std::min(x0, p.x - radius);
+    x1 = std::max(x1, p.x + radius);
+    y0 = std::min(y0, p.y - radius);
+    y1 = std::max(y1, p.y + radius);
+  }
+  Status status;
+  auto consider = [&](uint64_t key, const Landmark& l) {
+    if (!status.ok()) return;
+    const double lx = l.x_m - pose.x_m, ly = l.y_m - pose.y_m;
+    const double half_trace = 0.5 * (l.xx + l.yy), half_diff = 0.5 * (l.xx - l.yy);
+    const double lp = half_trace + std::sqrt(half_diff * half_diff + l.xy * l.xy);
+    // The bound of the file comment with this landmark's own range and largest eigenvalue:
+    // d2 >= D^2 / (2 (lP + sr^2 + r_l^2 sb^2)); beyond the augment gate it rules the pair out
+    // without the likelihood.
+    const double reach2 = 2 * params.augment_gate * (lp + sr2 + (lx * lx + ly * ly) * sb2);
+    for (size_t j = 0; j < scan.size(); ++j) {
+      const Probe& p = probes[j];
+      const double dx = l.x_m - p.x, dy = l.y_m - p.y;
+      const double d2 = dx * dx + dy * dy;
+      if (use_index && (!(d2 <= p.radius2) || d2 > reach2)) continue;
+      const LandmarkObservation& z = scan[j];
+      double ll = 0, m2 = 0;
+      Status s = ObservationLogLikelihood(pose, RangeBearing{z.range_m, z.bearing_rad},
+                                          params.noise, l, &ll, &m2);
+      if (!s.ok()) {
+        status = Status(s.code(), fmt::format("detection {}, landmark {}: {}", j, key, s.message()));
+        return;
+      }
+      if (m2 <= params.augment_gate) out->push_back(Match{static_cast<uint32_t>(j), key, ll, m2});
+    }
+  };
+  if (scan.empty()) return status;
+  if (use_index && bounded) {
+    const CellRect rect = CellsBetween(x0, x1, y0, y1, params.cell_m);
+    trie.ForEachIf(
+        root, [&](uint64_t lo, uint64_t hi) { return KeyRangeMayHit(lo, hi, rect); }, consider);
+  } else {
+    trie.ForEach(root, consider);
+  }
+  return status;
+}
+
+}  // namespace grove::fastslam
+
+#endif  // GROVE_ENGINE_FASTSLAM_DATA_ASSOCIATION_H_
