@@ -1,6 +1,7 @@
 // Landmark FastSLAM's maps at scale (white-box, on FastSlamModel): the cost of a scan's update
-// per particle and observation against the number of landmarks, for each tree degree, and the
-// memory of many particles sharing a big map.
+// per particle and observation against the number of landmarks, for each tree degree, the cost
+// of unknown association against the map's size, and the memory of many particles sharing a big
+// map.
 //
 // Every particle starts with the same map (particle 0's, shared after a resampling, as after a
 // common history). Each iteration is one scan: a resampling that makes every odd particle a
@@ -11,11 +12,13 @@
 #include <sys/resource.h>
 
 #include <cmath>
+#include <numbers>
 #include <random>
 #include <vector>
 
 #include "concurrency/worker_pool.h"
 #include "engine/fastslam/fastslam_model.h"
+#include "tools/fastslam_simulator.h"
 
 namespace grove {
 namespace {
@@ -97,6 +100,83 @@ BENCHMARK(BM_ScanUpdate<1>)->Apply(MapSizes)->Name("BM_ScanUpdate/degree:2");
 BENCHMARK(BM_ScanUpdate<2>)->Apply(MapSizes)->Name("BM_ScanUpdate/degree:4");
 BENCHMARK(BM_ScanUpdate<3>)->Apply(MapSizes)->Name("BM_ScanUpdate/degree:8");
 BENCHMARK(BM_ScanUpdate<4>)->Apply(MapSizes)->Name("BM_ScanUpdate/degree:16");
+
+// Unknown association against the map's size: the replicated webmap (its 35 landmarks in k x k
+// tiles 300 m apart, 35 ... 20,160 landmarks, every particle sharing particle 0's map), 1,000
+// particles, the vehicle at the origin of the central tile. Each iteration is a resampling into
+// pairs, then FastSLAM 2.0's weighting, draw and updates with a scan that detects every landmark
+// in view (so the existence evidence leaves the map as it is). Items: particle-detections.
+struct UnknownFixture {
+  FastSlamConfig config;
+  WorkerPool workers{1};
+  std::unique_ptr<FastSlamModel<3>> model;
+  std::vector<double> log_w;
+  std::vector<uint32_t> pairs;
+  std::vector<LandmarkObservation> scan;
+  uint64_t step = 0;
+
+  UnknownFixture(int64_t tiles_per_side, int64_t particles) {
+    config.particles = particles;
+    config.threads = 1;
+    config.association = FastSlamAssociation::kMaximumLikelihood;
+    model = std::make_unique<FastSlamModel<3>>(config, 1);
+    log_w.assign(static_cast<size_t>(particles), 0.0);
+    StatusOr<tools::BaileyMap> map = tools::ParseBaileyMap("webmap", tools::EmbeddedBaileyWebmap());
+    if (!map.ok()) std::abort();
+    const fastslam::SensorNoise noise{config.sigma_range_m, config.sigma_bearing_rad};
+    const fastslam::VehiclePose origin{0, 0, 0};
+    for (const tools::BaileyPoint& p : map->landmarks) {
+      const fastslam::RangeBearing z = fastslam::Observe(origin, p.x_m, p.y_m);
+      if (z.range_m <= config.sensor_range_m &&
+          std::fabs(z.bearing_rad) <= 0.5 * std::numbers::pi) {
+        scan.push_back({z.range_m, z.bearing_rad, -1});
+      }
+    }
+    if (scan.empty()) std::abort();
+    model->NoteScan(ScanStep{scan});
+    const int64_t lo = -tiles_per_side / 2;
+    for (int64_t tx = lo; tx < lo + tiles_per_side; ++tx) {
+      for (int64_t ty = lo; ty < lo + tiles_per_side; ++ty) {
+        for (const tools::BaileyPoint& p : map->landmarks) {
+          // As first seen from 10 m away: the covariance of a new landmark at that range.
+          const double x = p.x_m + 300.0 * static_cast<double>(tx);
+          const double y = p.y_m + 300.0 * static_cast<double>(ty);
+          const fastslam::VehiclePose from{x - 10, y, 0};
+          const fastslam::Landmark l = fastslam::InitLandmark(from, {10, 0}, noise);
+          if (!model->InsertLandmark(0, l, 0).ok()) std::abort();
+        }
+      }
+    }
+    std::vector<uint32_t> zeros(static_cast<size_t>(particles), 0);
+    model->Gather(zeros, workers);
+    model->ReleaseDead(workers);
+    for (uint32_t k = 0; k < particles; ++k) pairs.push_back(k & ~1u);
+  }
+
+  void Scan() {
+    model->Gather(pairs, workers);
+    model->ReleaseDead(workers);
+    const ScanStep s{scan};
+    const size_t n = log_w.size();
+    if (!model->Advance(s, step, 0, n, 0, log_w.data()).ok() ||
+        !model->Complete(s, step, 0, n, 0).ok()) {
+      std::abort();
+    }
+    ++step;
+  }
+};
+
+void BM_UnknownAssociation(benchmark::State& state) {
+  const int64_t particles = 1000;
+  UnknownFixture f(state.range(0), particles);
+  for (auto _ : state) f.Scan();
+  state.SetItemsProcessed(state.iterations() * particles * static_cast<int64_t>(f.scan.size()));
+  state.counters["landmarks"] = static_cast<double>(35 * state.range(0) * state.range(0));
+  state.counters["detections"] = static_cast<double>(f.scan.size());
+  state.counters["tree_height"] = FastSlamModel<3>::Trie::Height(f.model->map(0));
+  state.counters["map_MiB"] = f.model->map_memory().live_bytes / 1048576.0;
+}
+BENCHMARK(BM_UnknownAssociation)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Arg(16)->Arg(24);
 
 // 10,000 particles on a 20,000-landmark map: the live map bytes after 100 scans against a deep
 // copy per particle. Run it alone (--benchmark_filter=BM_MapMemory) for a peak RSS of its own.

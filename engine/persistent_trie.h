@@ -341,10 +341,11 @@ class PersistentTrie {
     }
   }
 
-  // Calls f(key, const Leaf&) in increasing key order for the leaves of one version whose
-  // subtrees the filter admits: may_contain(lo, hi) is asked for the key range [lo, hi] of each
-  // node's subtree (and of each leaf, lo == hi) and a false prunes it. A range query (a spatial
-  // one when keys encode positions) costs the nodes it admits, not the size of the map.
+  // Calls f(key, const Leaf&) in increasing key order for the leaves of the bottom nodes of one
+  // version that the filter admits: may_contain(lo, hi) is asked for the key range [lo, hi] of
+  // each node's subtree (a bottom node's too, but not of its single leaves) and a false prunes
+  // it. A range query (a spatial one when keys encode positions) costs the nodes it admits, not
+  // the size of the map.
   template <typename P, typename F>
   void ForEachIf(const Node* root, P&& may_contain, F&& f) const {
     if (root == nullptr) return;
@@ -375,8 +376,7 @@ class PersistentTrie {
       } else {
         const Bottom* b = static_cast<const Bottom*>(item.node);
         for (int i = 0; i < kDegree; ++i) {
-          const uint64_t key = (item.prefix << kLog2Degree) | i;
-          if (b->Has(i) && may_contain(key, key)) f(key, b->leaf[i]);
+          if (b->Has(i)) f((item.prefix << kLog2Degree) | i, b->leaf[i]);
         }
       }
     }

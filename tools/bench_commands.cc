@@ -21,6 +21,7 @@
 #include "tools/fastslam_simulator.h"
 #include "tools/footslam_run.h"
 #include "tools/report_tables.h"
+#include "tools/victoria_park.h"
 #include "tools/walk_simulator.h"
 
 namespace grove::tools {
@@ -557,6 +558,115 @@ int FastSlamSpeedBenchCommand(const FastSlamSpeedOptions& options) {
                                          {"throughput", points}}
                               .dump(2));
   if (s.ok()) s = WriteFileAtomically(options.out_dir + "/fastslam_speed.md", md);
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  std::printf("%s", md.c_str());
+  return kExitOk;
+}
+
+int VictoriaParkBenchCommand(const VictoriaParkBenchOptions& options) {
+  Status s = EnsureDirectory(options.out_dir);
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  StatusOr<VictoriaParkData> data = ReadVictoriaPark(BundledVictoriaParkDir(), options.until_s);
+  if (!data.ok()) return Fail(kExitInput, data.status().message());
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  std::vector<std::vector<std::string>> rows;
+  nlohmann::json points = nlohmann::json::array();
+  for (const std::string& filter : options.filters) {
+    if (filter != "fastslam1" && filter != "fastslam2") {
+      return Fail(kExitUsage, fmt::format("--filters: {}: must be fastslam1 or fastslam2",
+                                          QuoteForMessage(filter)));
+    }
+    for (int64_t n : options.particles) {
+      for (int threads : {1, cores}) {
+        if (threads == 1 && cores > 1 && n > options.max_one_thread_particles) continue;
+        if (threads == cores && cores == 1 && !rows.empty() && rows.back()[1] == "1") continue;
+        const std::string result_path = fmt::format("{}/.park-{}", options.out_dir, getpid());
+        std::fflush(nullptr);
+        const pid_t pid = fork();
+        if (pid < 0) return Fail(kExitRun, "fork failed");
+        if (pid == 0) {
+          FastSlamConfig config = VictoriaParkConfig();
+          config.filter =
+              filter == "fastslam1" ? FastSlamFilter::kFastSlam1 : FastSlamFilter::kFastSlam2;
+          config.particles = n;
+          config.threads = threads;
+          auto slam = FastSlam::Create(config);
+          if (!slam.ok()) _exit(10);
+          VictoriaParkEvents events(&*data);
+          FastSlamEvent e;
+          const auto t0 = Clock::now();
+          for (;;) {
+            StatusOr<bool> more = events.Next(&e);
+            if (!more.ok()) _exit(11);
+            if (!*more) break;
+            Status step =
+                e.is_scan ? (*slam)->Scan(e.scan_t_s, e.scan)
+                          : (*slam)->Control(e.control.t_s, e.control.v_mps, e.control.steer_rad);
+            if (!step.ok()) {
+              std::fprintf(stderr, "%s\n", step.message().c_str());
+              _exit(12);
+            }
+          }
+          const double run_s = std::chrono::duration<double>(Clock::now() - t0).count();
+          StatusOr<GpsErrors> gps = CompareWithGps((*slam)->MeanTrajectory(), data->gps);
+          if (!gps.ok()) _exit(13);
+          const FastSlamSummary summary = (*slam)->Summary();
+          const nlohmann::json j = {{"run_s", run_s},
+                                    {"filter_s", summary.filter_s()},
+                                    {"landmarks", summary.landmarks},
+                                    {"gps_mean_m", gps->mean_m},
+                                    {"gps_median_m", gps->median_m},
+                                    {"gps_rmse_m", gps->rmse_m},
+                                    {"gps_max_m", gps->max_m},
+                                    {"gps_fixes", gps->fixes.size()}};
+          _exit(WriteFileAtomically(result_path, j.dump()).ok() ? 0 : 14);
+        }
+        int status = 0;
+        rusage usage{};
+        wait4(pid, &status, 0, &usage);
+        if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+          return Fail(kExitRun, fmt::format("{} with {} particles on {} threads failed (status {})",
+                                            filter, n, threads, status));
+        }
+        std::ifstream in(result_path);
+        const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+        std::remove(result_path.c_str());
+        if (j.is_discarded()) return Fail(kExitRun, "a run's result could not be read");
+        const double rss_mib = static_cast<double>(usage.ru_maxrss) / 1024.0;
+        rows.push_back({filter, std::to_string(threads), std::to_string(n),
+                        fmt::format("{:.2f}", j["gps_mean_m"].get<double>()),
+                        fmt::format("{:.2f}", j["gps_median_m"].get<double>()),
+                        fmt::format("{:.2f}", j["gps_rmse_m"].get<double>()),
+                        std::to_string(j["landmarks"].get<int64_t>()),
+                        fmt::format("{:.2f}", j["run_s"].get<double>()),
+                        fmt::format("{:.0f}", rss_mib)});
+        nlohmann::json point = j;
+        point["filter"] = filter;
+        point["particles"] = n;
+        point["threads"] = threads;
+        point["peak_rss_mib"] = rss_mib;
+        points.push_back(point);
+        std::fprintf(stderr, "%s, %lld particles, %d threads: %.2f s, GPS mean %.2f m\n",
+                     filter.c_str(), static_cast<long long>(n), threads, j["run_s"].get<double>(),
+                     j["gps_mean_m"].get<double>());
+      }
+    }
+  }
+  const std::string md = fmt::format(
+      "# Victoria Park\n\nMachine: {}\n\n`grove fastslam victoria-park` defaults (guivant_nebot, "
+      "the seed's noise, unknown association, evidence on), seed 1, {} controls and {} "
+      "detections{}. Error of the weighted-mean path against GPS after a rigid alignment (every "
+      "fix, GPS jumps included); landmarks in the heaviest map; run time of the filter (reading "
+      "excluded); peak RSS of the process.\n\n{}",
+      MachineDescription(), data->controls.size(), data->observations.size(),
+      options.until_s < 1e9 ? fmt::format(" (up to {} s)", options.until_s) : std::string(),
+      MarkdownTable({"filter", "threads", "particles", "GPS mean (m)", "median (m)", "RMSE (m)",
+                     "landmarks", "time (s)", "peak RSS (MiB)"},
+                    rows));
+  s = WriteFileAtomically(
+      options.out_dir + "/victoria_park.json",
+      nlohmann::json{{"machine", MachineDescription()}, {"runs", points}}.dump(2));
+  if (s.ok()) s = WriteFileAtomically(options.out_dir + "/victoria_park.md", md);
   if (!s.ok()) return Fail(kExitOutput, s.message());
   std::printf("%s", md.c_str());
   return kExitOk;

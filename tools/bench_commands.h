@@ -50,6 +50,19 @@ struct FastSlamSpeedOptions {
 };
 int FastSlamSpeedBenchCommand(const FastSlamSpeedOptions& options);
 
+// `grove bench victoria-park`: the bundled Victoria Park run (its defaults,
+// VictoriaParkConfig()) for each filter and particle count, at 1 thread (up to
+// max_one_thread_particles) and at every hardware thread: the error against GPS, the landmarks
+// of the heaviest map, the filter's run time and the peak RSS of a child process per run.
+struct VictoriaParkBenchOptions {
+  std::string out_dir;
+  std::vector<int64_t> particles = {3, 10, 100, 1000, 10000};
+  std::vector<std::string> filters = {"fastslam1", "fastslam2"};
+  int64_t max_one_thread_particles = 1000;
+  double until_s = 1e9;
+};
+int VictoriaParkBenchCommand(const VictoriaParkBenchOptions& options);
+
 }  // namespace grove::tools
 
 #endif  // GROVE_TOOLS_BENCH_COMMANDS_H_

@@ -47,8 +47,8 @@ Status ForEachRecord(const std::string& path, const std::vector<const char*>& na
     SplitBlanks(line, &fields);
     if (fields.empty()) continue;
     if (fields.size() != names.size()) {
-      return LineError(path, line_number, fields.size() < names.size() ? line.size() + 1
-                                                                       : fields[names.size()].column,
+      return LineError(path, line_number,
+                       fields.size() < names.size() ? line.size() + 1 : fields[names.size()].column,
                        fmt::format("{} numbers where {} are expected ({})", fields.size(),
                                    names.size(), fmt::join(names, ", ")));
     }
@@ -77,7 +77,8 @@ StatusOr<std::string> ReadMaybeCompressed(const std::string& path) {
   if (::stat(path.c_str(), &st) != 0) {
     return NotFoundError(fmt::format("{}: no such file", path));
   }
-  if (!S_ISREG(st.st_mode)) return InvalidArgumentError(fmt::format("{}: not a regular file", path));
+  if (!S_ISREG(st.st_mode))
+    return InvalidArgumentError(fmt::format("{}: not a regular file", path));
   gzFile f = gzopen(path.c_str(), "rb");
   if (f == nullptr) return IoError(fmt::format("{}: cannot open", path));
   std::string out;
@@ -96,8 +97,8 @@ StatusOr<std::string> ReadMaybeCompressed(const std::string& path) {
   // A truncated gzip stream reads as a short file: gzclose_r reports it.
   const int closed = gzclose(f);
   if (closed != Z_OK) {
-    return IoError(fmt::format("{}: the compressed data is truncated or corrupt (zlib {})", path,
-                               closed));
+    return IoError(
+        fmt::format("{}: the compressed data is truncated or corrupt (zlib {})", path, closed));
   }
   return out;
 }
@@ -140,8 +141,9 @@ StatusOr<VictoriaParkData> ReadVictoriaPark(const std::string& dir, double until
                            fmt::format("range = {}: must be >= 0", v[1]));
         }
         if (!(v[2] >= 0 && v[2] <= kPi)) {
-          return LineError(d.observations_path, line, f[2].column,
-                           fmt::format("bearing = {}: must be in [0, pi] (the laser's view)", v[2]));
+          return LineError(
+              d.observations_path, line, f[2].column,
+              fmt::format("bearing = {}: must be in [0, pi] (the laser's view)", v[2]));
         }
         if (!(v[3] >= 0)) {
           return LineError(d.observations_path, line, f[3].column,

@@ -144,7 +144,8 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
       Status s = ObservationLogLikelihood(pose, RangeBearing{z.range_m, z.bearing_rad},
                                           params.noise, l, &ll, &m2);
       if (!s.ok()) {
-        status = Status(s.code(), fmt::format("detection {}, landmark {}: {}", j, key, s.message()));
+        status =
+            Status(s.code(), fmt::format("detection {}, landmark {}: {}", j, key, s.message()));
         return;
       }
       if (m2 <= params.augment_gate) out->push_back(Match{static_cast<uint32_t>(j), key, ll, m2});

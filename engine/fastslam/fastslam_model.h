@@ -139,6 +139,10 @@ class FastSlamModel {
       max_range_ = std::max(max_range_, z.range_m);
   }
   bool unknown_association() const { return ml_; }
+  // Unknown association: stores `l` in particle i's map as a new landmark would be (benchmarks
+  // build big maps with it). REQUIRES: ml_, and l's covariance within the bound SearchRadius()
+  // assumes for the ranges NoteScan() has seen.
+  Status InsertLandmark(size_t i, const Landmark& l, int slot) { return Insert(i, slot, l); }
   const AssociationCounts& counts(size_t i) const { return counts_[i]; }
 
   // The next Predict() is the first of a path segment (after the start or a scan).
@@ -628,12 +632,20 @@ class FastSlamModel {
                 [](const Match& a, const Match& b) { return a.key < b.key; });
       const CellRect rect = CellsAround(pose.x_m, pose.y_m, config_.sensor_range_m, params_.cell_m);
       const size_t first_missed = touched.size();
+      // In view: range <= sensor_range_m and |bearing| <= fov / 2, i.e. the component along the
+      // heading at least |d| cos(fov / 2) (no angle computed).
+      const double range2 = config_.sensor_range_m * config_.sensor_range_m;
+      const double cos_half = std::cos(0.5 * config_.sensor_fov_rad);
+      const double hc = std::cos(pose.heading_rad), hs = std::sin(pose.heading_rad);
       trie_.ForEachIf(
           maps_[i], [&](uint64_t lo, uint64_t hi) { return KeyRangeMayHit(lo, hi, rect); },
           [&](uint64_t key, const Landmark& l) {
-            const RangeBearing rb = Observe(pose, l.x_m, l.y_m);
-            if (!(rb.range_m <= config_.sensor_range_m) ||
-                !(std::fabs(rb.bearing_rad) <= 0.5 * config_.sensor_fov_rad)) {
+            const double dx = l.x_m - pose.x_m, dy = l.y_m - pose.y_m;
+            const double d2 = dx * dx + dy * dy;
+            if (!(d2 <= range2)) return;
+            const double along = dx * hc + dy * hs;
+            if (cos_half >= 0 ? !(along >= 0 && along * along >= d2 * cos_half * cos_half)
+                              : !(along >= 0 || along * along <= d2 * cos_half * cos_half)) {
               return;
             }
             auto it = std::lower_bound(near.begin(), near.end(), key,

@@ -8,9 +8,9 @@
 // zigzag mapping 0, -1, 1, -2, 2, ... to 0, 1, 2, 3, 4, ... and Morton interleaving the bits (x
 // in the even bits). Keys near the origin are small, so a map grows in height with its extent
 // (the trie grows above its root), and a cell's kSlotsPerCell slots are one bottom node of a
-// degree-8 trie. A block of keys sharing a prefix covers, on each axis, at most two intervals
-// of cells (the non-negative and the negative ones): KeyRangeMayHit() tests such a block against
-// a rectangle of cells exactly.
+// degree-8 trie (so PersistentTrie::ForEachIf, which asks about nodes, decides per cell). A block
+// of keys sharing a prefix covers, on each axis, at most two intervals of cells (the non-negative
+// and the negative ones): KeyRangeMayHit() tests such a block against a rectangle of cells exactly.
 //
 // Extent: |cx|, |cy| <= kMaxCell (2^29 - 1), so keys use at most 63 bits.
 #ifndef GROVE_ENGINE_FASTSLAM_SPATIAL_KEY_H_
@@ -23,7 +23,7 @@
 
 namespace grove::fastslam {
 
-inline constexpr int kSlotBits = 3;
+inline constexpr int kSlotBits = 3;  // = the landmark trie's log2 degree
 inline constexpr int kSlotsPerCell = 1 << kSlotBits;
 inline constexpr int64_t kMaxCell = (int64_t{1} << 29) - 1;
 
@@ -111,8 +111,8 @@ inline int SlotOfKey(uint64_t key) { return static_cast<int>(key & (kSlotsPerCel
 inline CellRect CellsBetween(double x0, double x1, double y0, double y1, double cell_m) {
   auto cell = [&](double v) {
     const double c = std::floor(v / cell_m);
-    return static_cast<int64_t>(std::clamp(c, -static_cast<double>(kMaxCell) - 1,
-                                           static_cast<double>(kMaxCell) + 1));
+    return static_cast<int64_t>(
+        std::clamp(c, -static_cast<double>(kMaxCell) - 1, static_cast<double>(kMaxCell) + 1));
   };
   return CellRect{cell(x0), cell(x1), cell(y0), cell(y1)};
 }

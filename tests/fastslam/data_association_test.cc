@@ -80,9 +80,8 @@ TEST(PersistentTrieErase, MatchesAMapAndFreesEveryNode) {
     switch (rng() % 4) {
       case 0:
       case 1:
-        ASSERT_TRUE(trie.Update(&versions[v], key, 0, [&](Landmark& l, bool) {
-          l = At(static_cast<double>(op), 0);
-        }));
+        ASSERT_TRUE(trie.Update(&versions[v], key, 0,
+                                [&](Landmark& l, bool) { l = At(static_cast<double>(op), 0); }));
         models[v][key] = op;
         break;
       case 2:
@@ -150,10 +149,10 @@ TEST(Decide, GatesPickTheMostLikelyInsideAndNewBeyond) {
   AssociationParams p;  // gates 4 and 25
   std::vector<Decision> out;
   std::vector<Match> m = {
-      M(0, 10, -3.0, 1.0), M(0, 11, -2.5, 2.0),  // two candidates in the gate: 11 more likely
-      M(1, 12, -4.0, 4.01),                      // just outside the reject gate: ignored
-      M(3, 13, -9.0, 24.9),                      // inside the augment gate only: ignored
-      M(4, 14, -1.0, 3.99),                      // just inside: associated
+      M(0, 10, -3.0, 1.0),  M(0, 11, -2.5, 2.0),  // two candidates in the gate: 11 more likely
+      M(1, 12, -4.0, 4.01),                       // just outside the reject gate: ignored
+      M(3, 13, -9.0, 24.9),                       // inside the augment gate only: ignored
+      M(4, 14, -1.0, 3.99),                       // just inside: associated
   };
   Decide(m, 6, p, &out);  // detections 2 and 5 have no landmark within 25: new
   ASSERT_EQ(out.size(), 6u);
@@ -214,8 +213,8 @@ TEST(FindMatches, IndexGivesTheSameMatchesAsTheWholeMap) {
     Trie::Node* root = nullptr;
     for (int k = 0; k < 300; ++k) {
       const VehiclePose from{pos(rng), pos(rng), (2 * unit(rng) - 1) * kPi};
-      Landmark l = InitLandmark(from, RangeBearing{max_range * unit(rng), (2 * unit(rng) - 1) * kPi},
-                                p.noise);
+      Landmark l = InitLandmark(
+          from, RangeBearing{max_range * unit(rng), (2 * unit(rng) - 1) * kPi}, p.noise);
       for (int u = static_cast<int>(rng() % 3); u > 0; --u) {
         const RangeBearing z = Observe(from, l.x_m + 0.1, l.y_m);
         ASSERT_TRUE(UpdateLandmark(from, z, p.noise, &l, nullptr).ok());
@@ -233,9 +232,9 @@ TEST(FindMatches, IndexGivesTheSameMatchesAsTheWholeMap) {
       if (z.range_m < max_range && unit(rng) < 0.5) {
         // Near a landmark: a few sigmas off, so some fall inside, between and beyond the gates.
         const double k = 4 * unit(rng);
-        scan.push_back({std::max(0.0, z.range_m + k * p.noise.sigma_range_m * (2 * unit(rng) - 1)),
-                        WrapAngle(z.bearing_rad + k * p.noise.sigma_bearing_rad * (2 * unit(rng) - 1)),
-                        -1});
+        scan.push_back(
+            {std::max(0.0, z.range_m + k * p.noise.sigma_range_m * (2 * unit(rng) - 1)),
+             WrapAngle(z.bearing_rad + k * p.noise.sigma_bearing_rad * (2 * unit(rng) - 1)), -1});
       }
     });
     for (int k = 0; k < 5; ++k) {

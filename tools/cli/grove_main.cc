@@ -181,6 +181,19 @@ int Main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(int64_t{1}, int64_t{100000000}));
 
+  CLI::App* park_bench = bench->add_subcommand(
+      "victoria-park", "Victoria Park: GPS error, landmarks, time and memory per particle count");
+  gt::VictoriaParkBenchOptions park_bench_options;
+  park_bench->add_option("--out", park_bench_options.out_dir, "Output directory")->required();
+  park_bench->add_option("--particles", park_bench_options.particles)->capture_default_str();
+  park_bench->add_option("--filters", park_bench_options.filters)->capture_default_str();
+  park_bench
+      ->add_option("--max-one-thread-particles", park_bench_options.max_one_thread_particles,
+                   "Larger counts run on every hardware thread only")
+      ->capture_default_str();
+  park_bench->add_option("--until", park_bench_options.until_s, "Data up to this time, seconds")
+      ->check(CLI::NonNegativeNumber);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -215,6 +228,7 @@ int Main(int argc, char** argv) {
                                        fs_eval_landmarks_truth);
   }
   if (*paper) return gt::PaperBenchCommand(paper_options);
+  if (*park_bench) return gt::VictoriaParkBenchCommand(park_bench_options);
   if (*fs_accuracy) return gt::FastSlamAccuracyBenchCommand(fs_accuracy_options);
   if (*fs_speed) return gt::FastSlamSpeedBenchCommand(fs_speed_options);
   if (*scaling) return gt::ScalingBenchCommand(scaling_options);
