@@ -249,12 +249,16 @@ class ParticleFilter {
     return std::chrono::duration<double>(d).count();
   }
 
-  // Runs body(slot, begin, end) -> Status over batches of options_.batch particles; returns the
-  // error of the lowest failing batch (the same at any thread count).
+  // Runs body(slot, begin, end) -> Status over batches of options_.batch particles, smaller
+  // when that leaves fewer than 4 batches per thread (100 particles in batches of 64 would keep
+  // two threads at 64 and 36); returns the error of the lowest failing batch, which is the
+  // error of the lowest failing particle whatever the batches (a batch stops at its first).
   template <typename F>
   Status ForBatches(F&& body) {
     const size_t n = log_w_.size();
-    const size_t batch = std::max<size_t>(options_.batch, 1);
+    const size_t threads = static_cast<size_t>(workers_->num_threads());
+    size_t batch = std::max<size_t>(options_.batch, 1);
+    if (threads > 1) batch = std::clamp<size_t>((n + 4 * threads - 1) / (4 * threads), 1, batch);
     batch_status_.assign((n + batch - 1) / batch, Status::Ok());
     workers_->ParallelFor(n, batch, [&](int slot, size_t begin, size_t end) {
       batch_status_[begin / batch] = body(slot, begin, end);

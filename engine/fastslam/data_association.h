@@ -92,19 +92,27 @@ inline void DetectionPoint(const VehiclePose& pose, const LandmarkObservation& z
   *y = pose.y_m + z.range_m * std::sin(a);
 }
 
+// The sensor's view for the existence evidence: range <= sqrt(range2) and |bearing| <= fov / 2,
+// tested as: the component along the heading is at least |d| cos(fov / 2) (no angle computed).
+struct SensorView {
+  double range_m = 30;
+  double fov_rad = 3.141592653589793;
+};
+
 // Appends the matches of every detection of `scan` against the map `root` of `trie` (keyed by
-// SpatialKey) seen from `pose`. use_index: candidates from the spatial range query; false: from
-// every landmark of the map, unfiltered (the reference the index and the radius are tested
-// against). Errors: those of
-// ObservationLogLikelihood, naming the detection.
+// SpatialKey) seen from `pose`; with `view`, also the keys of the landmarks in view, in
+// increasing order, to *in_view (the same range query). use_index: candidates from the spatial
+// range query; false: from every landmark of the map, unfiltered (the reference the index and the
+// radius are tested against). Errors: those of ObservationLogLikelihood, naming the detection.
 template <typename Trie>
 Status FindMatches(const Trie& trie, const typename Trie::Node* root, const VehiclePose& pose,
                    std::span<const LandmarkObservation> scan, const AssociationParams& params,
-                   double max_range_m, bool use_index, std::vector<Match>* out) {
+                   double max_range_m, bool use_index, std::vector<Match>* out,
+                   const SensorView* view = nullptr, std::vector<uint64_t>* in_view = nullptr) {
   const Eigen::Matrix2d r = SensorCovariance(params.noise);
   const double sr2 = r(0, 0), sb2 = r(1, 1);
-  // Each detection's point and candidate radius, and the box around all of them: one range
-  // query per scan, each landmark in it tested against every detection.
+  // Each detection's point and candidate radius, and the box around all of them (and the
+  // view): one range query per scan, each landmark in it tested against every detection.
   struct Probe {
     double x, y, radius2;
   };
@@ -124,21 +132,46 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
     y0 = std::min(y0, p.y - radius);
     y1 = std::max(y1, p.y + radius);
   }
+  double view_range2 = 0, cos_half = 0, hc = 0, hs = 0;
+  if (view != nullptr) {
+    view_range2 = view->range_m * view->range_m;
+    cos_half = std::cos(0.5 * view->fov_rad);
+    hc = std::cos(pose.heading_rad);
+    hs = std::sin(pose.heading_rad);
+    x0 = std::min(x0, pose.x_m - view->range_m);
+    x1 = std::max(x1, pose.x_m + view->range_m);
+    y0 = std::min(y0, pose.y_m - view->range_m);
+    y1 = std::max(y1, pose.y_m + view->range_m);
+  }
   Status status;
   auto consider = [&](uint64_t key, const Landmark& l) {
     if (!status.ok()) return;
     const double lx = l.x_m - pose.x_m, ly = l.y_m - pose.y_m;
-    const double half_trace = 0.5 * (l.xx + l.yy), half_diff = 0.5 * (l.xx - l.yy);
-    const double lp = half_trace + std::sqrt(half_diff * half_diff + l.xy * l.xy);
+    if (view != nullptr) {
+      const double d2 = lx * lx + ly * ly;
+      const double along = lx * hc + ly * hs;
+      const bool within = d2 <= view_range2 &&
+                          (cos_half >= 0 ? along >= 0 && along * along >= d2 * cos_half * cos_half
+                                         : along >= 0 || along * along <= d2 * cos_half * cos_half);
+      if (within) in_view->push_back(key);
+    }
     // The bound of the file comment with this landmark's own range and largest eigenvalue:
     // d2 >= D^2 / (2 (lP + sr^2 + r_l^2 sb^2)); beyond the augment gate it rules the pair out
-    // without the likelihood.
-    const double reach2 = 2 * params.augment_gate * (lp + sr2 + (lx * lx + ly * ly) * sb2);
+    // without the likelihood. Computed for the first detection within the radius.
+    double reach2 = -1;
     for (size_t j = 0; j < scan.size(); ++j) {
       const Probe& p = probes[j];
       const double dx = l.x_m - p.x, dy = l.y_m - p.y;
       const double d2 = dx * dx + dy * dy;
-      if (use_index && (!(d2 <= p.radius2) || d2 > reach2)) continue;
+      if (use_index) {
+        if (!(d2 <= p.radius2)) continue;
+        if (reach2 < 0) {
+          const double half_trace = 0.5 * (l.xx + l.yy), half_diff = 0.5 * (l.xx - l.yy);
+          const double lp = half_trace + std::sqrt(half_diff * half_diff + l.xy * l.xy);
+          reach2 = 2 * params.augment_gate * (lp + sr2 + (lx * lx + ly * ly) * sb2);
+        }
+        if (d2 > reach2) continue;
+      }
       const LandmarkObservation& z = scan[j];
       double ll = 0, m2 = 0;
       Status s = ObservationLogLikelihood(pose, RangeBearing{z.range_m, z.bearing_rad},
@@ -151,8 +184,11 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
       if (m2 <= params.augment_gate) out->push_back(Match{static_cast<uint32_t>(j), key, ll, m2});
     }
   };
-  if (scan.empty()) return status;
+  if (scan.empty() && view == nullptr) return status;
   if (use_index && bounded) {
+    // One rectangle around them all: testing each node against every detection's rectangle
+    // costs more than the landmarks it would skip (measured on Victoria Park: 8 % more
+    // instructions).
     const CellRect rect = CellsBetween(x0, x1, y0, y1, params.cell_m);
     trie.ForEachIf(
         root, [&](uint64_t lo, uint64_t hi) { return KeyRangeMayHit(lo, hi, rect); }, consider);

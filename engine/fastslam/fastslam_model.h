@@ -24,9 +24,11 @@
 // (data_association.h), adds the associated detections' likelihoods and p0 for the others, and
 // then (FastSLAM 1.0 in Advance, 2.0 in Complete from the drawn pose) updates the associated
 // landmarks, lowers the evidence of those in view and not seen (removing the ones below the
-// threshold), moves an updated landmark whose mean left its cell to a slot of its new cell, and
-// adds the new landmarks. FastSLAM 2.0 decides from the predicted pose mean (Bailey's order);
-// the matches Advance() found are kept per particle and gathered with it for Complete().
+// threshold; the view is found by the same range query as the candidates, so it is judged from
+// the pose the decisions were made from: for FastSLAM 2.0 the predicted mean), moves an updated
+// landmark whose mean left its cell to a slot of its new cell, and adds the new landmarks.
+// FastSLAM 2.0 decides from the predicted pose mean (Bailey's order); the query Advance() made is
+// kept per particle and gathered with it for Complete().
 //
 // Paths: a particle does not store a pose per step. Its history holds one entry per path
 // segment: the pose and particle index at the first prediction after the start or a scan.
@@ -255,8 +257,8 @@ class FastSlamModel {
       if (ml_) {
         // The matches Advance() found from the predicted mean (a copy has its parent's).
         Scratch& sc = scratch_[slot];
-        sc.matches = pending_[i];
-        Decide(sc.matches, scan.observations.size(), params_, &sc.decisions);
+        sc.query = pending_[i];
+        Decide(sc.query.matches, scan.observations.size(), params_, &sc.decisions);
         GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
         continue;
       }
@@ -505,19 +507,29 @@ class FastSlamModel {
 
   // ---- Unknown association ----
 
-  struct alignas(kFalseSharingBytes) Scratch {
+  // What one range query found for a particle's scan: the pairs within an augment gate and,
+  // with the evidence on, the landmarks in view.
+  struct ScanQuery {
     std::vector<Match> matches;
+    std::vector<uint64_t> in_view;  // increasing
+  };
+  struct alignas(kFalseSharingBytes) Scratch {
+    ScanQuery query;
     std::vector<Decision> decisions;
     std::vector<uint64_t> keys;
   };
 
-  // Matches and decisions of particle i's scan seen from `pose`, into sc.
+  // The query and decisions of particle i's scan seen from `pose`, into sc.
   Status DecideScan(const ScanStep& scan, size_t i, const VehiclePose& pose, Scratch* sc) const {
-    sc->matches.clear();
+    sc->query.matches.clear();
+    sc->query.in_view.clear();
+    const SensorView view{config_.sensor_range_m, config_.sensor_fov_rad};
+    const bool evidence = config_.evidence == FastSlamEvidence::kOn;
     Status s = FindMatches(trie_, maps_[i], pose, scan.observations, params_, max_range_,
-                           /*use_index=*/true, &sc->matches);
+                           /*use_index=*/true, &sc->query.matches, evidence ? &view : nullptr,
+                           &sc->query.in_view);
     if (!s.ok()) return Status(s.code(), fmt::format("particle {}, {}", i, s.message()));
-    Decide(sc->matches, scan.observations.size(), params_, &sc->decisions);
+    Decide(sc->query.matches, scan.observations.size(), params_, &sc->decisions);
     return Status::Ok();
   }
 
@@ -526,9 +538,10 @@ class FastSlamModel {
     if (scan.observations.empty()) {
       // Nothing to weigh or draw; the evidence of what is in view still falls.
       if (config_.evidence == FastSlamEvidence::kOff) return Status::Ok();
-      sc.matches.clear();
-      sc.decisions.clear();
-      for (size_t i = begin; i < end; ++i) GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
+      for (size_t i = begin; i < end; ++i) {
+        GROVE_RETURN_IF_ERROR(DecideScan(scan, i, pose_[i], &sc));
+        GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
+      }
       return Status::Ok();
     }
     const bool fs2 = config_.filter == FastSlamFilter::kFastSlam2;
@@ -560,7 +573,7 @@ class FastSlamModel {
       if (fs2) {
         proposal_mu_[i] = mu;
         proposal_sigma_[i] = Upper(sigma);
-        pending_[i] = sc.matches;
+        pending_[i] = sc.query;
       } else {
         GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
       }
@@ -597,7 +610,8 @@ class FastSlamModel {
     return Status::Ok();
   }
 
-  // Applies particle i's decisions in sc from its pose now (see the file comment).
+  // Applies particle i's decisions in sc from its pose now (the view in sc is the one the
+  // decisions were made from; see the file comment).
   Status ApplyScan(const ScanStep& scan, size_t i, int slot, Scratch* sc) {
     const VehiclePose pose = pose_[i];
     AssociationCounts& counts = counts_[i];
@@ -627,32 +641,15 @@ class FastSlamModel {
     }
     // 2. Evidence of the landmarks in view and not seen: near no detection's augment gate.
     if (config_.evidence == FastSlamEvidence::kOn) {
-      std::vector<Match>& near = sc->matches;  // every pair within an augment gate
+      std::vector<Match>& near = sc->query.matches;  // every pair within an augment gate
       std::sort(near.begin(), near.end(),
                 [](const Match& a, const Match& b) { return a.key < b.key; });
-      const CellRect rect = CellsAround(pose.x_m, pose.y_m, config_.sensor_range_m, params_.cell_m);
       const size_t first_missed = touched.size();
-      // In view: range <= sensor_range_m and |bearing| <= fov / 2, i.e. the component along the
-      // heading at least |d| cos(fov / 2) (no angle computed).
-      const double range2 = config_.sensor_range_m * config_.sensor_range_m;
-      const double cos_half = std::cos(0.5 * config_.sensor_fov_rad);
-      const double hc = std::cos(pose.heading_rad), hs = std::sin(pose.heading_rad);
-      trie_.ForEachIf(
-          maps_[i], [&](uint64_t lo, uint64_t hi) { return KeyRangeMayHit(lo, hi, rect); },
-          [&](uint64_t key, const Landmark& l) {
-            const double dx = l.x_m - pose.x_m, dy = l.y_m - pose.y_m;
-            const double d2 = dx * dx + dy * dy;
-            if (!(d2 <= range2)) return;
-            const double along = dx * hc + dy * hs;
-            if (cos_half >= 0 ? !(along >= 0 && along * along >= d2 * cos_half * cos_half)
-                              : !(along >= 0 || along * along <= d2 * cos_half * cos_half)) {
-              return;
-            }
-            auto it = std::lower_bound(near.begin(), near.end(), key,
-                                       [](const Match& m, uint64_t k) { return m.key < k; });
-            if (it != near.end() && it->key == key) return;
-            touched.push_back(key);
-          });
+      for (uint64_t key : sc->query.in_view) {
+        auto it = std::lower_bound(near.begin(), near.end(), key,
+                                   [](const Match& m, uint64_t k) { return m.key < k; });
+        if (it == near.end() || it->key != key) touched.push_back(key);
+      }
       for (size_t k = first_missed; k < touched.size(); ++k) {
         bool remove = false;
         if (!trie_.Update(&maps_[i], touched[k], slot, [&](Landmark& l, bool) {
@@ -721,7 +718,7 @@ class FastSlamModel {
   double max_range_ = 0;                   // the longest detection range so far
   std::vector<AssociationCounts> counts_;  // per particle, along its ancestry
   // FastSLAM 2.0: each particle's matches of the current scan, from Advance() to Complete().
-  std::vector<std::vector<Match>> pending_;
+  std::vector<ScanQuery> pending_;
   std::vector<Scratch> scratch_;  // per worker slot
 };
 

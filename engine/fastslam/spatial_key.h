@@ -67,21 +67,6 @@ inline uint64_t Compact(uint64_t v) {
   v = (v | (v >> 16)) & 0x00000000FFFFFFFFull;
   return v;
 }
-// Whether the cells whose zigzag codes are [a, a + 2^bits) meet [q0, q1]. REQUIRES: a is a
-// multiple of 2^bits, bits <= 40.
-inline bool ZigzagBlockHits(uint64_t a, int bits, int64_t q0, int64_t q1) {
-  if (bits == 0) {
-    const int64_t v = Unzigzag(a);
-    return v >= q0 && v <= q1;
-  }
-  const int64_t half = int64_t{1} << (bits - 1);  // codes of each sign in the block
-  const int64_t base = static_cast<int64_t>(a >> 1);
-  // Even codes: cells base .. base + half - 1; odd codes: cells -base - half .. -base - 1.
-  const bool non_negative = base <= q1 && base + half - 1 >= q0;
-  const bool negative = -base - half <= q1 && -base - 1 >= q0;
-  return non_negative || negative;
-}
-
 }  // namespace spatial_detail
 
 // The cell of (x, y); false when a coordinate is not finite or the cell is beyond kMaxCell.
@@ -121,18 +106,54 @@ inline CellRect CellsAround(double x, double y, double radius, double cell_m) {
   return CellsBetween(x - radius, x + radius, y - radius, y + radius, cell_m);
 }
 
-// Whether a key block [lo, hi] of the trie (hi - lo + 1 a power of two, lo a multiple of it)
-// holds a key of a cell in `rect`. Exact: false only when no key of the block lies in it.
-inline bool KeyRangeMayHit(uint64_t lo, uint64_t hi, const CellRect& rect) {
+// The cells of a key block [lo, hi] of the trie (hi - lo + 1 a power of two, lo a multiple of
+// it): on each axis at most two intervals (the non-negative and the negative cells).
+struct CellBlock {
+  int64_t x_lo[2], x_hi[2], y_lo[2], y_hi[2];
+  int x_count, y_count;
+  bool Meets(const CellRect& r) const {
+    bool x = false, y = false;
+    for (int k = 0; k < x_count; ++k) x = x || (x_lo[k] <= r.x1 && x_hi[k] >= r.x0);
+    for (int k = 0; k < y_count; ++k) y = y || (y_lo[k] <= r.y1 && y_hi[k] >= r.y0);
+    return x && y;
+  }
+};
+
+namespace spatial_detail {
+// The cells whose zigzag codes are [a, a + 2^bits). REQUIRES: a a multiple of 2^bits, bits <= 40.
+inline int ZigzagBlock(uint64_t a, int bits, int64_t* lo, int64_t* hi) {
+  if (bits == 0) {
+    lo[0] = hi[0] = Unzigzag(a);
+    return 1;
+  }
+  const int64_t half = int64_t{1} << (bits - 1);  // codes of each sign in the block
+  const int64_t base = static_cast<int64_t>(a >> 1);
+  // Even codes: cells base .. base + half - 1; odd codes: cells -base - half .. -base - 1.
+  lo[0] = base;
+  hi[0] = base + half - 1;
+  lo[1] = -base - half;
+  hi[1] = -base - 1;
+  return 2;
+}
+}  // namespace spatial_detail
+
+inline CellBlock BlockOf(uint64_t lo, uint64_t hi) {
   using namespace spatial_detail;
   const uint64_t span = hi - lo;  // 2^s - 1
   const int s = span == ~uint64_t{0} ? 64 : std::countr_one(span);
-  if (s <= kSlotBits) return rect.Contains(CellOfKey(lo));
-  const int free_bits = s - kSlotBits;  // low Morton bits free in the block
+  const int free_bits = std::max(s - kSlotBits, 0);  // low Morton bits free in the block
   const int x_bits = std::min((free_bits + 1) / 2, 40), y_bits = std::min(free_bits / 2, 40);
   const uint64_t m = lo >> kSlotBits;
-  return ZigzagBlockHits(Compact(m), x_bits, rect.x0, rect.x1) &&
-         ZigzagBlockHits(Compact(m >> 1), y_bits, rect.y0, rect.y1);
+  CellBlock b;
+  b.x_count = ZigzagBlock(Compact(m), x_bits, b.x_lo, b.x_hi);
+  b.y_count = ZigzagBlock(Compact(m >> 1), y_bits, b.y_lo, b.y_hi);
+  return b;
+}
+
+// Whether the key block [lo, hi] holds a key of a cell in `rect`. Exact: false only when no
+// key of the block lies in it.
+inline bool KeyRangeMayHit(uint64_t lo, uint64_t hi, const CellRect& rect) {
+  return BlockOf(lo, hi).Meets(rect);
 }
 
 }  // namespace grove::fastslam

@@ -126,8 +126,10 @@ struct FastSlamConfig {
   FastSlamGateUnit gate_unit = FastSlamGateUnit::kDistance2;
   // Landmark existence evidence (Montemerlo): a new landmark starts at 1, gains 1 at each scan
   // that associates it and loses 1 at each scan that has it in view (range <= sensor_range_m,
-  // |bearing| <= sensor_fov_rad / 2) without a detection inside its augment gate; it is removed
-  // when its evidence falls below evidence_threshold. Default: on, threshold 0.
+  // |bearing| <= sensor_fov_rad / 2, from the pose the association used: FastSLAM 2.0's
+  // predicted mean) without a detection inside its augment gate; it is removed when its
+  // evidence falls below evidence_threshold. Default: on (measured: on Victoria Park it halves
+  // the map and lowers the GPS error; README), threshold 0.
   FastSlamEvidence evidence = FastSlamEvidence::kOn;
   int64_t evidence_threshold = 0;
   // The sensor's view for the evidence. Range: (0, 1e6] m and (0, 2 pi]. Defaults: Bailey's
