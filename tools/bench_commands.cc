@@ -415,10 +415,22 @@ int FastSlamAccuracyBenchCommand(const FastSlamAccuracyOptions& options) {
   Status s = EnsureDirectory(options.out_dir);
   if (!s.ok()) return Fail(kExitOutput, s.message());
   const FastSlamFilter filters[] = {FastSlamFilter::kFastSlam1, FastSlamFilter::kFastSlam2};
+  FastSlamAssociation association = FastSlamAssociation::kKnown;
+  if (options.association == "ml") {
+    association = FastSlamAssociation::kMaximumLikelihood;
+  } else if (options.association == "ml_exclusive") {
+    association = FastSlamAssociation::kExclusive;
+  } else if (options.association != "known") {
+    return Fail(kExitUsage, fmt::format("--association = {}: must be known, ml or ml_exclusive",
+                                        QuoteForMessage(options.association)));
+  }
+  const bool unknown = association != FastSlamAssociation::kKnown;
   std::vector<std::vector<std::string>> rows;
   nlohmann::json runs = nlohmann::json::array();
-  // rmse[filter][particles] over seeds
+  // rmse[filter][particles] over seeds; under unknown association also the wrong associations
+  // and the landmarks created, summed over seeds.
   std::map<std::pair<int, int64_t>, std::vector<double>> rmse;
+  std::map<std::pair<int, int64_t>, AssociationCounts> counts;
   for (int seed = 1; seed <= options.seeds; ++seed) {
     StatusOr<BaileySimulation> sim = WebmapSimulation(static_cast<uint64_t>(seed));
     if (!sim.ok()) return Fail(kExitRun, sim.status().message());
@@ -429,6 +441,7 @@ int FastSlamAccuracyBenchCommand(const FastSlamAccuracyOptions& options) {
         config.particles = n;
         config.seed = static_cast<uint64_t>(seed);
         config.threads = options.threads;
+        config.association = association;
         auto slam = FastSlam::Create(config);
         if (!slam.ok()) return Fail(kExitUsage, slam.status().message());
         s = FeedSimulation(*sim, slam->get());
@@ -436,6 +449,10 @@ int FastSlamAccuracyBenchCommand(const FastSlamAccuracyOptions& options) {
         const PoseErrors a = ScoreAgainstTruth(**slam, *sim);
         const FastSlamSummary summary = (*slam)->Summary();
         rmse[{static_cast<int>(filter), n}].push_back(a.position_rmse_m);
+        AssociationCounts& c = counts[{static_cast<int>(filter), n}];
+        c.tagged += summary.association.tagged;
+        c.wrong += summary.association.wrong;
+        c.created += summary.association.created;
         runs.push_back({{"seed", seed},
                         {"filter", FastSlamFilterName(filter)},
                         {"particles", n},
@@ -444,7 +461,12 @@ int FastSlamAccuracyBenchCommand(const FastSlamAccuracyOptions& options) {
                         {"position_mse_mean_m2", a.position_mse_mean_m2},
                         {"position_mse_variance_m4", a.position_mse_variance_m4},
                         {"resamplings", summary.resamplings},
-                        {"filter_time_s", summary.filter_s()}});
+                        {"filter_time_s", summary.filter_s()},
+                        {"association", options.association},
+                        {"associations_tagged", summary.association.tagged},
+                        {"associations_wrong", summary.association.wrong},
+                        {"landmarks_created", summary.association.created},
+                        {"landmarks", summary.landmarks}});
         std::fprintf(stderr, "seed %d %s %lld particles: position RMSE %.2f m\n", seed,
                      FastSlamFilterName(filter), static_cast<long long>(n), a.position_rmse_m);
       }
@@ -452,6 +474,9 @@ int FastSlamAccuracyBenchCommand(const FastSlamAccuracyOptions& options) {
   }
   std::vector<std::string> header = {"filter",  "particles", "mean RMSE (m)", "median (m)",
                                      "min (m)", "max (m)",   "per seed (m)"};
+  if (unknown) {
+    header.insert(header.end() - 1, {"wrong / tagged associations", "landmarks created per run"});
+  }
   for (FastSlamFilter filter : filters) {
     for (int64_t n : options.particles) {
       const std::vector<double>& v = rmse[{static_cast<int>(filter), n}];
@@ -465,14 +490,25 @@ int FastSlamAccuracyBenchCommand(const FastSlamAccuracyOptions& options) {
                       fmt::format("{:.2f}", sum / v.size()), fmt::format("{:.2f}", Median(v)),
                       fmt::format("{:.2f}", *std::min_element(v.begin(), v.end())),
                       fmt::format("{:.2f}", *std::max_element(v.begin(), v.end())), each});
+      if (unknown) {
+        const AssociationCounts& c = counts[{static_cast<int>(filter), n}];
+        rows.back().insert(rows.back().end() - 1,
+                           {fmt::format("{} / {}", c.wrong, c.tagged),
+                            fmt::format("{:.1f}", static_cast<double>(c.created) / v.size())});
+      }
     }
   }
   const std::string md = fmt::format(
-      "# FastSLAM accuracy on Bailey's webmap\n\nMachine: {}\n\nKnown association, Bailey's "
+      "# FastSLAM accuracy on Bailey's webmap\n\nMachine: {}\n\n{}, Bailey's "
       "webmap options (2 loops, scans every 0.2 s), position RMSE of the weighted-mean pose "
       "against the truth at every control time (after the scan at a scan time), seeds 1..{} "
       "(simulator and filter).\n\n{}",
-      MachineDescription(), options.seeds, MarkdownTable(header, rows));
+      MachineDescription(),
+      unknown ? fmt::format("Unknown association ({}; the simulator's ids only tag, and the wrong "
+                            "associations are counted along the heaviest particle's ancestry)",
+                            options.association)
+              : std::string("Known association"),
+      options.seeds, MarkdownTable(header, rows));
   s = WriteFileAtomically(
       options.out_dir + "/fastslam_accuracy.json",
       nlohmann::json{{"machine", MachineDescription()}, {"runs", runs}}.dump(2));

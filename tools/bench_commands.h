@@ -28,13 +28,16 @@ struct ScalingBenchOptions {
 int ScalingBenchCommand(const ScalingBenchOptions& options);
 
 // `grove bench fastslam-accuracy`: position RMSE of the weighted-mean pose against the truth on
-// Bailey's webmap (known association), for FastSLAM 1.0 and 2.0, `seeds` simulator seeds (the
-// filter's seed equals the simulator's) and each particle count.
+// Bailey's webmap (known or unknown association), for FastSLAM 1.0 and 2.0, `seeds` simulator seeds
+// (the filter's seed equals the simulator's) and each particle count.
 struct FastSlamAccuracyOptions {
   std::string out_dir;
   int seeds = 10;
   std::vector<int64_t> particles = {10, 100, 1000, 10000};
   int threads = 0;
+  // "known", or "ml" / "ml_exclusive": unknown association, the ids only tags (the table then
+  // also gives the detections associated wrongly and the landmarks created).
+  std::string association = "known";
 };
 int FastSlamAccuracyBenchCommand(const FastSlamAccuracyOptions& options);
 

@@ -197,7 +197,9 @@ nlohmann::json GpsErrorsJson(const GpsErrors& e) {
           {"alignment_rotation_rad", e.alignment.rotation_rad},
           {"alignment_translation_m", {e.alignment.translation_x_m, e.alignment.translation_y_m}},
           {"gps_jumps_over_10_mps", e.jumps},
-          {"gps_gaps_over_5_s", e.gaps}};
+          {"gps_gaps_over_5_s", e.gaps},
+          {"mean_without_jumps_m", e.mean_without_jumps_m},
+          {"max_without_jumps_m", e.max_without_jumps_m}};
 }
 
 std::string GpsErrorCsv(const GpsErrors& e) {

@@ -243,12 +243,25 @@ StatusOr<GpsErrors> CompareWithGps(const std::vector<StampedPose>& path,
   std::sort(errors.begin(), errors.end());
   const size_t mid = errors.size() / 2;
   e.median_m = errors.size() % 2 == 1 ? errors[mid] : 0.5 * (errors[mid - 1] + errors[mid]);
+  std::vector<double> jumped_at;  // times of the fixes that jumped
   for (size_t k = 1; k < gps.size(); ++k) {
     const double dt = gps[k].t_s - gps[k - 1].t_s;
     const double d = std::hypot(gps[k].x_m - gps[k - 1].x_m, gps[k].y_m - gps[k - 1].y_m);
-    e.jumps += d > 10 * dt;
+    if (d > 10 * dt) {
+      ++e.jumps;
+      jumped_at.push_back(gps[k].t_s);
+    }
     e.gaps += dt > 5;
   }
+  double clean_sum = 0;
+  int64_t clean = 0;
+  for (const AlignedPointError& f : e.fixes) {
+    if (std::binary_search(jumped_at.begin(), jumped_at.end(), f.t_s)) continue;
+    clean_sum += f.error_m;
+    ++clean;
+    e.max_without_jumps_m = std::max(e.max_without_jumps_m, f.error_m);
+  }
+  e.mean_without_jumps_m = clean > 0 ? clean_sum / clean : 0;
   return e;
 }
 

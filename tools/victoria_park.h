@@ -73,9 +73,11 @@ struct GpsErrors {
   std::vector<AlignedPointError> fixes;
   double mean_m = 0, median_m = 0, rmse_m = 0, max_m = 0;
   // The GPS's own trouble: fixes whose jump from the previous fix implies a speed above 10 m/s
-  // (the vehicle drives below 4 m/s), and gaps of more than 5 s between fixes.
+  // (the vehicle drives below 4 m/s), and gaps of more than 5 s between fixes; and the mean and
+  // maximum error over the fixes that did not jump.
   int64_t jumps = 0;
   int64_t gaps = 0;
+  double mean_without_jumps_m = 0, max_without_jumps_m = 0;
 };
 StatusOr<GpsErrors> CompareWithGps(const std::vector<StampedPose>& path,
                                    const std::vector<TimedPoint>& gps);

@@ -169,6 +169,9 @@ int Main(int argc, char** argv) {
       ->check(CLI::Range(int64_t{1}, int64_t{1} << 31));
   fs_accuracy->add_option("--threads", fs_accuracy_options.threads, "0 = all cores")
       ->check(CLI::Range(0, 256));
+  fs_accuracy
+      ->add_option("--association", fs_accuracy_options.association, "known, ml or ml_exclusive")
+      ->capture_default_str();
   CLI::App* fs_speed = bench->add_subcommand(
       "fastslam-speed",
       "FastSLAM run time on the webmap and throughput against particles and threads");

@@ -1,0 +1,131 @@
+// The Victoria Park readers, their events in the filter's order, and the error against GPS.
+#include "tools/victoria_park.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <string>
+#include <vector>
+
+namespace grove::tools {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kPi = std::numbers::pi;
+
+class VictoriaParkTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::path(::testing::TempDir()) /
+           ("grove_park_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  void Write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name) << text;
+  }
+  fs::path dir_;
+};
+
+TEST_F(VictoriaParkTest, ReadsTheFilesAndMergesControlsBeforeScans) {
+  Write("inputs.dat", "  1.0 2.0 0.1\n  2.0 2.5 -0.1\n\n  3.0 0.0 0.0\n");
+  Write("measurements.dat",
+        "0.5 10 1.0 0.2\n1.0 12 0.0 0.3\n1.5 20 3.14159 0.3\n1.5 21 1.5707963267948966 0.4\n"
+        "3.5 5 1 0.1\n");
+  Write("gps.dat", "0.0 1 2\n1.0 3 4\n");
+  StatusOr<VictoriaParkData> d = ReadVictoriaPark(dir_.string(), 3.0);
+  ASSERT_TRUE(d.ok()) << d.status().message();
+  EXPECT_EQ(d->controls.size(), 3u);
+  ASSERT_EQ(d->observations.size(), 4u);  // 3.5 s is after --until
+  EXPECT_EQ(d->gps.size(), 2u);
+  EXPECT_NEAR(d->observations[0].z.bearing_rad, 1.0 - kPi / 2, 1e-15);
+  EXPECT_EQ(d->observations[0].z.id, -1);
+  EXPECT_NEAR(d->observations[3].z.bearing_rad, 0, 1e-15);
+  VictoriaParkEvents events(&*d);
+  FastSlamEvent e;
+  std::vector<std::string> order;
+  for (;;) {
+    StatusOr<bool> more = events.Next(&e);
+    ASSERT_TRUE(more.ok());
+    if (!*more) break;
+    order.push_back(e.is_scan ? "scan " + std::to_string(e.scan.size()) + " @" +
+                                    std::to_string(e.scan_t_s)
+                              : "control @" + std::to_string(e.control.t_s));
+  }
+  const std::vector<std::string> expected = {"control @1.000000", "scan 1 @1.000000",
+                                             "scan 2 @1.500000", "control @2.000000",
+                                             "control @3.000000"};
+  EXPECT_EQ(order, expected);
+  EXPECT_EQ(events.skipped_scans(), 1);  // 0.5 s, before the first control
+}
+
+TEST_F(VictoriaParkTest, ErrorsNameFileLineAndColumn) {
+  Write("gps.dat", "0.0 1 2\n");
+  Write("measurements.dat", "1.0 12 0.0 0.3\n");
+  Write("inputs.dat", "1.0 2.0 0.1\n1.0 2.0 0.1\n");
+  StatusOr<VictoriaParkData> d = ReadVictoriaPark(dir_.string(), 1e9);
+  ASSERT_FALSE(d.ok());
+  EXPECT_NE(d.status().message().find("inputs.dat:2:1: time = 1: must be after the previous time"),
+            std::string::npos)
+      << d.status().message();
+  Write("inputs.dat", "1.0 2.0 1.6\n");
+  d = ReadVictoriaPark(dir_.string(), 1e9);
+  EXPECT_NE(d.status().message().find("inputs.dat:1:9: steering = 1.6"), std::string::npos)
+      << d.status().message();
+  Write("inputs.dat", "1.0 2.0 0.1 7\n");
+  d = ReadVictoriaPark(dir_.string(), 1e9);
+  EXPECT_NE(d.status().message().find("inputs.dat:1:13: 4 numbers where 3 are expected"),
+            std::string::npos)
+      << d.status().message();
+  Write("inputs.dat", "1.0 nan 0.1\n");
+  d = ReadVictoriaPark(dir_.string(), 1e9);
+  EXPECT_NE(d.status().message().find("inputs.dat:1:5: speed"), std::string::npos)
+      << d.status().message();
+  fs::remove(dir_ / "inputs.dat");
+  d = ReadVictoriaPark(dir_.string(), 1e9);
+  EXPECT_EQ(d.status().code(), StatusCode::kNotFound);
+  EXPECT_NE(d.status().message().find("inputs.dat.gz: no such file"), std::string::npos);
+}
+
+TEST(CompareWithGpsTest, AlignsRigidlyAndCountsTheGpsJumps) {
+  // A path on a circle; the GPS is the same path rotated by 0.3 rad and moved by (5, -2), one
+  // fix a second, with one fix thrown 40 m off.
+  std::vector<StampedPose> path;
+  std::vector<TimedPoint> gps;
+  const double c = std::cos(0.3), s = std::sin(0.3);
+  for (int k = 0; k <= 200; ++k) {
+    const double t = 0.5 * k, a = 0.05 * t;
+    const double x = 20 * std::cos(a), y = 20 * std::sin(a);
+    path.push_back({t, Pose2{x, y, a}});
+    if (k % 2 == 0) gps.push_back({t, c * x - s * y + 5, s * x + c * y - 2});
+  }
+  gps[50].x_m += 40;
+  StatusOr<GpsErrors> e = CompareWithGps(path, gps);
+  ASSERT_TRUE(e.ok()) << e.status().message();
+  EXPECT_EQ(e->fixes.size(), gps.size());
+  EXPECT_EQ(e->jumps, 2);  // away and back
+  EXPECT_EQ(e->gaps, 0);
+  EXPECT_NEAR(e->alignment.rotation_rad, 0.3, 0.05);
+  EXPECT_LT(e->median_m, 1.5);
+  EXPECT_GT(e->max_m, 35);
+  EXPECT_GT(e->mean_m, e->median_m);
+  EXPECT_LT(e->max_without_jumps_m, 2.0);
+  EXPECT_LT(e->mean_without_jumps_m, e->mean_m);
+  // Without the jump the alignment is exact.
+  gps[50].x_m -= 40;
+  e = CompareWithGps(path, gps);
+  ASSERT_TRUE(e.ok());
+  EXPECT_NEAR(e->alignment.rotation_rad, 0.3, 1e-9);
+  EXPECT_LT(e->max_m, 1e-6);
+  EXPECT_EQ(e->jumps, 0);
+}
+
+}  // namespace
+}  // namespace grove::tools
