@@ -144,7 +144,8 @@ struct FastSlamConfig {
 
   // Worker threads; 0 means one per hardware thread. Range: 0..256. Default: 0.
   int threads = 0;
-  // Particles per parallel batch. Range: >= 1. Default: 64.
+  // Particles per parallel batch, at most (batches shrink to leave each thread at least 4).
+  // Range: >= 1. Default: 64.
   int64_t batch = 64;
 
   // Checks every field; the message names the field, its value and the rule it breaks.

@@ -108,7 +108,8 @@ struct FootSlamConfig {
   // Worker threads. 0 means one per hardware thread. Range: 0..256 (more threads than cores
   // only add overhead; oneTBB runs at most as many as the process may use). Default: 0.
   int threads = 0;
-  // Particles per parallel batch. Range: >= 1. Default: 512.
+  // Particles per parallel batch, at most (batches shrink to leave each thread at least 4).
+  // Range: >= 1. Default: 512.
   int64_t batch = 512;
 
   // Checks every field; the message names the field, its value and the rule it breaks.
