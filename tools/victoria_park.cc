@@ -89,15 +89,18 @@ StatusOr<std::string> ReadMaybeCompressed(const std::string& path) {
       int code = 0;
       const std::string what = gzerror(f, &code);
       gzclose(f);
-      return IoError(fmt::format("{}: cannot read: {}", path, what));
+      if (code == Z_ERRNO) return IoError(fmt::format("{}: cannot read: {}", path, what));
+      return InvalidArgumentError(
+          fmt::format("{}: the compressed data is corrupt: {}", path, QuotedField(what)));
     }
     if (n == 0) break;
     out.append(buffer, static_cast<size_t>(n));
   }
   // A truncated gzip stream reads as a short file: gzclose_r reports it.
   const int closed = gzclose(f);
+  if (closed == Z_ERRNO) return IoError(fmt::format("{}: cannot read", path));
   if (closed != Z_OK) {
-    return IoError(
+    return InvalidArgumentError(
         fmt::format("{}: the compressed data is truncated or corrupt (zlib {})", path, closed));
   }
   return out;

@@ -23,6 +23,7 @@
 #define GROVE_TESTS_FUZZ_FUZZ_CHECKS_H_
 
 #include <fmt/format.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -47,6 +48,7 @@
 #include "tools/output_readers.h"
 #include "tools/step_reader.h"
 #include "tools/trajectory_metrics.h"
+#include "tools/victoria_park.h"
 
 namespace grove::testing {
 
@@ -288,6 +290,71 @@ inline std::string CsvInputPath() {
   return fmt::format("/tmp/grove_fuzz_{}.csv", static_cast<long>(::getpid()));
 }
 
+// The Victoria Park readers (tools/victoria_park.h) on the input cut at its first two record
+// separators (0x1e) into inputs.dat, measurements.dat and gps.dat (missing parts empty), in a
+// directory beside `path`: the data as the readers promise it, or an InvalidArgument naming the
+// file (and its line and column when it names one).
+inline std::string CheckVictoriaPark(const std::string& path, std::string_view text) {
+  const std::string dir = path + ".park";
+  ::mkdir(dir.c_str(), 0700);
+  const char* names[] = {"inputs.dat", "measurements.dat", "gps.dat"};
+  std::string_view parts[3];
+  std::string_view rest = text;
+  for (int k = 0; k < 3; ++k) {
+    const size_t cut = k < 2 ? rest.find('\x1e') : std::string_view::npos;
+    parts[k] = rest.substr(0, cut);
+    rest = cut == std::string_view::npos ? std::string_view() : rest.substr(cut + 1);
+  }
+  for (int k = 0; k < 3; ++k) {
+    const std::string file = dir + "/" + names[k];
+    std::FILE* f = std::fopen(file.c_str(), "wb");
+    if (f == nullptr) return "setup: cannot create " + file;
+    const bool written = std::fwrite(parts[k].data(), 1, parts[k].size(), f) == parts[k].size();
+    if (std::fclose(f) != 0 || !written) return "setup: cannot write " + file;
+  }
+  std::string failure;
+  StatusOr<tools::VictoriaParkData> d = tools::ReadVictoriaPark(dir, 1e9);
+  if (!d.ok()) {
+    for (int k = 0; k < 3 && failure.empty(); ++k) {
+      const std::string file = dir + "/" + names[k];
+      if (d.status().message().rfind(file + ":", 0) == 0) {
+        failure = CheckError(d.status(), file, parts[k]);
+        if (!failure.empty()) failure = "ReadVictoriaPark: " + failure;
+        break;
+      }
+      if (k == 2) failure = "ReadVictoriaPark: the error names no file: " + d.status().message();
+    }
+  } else {
+    if (d->controls.empty()) failure = "ReadVictoriaPark: ok without a control";
+    for (size_t i = 0; i < d->controls.size() && failure.empty(); ++i) {
+      const tools::ControlRecord& c = d->controls[i];
+      if (!Finite(c.t_s, c.v_mps, c.steer_rad) || !(std::fabs(c.steer_rad) < 0.5 * M_PI) ||
+          (i > 0 && !(c.t_s > d->controls[i - 1].t_s))) {
+        failure = fmt::format("ReadVictoriaPark: control {} ({}, {}, {})", i, c.t_s, c.v_mps,
+                              c.steer_rad);
+      }
+    }
+    for (size_t i = 0; i < d->observations.size() && failure.empty(); ++i) {
+      const tools::ObservationRecord& o = d->observations[i];
+      if (!Finite(o.t_s, o.z.range_m, o.z.bearing_rad) || o.z.range_m < 0 ||
+          !(std::fabs(o.z.bearing_rad) <= 0.5 * M_PI + 1e-12) || o.z.id != -1 ||
+          (i > 0 && o.t_s < d->observations[i - 1].t_s)) {
+        failure = fmt::format("ReadVictoriaPark: detection {} ({}, {}, {})", i, o.t_s, o.z.range_m,
+                              o.z.bearing_rad);
+      }
+    }
+    for (size_t i = 0; i < d->gps.size() && failure.empty(); ++i) {
+      const tools::TimedPoint& g = d->gps[i];
+      if (!Finite(g.t_s, g.x_m, g.y_m) || (i > 0 && !(g.t_s > d->gps[i - 1].t_s))) {
+        failure = fmt::format("ReadVictoriaPark: fix {} ({}, {}, {})", i, g.t_s, g.x_m, g.y_m);
+      }
+    }
+  }
+  for (const char* name : names) std::remove((dir + "/" + name).c_str());
+  ::rmdir(dir.c_str());
+  return failure;
+}
+
 inline std::string CheckCsvReadersUnguarded(const std::string& path, std::string_view text) {
   {
     std::FILE* file = std::fopen(path.c_str(), "wb");
@@ -375,15 +442,17 @@ inline std::string CheckCsvReadersUnguarded(const std::string& path, std::string
       }
       if (!*more) break;
       const bool bearing_ok = o.z.bearing_rad > -M_PI && o.z.bearing_rad <= M_PI;
+      // Without the id column every id is -1 (unknown association).
+      const bool id_ok = observations->has_ids() ? o.z.id >= 0 : o.z.id == -1;
       if (!Finite(o.t_s, o.z.range_m, o.z.bearing_rad) || o.z.range_m < 0 || !bearing_ok ||
-          o.z.id < 0 || (!first && o.t_s < previous.t_s)) {
+          !id_ok || (!first && o.t_s < previous.t_s)) {
         return fmt::format("ObservationReader: row ({}, {}, {}, {}) after t = {}", o.t_s,
                            o.z.range_m, o.z.bearing_rad, o.z.id, previous.t_s);
       }
       previous = o;
     }
   }
-  return "";
+  return CheckVictoriaPark(path, text);
 }
 
 // Runs `check`, turning an exception out of the parser into a broken property.
