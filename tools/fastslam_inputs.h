@@ -96,8 +96,6 @@ class FastSlamInputReader final : public FastSlamEventSource {
   std::string ControlSource() const override { return controls_.path(); }
   std::string ScanSource() const override { return observations_.path(); }
   bool has_ids() const { return observations_.has_ids(); }
-  const std::string& controls_path() const { return controls_.path(); }
-  const std::string& observations_path() const { return observations_.path(); }
 
  private:
   FastSlamInputReader(ControlReader c, ObservationReader o)

@@ -94,9 +94,9 @@ inline void DetectionPoint(const VehiclePose& pose, const LandmarkObservation& z
 
 // The sensor's view for the existence evidence: range <= sqrt(range2) and |bearing| <= fov / 2,
 // tested as: the component along the heading is at least |d| cos(fov / 2) (no angle computed).
-struct SensorView {
-  double range_m = 30;
-  double fov_rad = 3.141592653589793;
+struct SensorView {  // FastSlamConfig's sensor_range_m and sensor_fov_rad
+  double range_m;
+  double fov_rad;
 };
 
 // Appends the matches of every detection of `scan` against the map `root` of `trie` (keyed by
