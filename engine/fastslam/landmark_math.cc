@@ -69,30 +69,6 @@ typename Derived::PlainObject Symmetric(const Eigen::MatrixBase<Derived>& expres
   return 0.5 * (a + a.transpose());
 }
 
-// A with A A^T = a when `a` is positive semi-definite in the sense of kPsdTolerance: the Cholesky
-// factor when LLT succeeds (positive definite, the usual case), else V diag(lambda)^1/2 from the
-// symmetric eigendecomposition with round-off eigenvalues clamped to 0 (a pivoted LDLT can stop
-// at a zero pivot followed by round-off; the eigenvalues decide semi-definiteness robustly).
-// False when `a` is not positive semi-definite. `root` may be null (a check only).
-// REQUIRES: a finite and symmetric.
-template <int N>
-bool SquareRoot(const Eigen::Matrix<double, N, N>& a, Eigen::Matrix<double, N, N>* root) {
-  using Matrix = Eigen::Matrix<double, N, N>;
-  const Eigen::LLT<Matrix> llt(a);
-  if (llt.info() == Eigen::Success) [[likely]] {
-    if (root != nullptr) *root = llt.matrixL();
-    return true;
-  }
-  const Eigen::SelfAdjointEigenSolver<Matrix> eigen(a);
-  if (eigen.info() != Eigen::Success) return false;
-  const double scale = a.diagonal().cwiseAbs().maxCoeff();
-  if (eigen.eigenvalues().minCoeff() < -kPsdTolerance * scale) return false;
-  if (root != nullptr) {
-    *root = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
-  }
-  return true;
-}
-
 // C^-1 B from the LLT of C, one column at a time: Eigen sends a matrix right-hand side through its
 // blocked, packing triangular solver, several times the cost of the vector path at these sizes.
 template <int N, int M>
@@ -163,7 +139,7 @@ Status ValidateInputs(const VehiclePose& pose, const RangeBearing& z, const Sens
                       std::isfinite(l.y_m) && std::isfinite(l.xx) && std::isfinite(l.xy) &&
                       std::isfinite(l.yy);
   if (finite && z.range_m >= 0 && noise.sigma_range_m >= 0 && noise.sigma_bearing_rad >= 0 &&
-      SquareRoot<2>(Covariance(l), nullptr)) [[likely]] {
+      PsdSquareRoot<2>(Covariance(l), nullptr)) [[likely]] {
     return Status::Ok();
   }
   return DescribeBadInputs(pose, z, noise, l);
@@ -299,7 +275,7 @@ Status PrepareProposal(const Eigen::Vector3d& mu, const Eigen::Matrix3d& sigma,
     return NotFiniteEntry("mu", mu);
   GROVE_RETURN_IF_ERROR(ValidateVehicleCovariance(sigma));
   *sigma_sym = Symmetric(sigma);
-  if (!SquareRoot<3>(*sigma_sym, nullptr)) [[unlikely]] {
+  if (!PsdSquareRoot<3>(*sigma_sym, nullptr)) [[unlikely]] {
     return FailedPreconditionError(
         fmt::format("sigma = {} is not positive semi-definite", FormatMatrix(sigma)));
   }
@@ -515,7 +491,7 @@ Status SamplePose(const Eigen::Vector3d& mu, const Eigen::Matrix3d& sigma,
   if (!standard_normals.allFinite()) return NotFiniteEntry("standard_normals", standard_normals);
   GROVE_RETURN_IF_ERROR(ValidateVehicleCovariance(sigma));
   Eigen::Matrix3d root;
-  if (!SquareRoot<3>(Symmetric(sigma), &root)) {
+  if (!PsdSquareRoot<3>(Symmetric(sigma), &root)) {
     return FailedPreconditionError(
         fmt::format("sigma = {} is not positive semi-definite", FormatMatrix(sigma)));
   }

@@ -36,7 +36,9 @@
 #ifndef GROVE_ENGINE_FASTSLAM_LANDMARK_MATH_H_
 #define GROVE_ENGINE_FASTSLAM_LANDMARK_MATH_H_
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <cstdint>
 #include <type_traits>
 
@@ -74,6 +76,30 @@ inline constexpr double kMinSigma = 1e-9;
 inline constexpr double kPsdTolerance = 1e-10;
 // A 3x3 covariance counts as symmetric when |A(i,j) - A(j,i)| <= kSymmetryTolerance * max |A(k,k)|.
 inline constexpr double kSymmetryTolerance = 1e-9;
+
+// A with A A^T = a when `a` is positive semi-definite in the sense of kPsdTolerance: the Cholesky
+// factor when LLT succeeds (positive definite, the usual case), else V diag(lambda)^1/2 from the
+// symmetric eigendecomposition with round-off eigenvalues clamped to 0 (a pivoted LDLT can stop
+// at a zero pivot followed by round-off; the eigenvalues decide semi-definiteness robustly).
+// False when `a` is not positive semi-definite. `root` may be null (a check only).
+// REQUIRES: a finite and symmetric.
+template <int N>
+bool PsdSquareRoot(const Eigen::Matrix<double, N, N>& a, Eigen::Matrix<double, N, N>* root) {
+  using Matrix = Eigen::Matrix<double, N, N>;
+  const Eigen::LLT<Matrix> llt(a);
+  if (llt.info() == Eigen::Success) [[likely]] {
+    if (root != nullptr) *root = llt.matrixL();
+    return true;
+  }
+  const Eigen::SelfAdjointEigenSolver<Matrix> eigen(a);
+  if (eigen.info() != Eigen::Success) return false;
+  const double scale = a.diagonal().cwiseAbs().maxCoeff();
+  if (eigen.eigenvalues().minCoeff() < -kPsdTolerance * scale) return false;
+  if (root != nullptr) {
+    *root = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+  }
+  return true;
+}
 
 // A landmark's 2-D Gaussian: the leaf of the persistent landmark trie. 48 bytes, trivially
 // copyable. Under unknown association it also carries its existence evidence (raised when the
