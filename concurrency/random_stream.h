@@ -47,10 +47,13 @@ struct ZigguratTables {
 // Every use of the random streams, one value each, so that no two uses of one (step, particle)
 // ever draw the same numbers. Values are part of the results: never renumber one.
 enum StreamPurpose : uint32_t {
-  kTest = 0,           // tests and tools
-  kMotion = 1,         // a particle's motion noise in a step
-  kInit = 2,           // a particle's initial state
-  kProposal = 3,       // a particle's draw from FastSLAM 2.0's proposal at a scan
+  kTest = 0,      // tests and tools
+  kMotion = 1,    // a particle's motion noise in a step
+  kInit = 2,      // a particle's initial state
+  kProposal = 3,  // a particle's draw from its proposal at a scan (FastSLAM 2.0 and later)
+  // Differential evolution's draws for a particle's trial in generation g use
+  // kDifferentialEvolution + 256 g (g < 256; the low byte keeps them apart from the others).
+  kDifferentialEvolution = 4,
   kResample = 0x5E5A,  // the resampling draws of a step
 };
 

@@ -4,15 +4,15 @@
 // One Update():
 //   1. advance: the model propagates, weights and updates the map of every particle, in parallel
 //      over batches (log-domain weight increments);
-//   2. population (optional): a model that needs the whole population within a step (moving
-//      particles towards the best one, as differential evolution does) gets it here, before the
-//      weights are normalised;
-//   3. normalise: log-sum-exp over fixed blocks, then the effective sample size 1 / sum(w^2);
-//   4. resample when ESS / N < threshold (threshold 1 resamples every step): parents are drawn
+//   2. normalise: log-sum-exp over fixed blocks, then the effective sample size 1 / sum(w^2);
+//   3. resample when ESS / N < threshold (threshold 1 resamples every step): parents are drawn
 //      (systematic by default, in parallel), the model gathers the new generation (O(1) per
 //      particle: maps are shared) and releases the dead one, both in parallel;
-//   5. complete (optional): a model whose weights do not depend on what it draws (FastSLAM
-//      2.0) draws and updates after resampling, in parallel over batches.
+//   4. complete (optional): a model whose weights do not depend on what it draws (FastSLAM
+//      2.0) draws and updates after resampling, in parallel over batches;
+//   5. population (optional): a model that needs the whole population once its particles are
+//      drawn (moving them towards the best one, as differential evolution does) gets it last:
+//      after complete, or for a model without it after advance (then before normalising).
 // One Predict() propagates every particle without weighting (a landmark filter predicts at the
 // control rate and weights only at scans). Both count as one step of the random streams.
 // Sums over particles are taken over fixed blocks and every draw comes from a counter-based
@@ -32,6 +32,7 @@
 #include <limits>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "concurrency/worker_pool.h"
@@ -87,13 +88,34 @@ concept PredictingModel = FilterModel<M> &&
   { m.Predict(in, step, i, i, slot) } -> std::same_as<Status>;
 };
 
-// A model with a population phase for `Input`, run after Advance() over every particle:
-// Population(input, step, log_w, workers) may move particles and change their log weights.
+// A model with a population phase for `Input`, run once its particles are drawn (after
+// Complete(), or after Advance() when the model has no Complete()): Population(input, step,
+// workers) may move particles (not their weights) and runs its own parallel loops.
 template <typename M, typename Input>
-concept PopulationModel = requires(M& m, const Input& in, uint64_t step, std::span<double> log_w,
-                                   WorkerPool& workers) {
-  { m.Population(in, step, log_w, workers) } -> std::same_as<Status>;
+concept PopulationModel = requires(M& m, const Input& in, uint64_t step, WorkerPool& workers) {
+  { m.Population(in, step, workers) } -> std::same_as<Status>;
 };
+
+// Runs body(slot, begin, end) -> Status over [0, n) in batches of at most max_batch particles,
+// fewer when that leaves a thread under 4 batches (100 particles in batches of 64 would keep two
+// threads at 64 and 36); returns the error of the lowest failing batch, which is the error of the
+// lowest failing particle whatever the batches when a batch stops at its first. `status` is
+// scratch space (one entry per batch), kept by the caller to avoid an allocation per loop.
+template <typename F>
+Status RunInBatches(WorkerPool& workers, size_t n, size_t max_batch, std::vector<Status>* status,
+                    F&& body) {
+  const size_t threads = static_cast<size_t>(workers.num_threads());
+  size_t batch = std::max<size_t>(max_batch, 1);
+  if (threads > 1) batch = std::clamp<size_t>((n + 4 * threads - 1) / (4 * threads), 1, batch);
+  status->assign((n + batch - 1) / batch, Status::Ok());
+  workers.ParallelFor(n, batch, [&](int slot, size_t begin, size_t end) {
+    (*status)[begin / batch] = body(slot, begin, end);
+  });
+  for (Status& s : *status) {
+    if (!s.ok()) return std::move(s);
+  }
+  return Status::Ok();
+}
 
 // A model that completes its update of `Input` after resampling, over every particle:
 // Complete(input, step, begin, end, slot). FastSLAM 2.0 weights a particle by its predictive
@@ -125,9 +147,8 @@ class ParticleFilter {
     Status status = ForBatches([&](int slot, size_t begin, size_t end) {
       return model_->Advance(input, step_, begin, end, slot, log_w_.data());
     });
-    if constexpr (PopulationModel<Model, Input>) {
-      if (status.ok())
-        status = model_->Population(input, step_, std::span<double>(log_w_), *workers_);
+    if constexpr (PopulationModel<Model, Input> && !CompletingModel<Model, Input>) {
+      if (status.ok()) status = model_->Population(input, step_, *workers_);
     }
     auto t1 = Clock::now();
     times_.advance_s += Seconds(t1 - t0);
@@ -153,6 +174,9 @@ class ParticleFilter {
       status = ForBatches([&](int slot, size_t begin, size_t end) {
         return model_->Complete(input, step_, begin, end, slot);
       });
+      if constexpr (PopulationModel<Model, Input>) {
+        if (status.ok()) status = model_->Population(input, step_, *workers_);
+      }
       times_.advance_s += Seconds(Clock::now() - t3);
     }
     ++step_;
@@ -250,24 +274,12 @@ class ParticleFilter {
     return std::chrono::duration<double>(d).count();
   }
 
-  // Runs body(slot, begin, end) -> Status over batches of options_.batch particles, smaller
-  // when that leaves fewer than 4 batches per thread (100 particles in batches of 64 would keep
-  // two threads at 64 and 36); returns the error of the lowest failing batch, which is the
-  // error of the lowest failing particle whatever the batches (a batch stops at its first).
+  // Runs body(slot, begin, end) -> Status over batches of at most options_.batch particles
+  // (RunInBatches).
   template <typename F>
   Status ForBatches(F&& body) {
-    const size_t n = log_w_.size();
-    const size_t threads = static_cast<size_t>(workers_->num_threads());
-    size_t batch = std::max<size_t>(options_.batch, 1);
-    if (threads > 1) batch = std::clamp<size_t>((n + 4 * threads - 1) / (4 * threads), 1, batch);
-    batch_status_.assign((n + batch - 1) / batch, Status::Ok());
-    workers_->ParallelFor(n, batch, [&](int slot, size_t begin, size_t end) {
-      batch_status_[begin / batch] = body(slot, begin, end);
-    });
-    for (Status& s : batch_status_) {
-      if (!s.ok()) return std::move(s);
-    }
-    return Status::Ok();
+    return RunInBatches(*workers_, log_w_.size(), options_.batch, &batch_status_,
+                        std::forward<F>(body));
   }
 
   Status Normalize() {

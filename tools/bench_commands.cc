@@ -608,9 +608,12 @@ int VictoriaParkBenchCommand(const VictoriaParkBenchOptions& options) {
   std::vector<std::vector<std::string>> rows;
   nlohmann::json points = nlohmann::json::array();
   for (const std::string& filter : options.filters) {
-    if (filter != "fastslam1" && filter != "fastslam2") {
-      return Fail(kExitUsage, fmt::format("--filters: {}: must be fastslam1 or fastslam2",
-                                          QuoteForMessage(filter)));
+    FastSlamFilter kind;
+    if (!FastSlamFilterFromName(filter, &kind)) {
+      return Fail(kExitUsage,
+                  fmt::format("--filters: {}: not a filter (fastslam1, fastslam2, ufastslam, "
+                              "srcd, srcd_aided, srcd_pf, de_srcd)",
+                              QuoteForMessage(filter)));
     }
     for (int64_t n : options.particles) {
       for (int threads : {1, cores}) {
@@ -622,8 +625,7 @@ int VictoriaParkBenchCommand(const VictoriaParkBenchOptions& options) {
         if (pid < 0) return Fail(kExitRun, "fork failed");
         if (pid == 0) {
           FastSlamConfig config = VictoriaParkConfig();
-          config.filter =
-              filter == "fastslam1" ? FastSlamFilter::kFastSlam1 : FastSlamFilter::kFastSlam2;
+          config.filter = kind;
           config.particles = n;
           config.threads = threads;
           auto slam = FastSlam::Create(config);

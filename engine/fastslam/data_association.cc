@@ -12,15 +12,23 @@ double NewLandmarkLogLikelihood(const SensorNoise& noise, double augment_gate) {
          0.5 * std::log(4 * r(0, 0) * r(1, 1));
 }
 
+double InitCovarianceBound(double range_m, const SensorNoise& noise, double init_cd_h) {
+  const Eigen::Matrix2d r = SensorCovariance(noise);
+  const double sr2 = r(0, 0), sb2 = r(1, 1);
+  const double across = range_m * range_m * sb2;
+  if (init_cd_h <= 0) return std::max(sr2, across);
+  return std::max(sr2 + across * sb2 * (init_cd_h * init_cd_h - 1) / 4, across);
+}
+
 double SearchRadius(double range_m, double max_range_m, const SensorNoise& noise,
-                    double augment_gate) {
+                    double augment_gate, double init_cd_h) {
   const Eigen::Matrix2d r = SensorCovariance(noise);
   const double sr2 = r(0, 0), sb2 = r(1, 1);
   const double k = 2 * augment_gate;
   const double a = k * sb2;
   if (!(a < 1)) return std::numeric_limits<double>::infinity();
   const double rmax = std::max(range_m, max_range_m);
-  const double lp = std::max(sr2, rmax * rmax * sb2);
+  const double lp = InitCovarianceBound(rmax, noise, init_cd_h);
   const double c = a * range_m * range_m + k * (lp + sr2);
   const double root = (a * range_m + std::sqrt(a * a * range_m * range_m + (1 - a) * c)) / (1 - a);
   // A margin of 1e-6 relative and 1e-9 m for the round-off of the distances compared with it.

@@ -25,7 +25,10 @@
 // d2 >= (dr^2 + r_l^2 db^2) / (lP + sr^2 + r_l^2 sb^2) >= D^2 / (2 (lP + sr^2 + r_l^2 sb^2)),
 // where lP bounds the largest eigenvalue of any landmark's P. An EKF update never grows P, and
 // a landmark starts at G R G^T, whose eigenvalues are sr^2 and (r sb)^2 for its first range r;
-// so lP = max(sr^2, (r_max sb)^2) with r_max the longest range of any detection so far. With
+// so lP = max(sr^2, (r_max sb)^2) with r_max the longest range of any detection so far (the
+// unscented and central-difference updates never grow P either; a central-difference
+// initialisation, whose second-order term lengthens the ray, gives lP = InitCovarianceBound()
+// instead). With
 // r_l <= r + D and k = 2 augment_gate, d2 > augment_gate whenever
 //   (1 - a) D^2 - 2 a r D - a r^2 - k (lP + sr^2) > 0,   a = k sb^2,
 // i.e. beyond the positive root of that quadratic. When a >= 1 there is no such bound and the
@@ -54,7 +57,18 @@ struct AssociationParams {
   bool exclusive = false;
   double cell_m = 5;  // the spatial keys' cell side
   SensorNoise noise;
+  // The map's leaves hold square-root factors (the SRCD filters), not covariances.
+  bool square_root_leaves = false;
+  // New landmarks come from a central-difference initialisation with this h (0: the EKF's).
+  double init_cd_h = 0;
 };
+
+// The largest eigenvalue a new landmark's covariance can have when its first range was at most
+// range_m: max(sr^2, r^2 sb^2) for the EKF's G R G^T; for a central-difference initialisation
+// (init_cd_h = h > 0), whose factor has the columns sr and a second-order term
+// s <= r sb^2 sqrt(h^2 - 1) / 2 along the ray and r sin(h sb) / h <= r sb across it,
+// max(sr^2 + r^2 sb^4 (h^2 - 1) / 4, r^2 sb^2).
+double InitCovarianceBound(double range_m, const SensorNoise& noise, double init_cd_h);
 
 // log p0 above.
 double NewLandmarkLogLikelihood(const SensorNoise& noise, double augment_gate);
@@ -62,7 +76,7 @@ double NewLandmarkLogLikelihood(const SensorNoise& noise, double augment_gate);
 // The candidate radius above for a detection at range_m, when no detection so far had a range
 // beyond max_range_m; +infinity when the bound does not exist.
 double SearchRadius(double range_m, double max_range_m, const SensorNoise& noise,
-                    double augment_gate);
+                    double augment_gate, double init_cd_h = 0);
 
 // A detection and a landmark within its augment gate.
 struct Match {
@@ -123,7 +137,8 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
   for (const LandmarkObservation& z : scan) {
     Probe p;
     DetectionPoint(pose, z, &p.x, &p.y);
-    const double radius = SearchRadius(z.range_m, max_range_m, params.noise, params.augment_gate);
+    const double radius =
+        SearchRadius(z.range_m, max_range_m, params.noise, params.augment_gate, params.init_cd_h);
     bounded = bounded && std::isfinite(radius) && std::isfinite(p.x) && std::isfinite(p.y);
     p.radius2 = radius * radius;
     probes.push_back(p);
@@ -144,8 +159,9 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
     y1 = std::max(y1, pose.y_m + view->range_m);
   }
   Status status;
-  auto consider = [&](uint64_t key, const Landmark& l) {
+  auto consider = [&](uint64_t key, const Landmark& leaf) {
     if (!status.ok()) return;
+    const Landmark l = params.square_root_leaves ? WithCovariance(leaf) : leaf;
     const double lx = l.x_m - pose.x_m, ly = l.y_m - pose.y_m;
     if (view != nullptr) {
       const double d2 = lx * lx + ly * ly;

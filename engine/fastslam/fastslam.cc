@@ -27,7 +27,8 @@ namespace {
 
 constexpr char kCheckpointKind[] = "grove fastslam";
 // FastSLAM's checkpoint body layout; bumped whenever it changes.
-constexpr uint32_t kFastSlamFormatVersion = 2;
+// Version 3: the seed's filters (their configuration fields, evolution counts).
+constexpr uint32_t kFastSlamFormatVersion = 3;
 
 // The landmark trees' degree, 2^kLog2Degree (see the README for the measurement behind it).
 constexpr int kLog2Degree = 3;
@@ -175,6 +176,27 @@ class FastSlam::Impl {
   }
   const std::vector<StampedPose>& MeanTrajectory() const { return reported_; }
 
+  // The weighted covariance of the particles' poses about the weighted mean (a serial sum: the
+  // same at any thread count).
+  Pose2Covariance PoseCovariance() const {
+    const Pose2 mean = MeanPose();
+    std::span<const double> lw = driver_.filter().log_weights();
+    Pose2Covariance c;
+    for (size_t i = 0; i < model_.size(); ++i) {
+      const VehiclePose& p = model_.pose(i);
+      const double w = std::exp(lw[i]);
+      const double dx = p.x_m - mean.x_m, dy = p.y_m - mean.y_m;
+      const double dh = fastslam::WrapAngle(p.heading_rad - mean.heading_rad);
+      c.xx += w * dx * dx;
+      c.xy += w * dx * dy;
+      c.xh += w * dx * dh;
+      c.yy += w * dy * dy;
+      c.yh += w * dy * dh;
+      c.hh += w * dh * dh;
+    }
+    return c;
+  }
+
   // Replays the heaviest particle's predictions segment by segment (fastslam_model.h).
   std::vector<StampedPose> HeaviestTrajectory() const {
     const size_t h = driver_.filter().heaviest();
@@ -189,6 +211,8 @@ class FastSlam::Impl {
     for (size_t j = 0; j < chain.size(); ++j) {
       const fastslam::SegmentStart& s = chain[j]->value;
       VehiclePose p{s.x_m, s.y_m, s.heading_rad};
+      // A segment starts after a draw, with the restarted covariance (fastslam_model.h).
+      fastslam::PoseCovariance cov = model_.restart_covariance();
       const size_t stop = j + 1 < chain.size() ? chain[j + 1]->step : steps;
       for (size_t k = chain[j]->step; k < stop; ++k) {
         if (log_[k].kind == kScanUpdate) {
@@ -202,7 +226,7 @@ class FastSlam::Impl {
           }
         } else {
           bool usable = true;
-          p = model_.PredictPose(p, log_[k].control, k, s.index, &usable);
+          p = model_.PredictPose(p, &cov, log_[k].control, k, s.index, &usable);
         }
         if (log_[k].kind != kScanPredict) {
           out.push_back({times[k + 1], Pose2{p.x_m, p.y_m, p.heading_rad}});
@@ -214,11 +238,13 @@ class FastSlam::Impl {
 
   std::vector<LandmarkEstimate> HeaviestLandmarks() const {
     std::vector<LandmarkEstimate> out;
-    model_.trie().ForEach(model_.map(driver_.filter().heaviest()),
-                          [&](uint64_t id, const fastslam::Landmark& l) {
-                            out.push_back({static_cast<int64_t>(id), l.x_m, l.y_m, l.xx, l.xy, l.yy,
-                                           model_.unknown_association() ? l.tag : -1});
-                          });
+    model_.trie().ForEach(
+        model_.map(driver_.filter().heaviest()), [&](uint64_t id, const fastslam::Landmark& leaf) {
+          const fastslam::Landmark l =
+              model_.traits().square_root_map() ? fastslam::WithCovariance(leaf) : leaf;
+          out.push_back({static_cast<int64_t>(id), l.x_m, l.y_m, l.xx, l.xy, l.yy,
+                         model_.unknown_association() ? l.tag : -1});
+        });
     return out;
   }
 
@@ -234,6 +260,7 @@ class FastSlam::Impl {
                           [&](uint64_t, const fastslam::Landmark&) { ++landmarks; });
     s.landmarks = landmarks;
     if (model_.unknown_association()) s.association = model_.counts(driver_.filter().heaviest());
+    s.evolution = model_.evolution_counts();
     s.map_memory = model_.map_memory();
     s.trajectory_memory = model_.path_memory();
     return s;
@@ -377,6 +404,7 @@ int64_t FastSlam::steps() const { return impl_->steps(); }
 Pose2 FastSlam::MeanPose() const { return impl_->MeanPose(); }
 Pose2 FastSlam::HeaviestPose() const { return impl_->HeaviestPose(); }
 const std::vector<StampedPose>& FastSlam::MeanTrajectory() const { return impl_->MeanTrajectory(); }
+Pose2Covariance FastSlam::PoseCovariance() const { return impl_->PoseCovariance(); }
 StatusOr<std::vector<StampedPose>> FastSlam::HeaviestTrajectory() const {
   return NoThrow(
       [&]() -> StatusOr<std::vector<StampedPose>> { return impl_->HeaviestTrajectory(); });

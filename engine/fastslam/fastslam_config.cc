@@ -18,8 +18,13 @@ const std::vector<ConfigField<FastSlamConfig>>& FastSlamConfigFields() {
       IntegerField("particles", &C::particles, 1, int64_t{1} << 31, kChangesResults,
                    "Number of particles"),
       UnsignedField("seed", &C::seed, kChangesResults, "Seed of every random stream"),
-      ChoiceField("filter", &C::filter, {"fastslam1", "fastslam2"}, kChangesResults,
-                  "The filter: fastslam1 or fastslam2"),
+      ChoiceField(
+          "filter", &C::filter,
+          {"fastslam1", "fastslam2", "ufastslam", "srcd", "srcd_aided", "srcd_pf", "de_srcd"},
+          kChangesResults,
+          "The filter: fastslam1, fastslam2, ufastslam (U-FastSLAM), srcd "
+          "(SRCD-FastSLAM), srcd_aided, srcd_pf (the seed's other SRCD variants), "
+          "de_srcd (DE-SRCD-FastSLAM)"),
       ChoiceField("vehicle", &C::vehicle, {"bailey", "guivant_nebot"}, kChangesResults,
                   "The vehicle model: bailey or guivant_nebot"),
       RealField("wheelbase_m", &C::wheelbase_m, I::LeftOpen(0, 100), kChangesResults,
@@ -49,6 +54,20 @@ const std::vector<ConfigField<FastSlamConfig>>& FastSlamConfigFields() {
                   "Resampling scheme"),
       RealField("resample_threshold", &C::resample_threshold, I::LeftOpen(0, 1), kChangesResults,
                 "Resample after a scan when ESS/N is below this; 1 resamples every scan"),
+      RealField("ut_alpha", &C::ut_alpha, I::LeftOpen(0, 10), kChangesResults,
+                "ufastslam: the unscented transform's alpha"),
+      RealField("ut_beta", &C::ut_beta, I::Closed(0, 100), kChangesResults,
+                "ufastslam: the unscented transform's beta"),
+      RealField("ut_kappa", &C::ut_kappa, I::LeftOpen(-4, 100), kChangesResults,
+                "ufastslam: the unscented transform's kappa"),
+      RealField("cd_step", &C::cd_step, I::Closed(1, 10), kChangesResults,
+                "srcd filters: the central-difference half-step h (sqrt(3) for Gaussians)"),
+      RealField("de_scale", &C::de_scale, I::Closed(0, 2), kChangesResults,
+                "de_srcd: differential evolution's scale factor F"),
+      RealField("de_crossover", &C::de_crossover, I::Closed(0, 1), kChangesResults,
+                "de_srcd: differential evolution's crossover probability Cr"),
+      IntegerField("de_generations", &C::de_generations, 0, 1000, kChangesResults,
+                   "de_srcd: differential evolution's generations per scan"),
       ChoiceField("association", &C::association, {"known", "ml", "ml_exclusive"}, kChangesResults,
                   "Data association: known (observation ids), ml (maximum likelihood with "
                   "gates), ml_exclusive (ml, one landmark per detection in a scan)"),
@@ -104,8 +123,34 @@ double FastSlamGateDistance2(double gate, FastSlamGateUnit unit) {
 }
 
 const char* FastSlamFilterName(FastSlamFilter filter) {
-  return filter == FastSlamFilter::kFastSlam1 ? "fastslam1" : "fastslam2";
+  switch (filter) {
+    case FastSlamFilter::kFastSlam1:
+      return "fastslam1";
+    case FastSlamFilter::kFastSlam2:
+      return "fastslam2";
+    case FastSlamFilter::kUnscented:
+      return "ufastslam";
+    case FastSlamFilter::kSrcd:
+      return "srcd";
+    case FastSlamFilter::kSrcdAided:
+      return "srcd_aided";
+    case FastSlamFilter::kSrcdParticle:
+      return "srcd_pf";
+    case FastSlamFilter::kDeSrcd:
+      return "de_srcd";
+  }
+  return "unknown";
 }
+bool FastSlamFilterFromName(std::string_view name, FastSlamFilter* filter) {
+  for (int k = 0; k <= static_cast<int>(FastSlamFilter::kDeSrcd); ++k) {
+    if (name == FastSlamFilterName(static_cast<FastSlamFilter>(k))) {
+      *filter = static_cast<FastSlamFilter>(k);
+      return true;
+    }
+  }
+  return false;
+}
+
 const char* FastSlamVehicleName(FastSlamVehicle vehicle) {
   return vehicle == FastSlamVehicle::kBailey ? "bailey" : "guivant_nebot";
 }
@@ -124,7 +169,11 @@ std::string FastSlamSummary::BriefReport() const {
                             "ignored, {} removed, {} dropped; {} of {} tagged associations wrong.",
                             association.associated, association.created, association.ignored,
                             association.removed, association.dropped, association.wrong,
-                            association.tagged));
+                            association.tagged)) +
+         (evolution.trials == 0 ? std::string()
+                                : fmt::format(" Differential evolution: {} of {} trial poses "
+                                              "accepted.",
+                                              evolution.accepted, evolution.trials));
 }
 
 }  // namespace grove

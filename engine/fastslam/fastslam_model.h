@@ -18,6 +18,16 @@
 //     drawn pose. Copies of one parent draw distinct poses (Bailey's order: resample, then
 //     sample). Both filters initialise new landmarks from the pose.
 //
+// The seed's family (FilterTraits): each filter is a choice of pose step (motion sampling, EKF,
+// unscented, central difference), landmark step (EKF, unscented, central difference), weight
+// (the scan's predictive likelihood, or for the sigma-point particle filter the importance ratio
+// at a pose drawn in Advance) and an optional population step (differential evolution, run by
+// Population() after Complete()). The pose covariance holds a covariance (EKF, unscented) or a
+// lower Cholesky factor (central difference), and so do the landmark leaves; the sigma-point
+// pose steps restart their covariance at a fixed value after every scan's draw, so that a path
+// segment's predictions, which depend on it, replay from the segment's start
+// (kPoseRestartVariance).
+//
 // Unknown association (config.association != kKnown): the map is keyed by SpatialKey (a
 // landmark's cell and a slot in it) instead of by id. At a scan each particle finds the
 // candidates of every detection with a range query of its own trie, decides with the gates
@@ -44,8 +54,10 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
@@ -56,9 +68,11 @@
 #include "engine/checkpoint_io.h"
 #include "engine/fastslam/data_association.h"
 #include "engine/fastslam/landmark_math.h"
+#include "engine/fastslam/sigma_point_filters.h"
 #include "engine/fastslam/vehicle_model.h"
 #include "engine/generation.h"
 #include "engine/memory_use.h"
+#include "engine/particle_filter.h"
 #include "engine/persistent_trie.h"
 #include "engine/version_set.h"
 #include "grove/fastslam.h"
@@ -91,10 +105,57 @@ inline bool ValidSegmentStart(const SegmentStart& s) {
          std::fabs(s.heading_rad) <= 4 && s.unused == 0;
 }
 
-// FastSLAM 2.0's pose covariance, its upper triangle.
+// A particle's pose covariance, its upper triangle, or for the central-difference filters the
+// lower Cholesky factor [xx 0 0; xy yy 0; xh yh hh].
 struct PoseCovariance {
   double xx = 0, xy = 0, xh = 0, yy = 0, yh = 0, hh = 0;
 };
+
+// How a filter of FastSlamFilter moves, weights and maps (fastslam.h, README).
+struct FilterTraits {
+  enum class Pose { kSampledMotion, kEkf, kUnscented, kCentralDifference };
+  enum class Map { kEkf, kUnscented, kCentralDifference };
+  Pose pose = Pose::kEkf;
+  Map map = Map::kEkf;
+  // The pose is drawn after resampling (Complete()); otherwise in Advance(), before the weight.
+  bool draws_after_resampling = true;
+  // The weight is p(z | x) p(x | prediction) / q(x) at the drawn pose (the sigma-point particle
+  // filter), not the predictive likelihood.
+  bool importance_ratio = false;
+  // Differential evolution after the draw (Population()).
+  bool evolution = false;
+
+  bool square_root_pose() const { return pose == Pose::kCentralDifference; }
+  bool square_root_map() const { return map == Map::kCentralDifference; }
+  // Whether every scan ends in a draw that restarts the pose covariance: the sigma-point pose
+  // steps need it for the replay of paths (FastSLAM 2.0's mean does not depend on its
+  // covariance, and it draws only at scans with observations, as Bailey's).
+  bool draws_every_scan() const {
+    return pose == Pose::kUnscented || pose == Pose::kCentralDifference;
+  }
+};
+
+inline FilterTraits TraitsOf(FastSlamFilter f) {
+  using P = FilterTraits::Pose;
+  using M = FilterTraits::Map;
+  switch (f) {
+    case FastSlamFilter::kFastSlam1:
+      return {P::kSampledMotion, M::kEkf, false, false, false};
+    case FastSlamFilter::kFastSlam2:
+      return {P::kEkf, M::kEkf, true, false, false};
+    case FastSlamFilter::kUnscented:
+      return {P::kUnscented, M::kUnscented, true, false, false};
+    case FastSlamFilter::kSrcd:
+      return {P::kCentralDifference, M::kCentralDifference, true, false, false};
+    case FastSlamFilter::kSrcdAided:
+      return {P::kEkf, M::kCentralDifference, true, false, false};
+    case FastSlamFilter::kSrcdParticle:
+      return {P::kCentralDifference, M::kEkf, false, true, false};
+    case FastSlamFilter::kDeSrcd:
+      return {P::kCentralDifference, M::kCentralDifference, true, false, true};
+  }
+  return {};
+}
 
 template <int kLog2Degree>
 class FastSlamModel {
@@ -104,8 +165,11 @@ class FastSlamModel {
   // REQUIRES: config.Validate() is ok.
   FastSlamModel(const FastSlamConfig& config, int slots)
       : config_(config),
+        traits_(TraitsOf(config.filter)),
         geometry_(VehicleGeometry::Of(config)),
         noise_{config.sigma_range_m, config.sigma_bearing_rad},
+        control_noise_{config.sigma_speed_mps, config.sigma_steer_rad},
+        rule_{config.ut_alpha, config.ut_beta, config.ut_kappa},
         n_(static_cast<size_t>(config.particles)),
         trie_(1, slots),
         history_(slots),
@@ -114,25 +178,46 @@ class FastSlamModel {
         ml_(config.association != FastSlamAssociation::kKnown),
         params_{FastSlamGateDistance2(config.reject_gate, config.gate_unit),
                 FastSlamGateDistance2(config.augment_gate, config.gate_unit),
-                config.association == FastSlamAssociation::kExclusive, config.index_cell_m, noise_},
+                config.association == FastSlamAssociation::kExclusive,
+                config.index_cell_m,
+                noise_,
+                traits_.square_root_map(),
+                traits_.map == FilterTraits::Map::kCentralDifference ? config.cd_step : 0},
         log_p0_(NewLandmarkLogLikelihood(noise_, params_.augment_gate)),
         counts_(ml_ ? n_ : 0),
-        pending_(ml_ && config.filter == FastSlamFilter::kFastSlam2 ? n_ : 0),
+        pending_(ml_ && traits_.draws_after_resampling ? n_ : 0),
         scratch_(slots) {
     const VehiclePose start{config.start_x_m, config.start_y_m,
                             WrapAngle(config.start_heading_rad)};
     pose_.assign(n_, start);
     unit_.assign(n_, Unit{std::cos(start.heading_rad), std::sin(start.heading_rad)});
-    cov_.assign(n_, PoseCovariance{});
-    if (config.filter == FastSlamFilter::kFastSlam2) {
+    cov_.assign(n_, restart_covariance());
+    if (traits_.draws_after_resampling) {
       proposal_mu_.resize(n_);
       proposal_sigma_.resize(n_);
     }
+    if (traits_.evolution) fitness_.resize(n_);
     q_ << config.sigma_speed_mps * config.sigma_speed_mps, 0, 0,
         config.sigma_steer_rad * config.sigma_steer_rad;
   }
 
   size_t size() const { return n_; }
+  const FilterTraits& traits() const { return traits_; }
+
+  // The pose covariance every particle starts with and, for the sigma-point pose steps, returns
+  // to after each scan's draw: 0 for FastSLAM 2.0's EKF; eps I (unscented) or its factor
+  // sqrt(eps) I (central difference), as Kim's code.
+  PoseCovariance restart_covariance() const {
+    if (traits_.pose == FilterTraits::Pose::kUnscented) {
+      return PoseCovariance{kPoseRestartVariance, 0, 0,
+                            kPoseRestartVariance, 0, kPoseRestartVariance};
+    }
+    if (traits_.square_root_pose()) {
+      const double s = std::sqrt(kPoseRestartVariance);
+      return PoseCovariance{s, 0, 0, s, 0, s};
+    }
+    return PoseCovariance{};
+  }
 
   // Before each scan's update: the longest range so far bounds the landmarks' covariances
   // (SearchRadius()).
@@ -146,31 +231,48 @@ class FastSlamModel {
   // assumes for the ranges NoteScan() has seen.
   Status InsertLandmark(size_t i, const Landmark& l, int slot) { return Insert(i, slot, l); }
   const AssociationCounts& counts(size_t i) const { return counts_[i]; }
+  const EvolutionCounts& evolution_counts() const { return evolution_; }
 
   // The next Predict() is the first of a path segment (after the start or a scan).
   void set_segment_start(bool v) { segment_start_ = v; }
 
-  // The pose particle `index` reaches from `p` by the prediction of filter step `step`: the
-  // one computation of a prediction, for Predict() and for the replay of paths.
-  VehiclePose PredictPose(const VehiclePose& p, const ControlStep& c, uint64_t step, uint32_t index,
-                          bool* usable) const {
-    if (config_.filter == FastSlamFilter::kFastSlam2) {
-      *usable = SteeringUsable(geometry_, c.steer_rad);
-      if (!*usable) return p;
-      return MoveVehicle(geometry_, ControlTermsOf(geometry_, c.v_mps, c.steer_rad, c.dt_s), p);
+  // The pose particle `index` reaches from `p`, whose covariance is *cov, by the prediction of
+  // filter step `step` (*cov is advanced too): the one computation of a prediction, for
+  // Predict() and for the replay of paths. *usable is false when the model cannot use the
+  // control (or, for the sigma-point steps, one of its sigma points).
+  VehiclePose PredictPose(const VehiclePose& p, PoseCovariance* cov, const ControlStep& c,
+                          uint64_t step, uint32_t index, bool* usable) const {
+    switch (traits_.pose) {
+      case FilterTraits::Pose::kSampledMotion: {
+        ControlTerms u;
+        *usable = NoisyTerms(c, step, index, &u);
+        return *usable ? MoveVehicle(geometry_, u, p) : p;
+      }
+      case FilterTraits::Pose::kEkf:
+        *usable = SteeringUsable(geometry_, c.steer_rad);
+        if (!*usable) return p;
+        return MoveVehicle(geometry_, ControlTermsOf(geometry_, c.v_mps, c.steer_rad, c.dt_s), p);
+      case FilterTraits::Pose::kUnscented:
+      case FilterTraits::Pose::kCentralDifference: {
+        Eigen::Vector3d mean = ToVector(p);
+        Eigen::Matrix3d m = Stored(*cov);
+        *usable = SigmaPointPredict(c, &mean, &m).ok();
+        if (!*usable) return p;
+        *cov = Store(m);
+        return ToPose(mean);
+      }
     }
-    ControlTerms u;
-    *usable = NoisyTerms(c, step, index, &u);
-    if (!*usable) return p;
-    return MoveVehicle(geometry_, u, p);
+    *usable = false;
+    return p;
   }
 
   Status Predict(const ControlStep& c, uint64_t step, size_t begin, size_t end, int slot) {
-    const bool fs2 = config_.filter == FastSlamFilter::kFastSlam2;
+    const bool ekf = traits_.pose == FilterTraits::Pose::kEkf;
+    const bool sigma_points = traits_.draws_every_scan();
     // FastSLAM 2.0 moves every particle with the same control: its terms once per batch.
     ControlTerms shared;
     Unit turn{1, 0};
-    if (fs2) {
+    if (ekf || sigma_points) {
       if (!SteeringUsable(geometry_, c.steer_rad)) return BadSteering(begin);
       shared = ControlTermsOf(geometry_, c.v_mps, c.steer_rad, c.dt_s);
       turn = Unit{std::cos(shared.turn_rad), std::sin(shared.turn_rad)};
@@ -184,24 +286,34 @@ class FastSlamModel {
         if (node == nullptr) return NoMemory(i, "path");
         paths_[i] = node;
       }
-      ControlTerms own;
-      if (!fs2 && !NoisyTerms(c, step, static_cast<uint32_t>(i), &own)) return BadSteering(i);
-      const ControlTerms& u = fs2 ? shared : own;
-      StepTrig trig;
-      const VehiclePose next = MoveVehicle(geometry_, u, p, &trig);
+      VehiclePose next;
+      if (sigma_points) {
+        Eigen::Vector3d mean = ToVector(p);
+        Eigen::Matrix3d m = Stored(cov_[i]);
+        Status s = SigmaPointPredict(c, &mean, &m);
+        if (!s.ok()) return ParticleStatus(i, s);
+        next = ToPose(mean);
+        cov_[i] = Store(m);
+      } else {
+        ControlTerms own;
+        if (!ekf && !NoisyTerms(c, step, static_cast<uint32_t>(i), &own)) return BadSteering(i);
+        const ControlTerms& u = ekf ? shared : own;
+        StepTrig trig;
+        next = MoveVehicle(geometry_, u, p, &trig);
+        if (ekf) {
+          Eigen::Matrix3d gv;
+          Eigen::Matrix<double, 3, 2> gu;
+          VehicleJacobians(geometry_, u, trig, &gv, &gu);
+          PropagateCovariance(gv, gu, &cov_[i]);
+        }
+      }
       if (!std::isfinite(next.x_m) || !std::isfinite(next.y_m) ||
           !std::isfinite(next.heading_rad)) {
         return FailedPreconditionError(fmt::format("particle {}'s pose ({}, {}, {}) is not finite",
                                                    i, next.x_m, next.y_m, next.heading_rad));
       }
-      if (fs2) {
-        Eigen::Matrix3d gv;
-        Eigen::Matrix<double, 3, 2> gu;
-        VehicleJacobians(geometry_, u, trig, &gv, &gu);
-        PropagateCovariance(gv, gu, &cov_[i]);
-      }
       pose_[i] = next;
-      if (fs2) {
+      if (ekf) {
         // The heading turns by the same angle for every particle: rotate its unit vector (only
         // the mean pose reads it) instead of a sine and cosine per particle.
         const Unit& h = unit_[i];
@@ -213,66 +325,167 @@ class FastSlamModel {
     return Status::Ok();
   }
 
-  // FastSLAM 1.0: the whole update. FastSLAM 2.0: the weight only (the predictive likelihood
-  // of the observations of known landmarks); Complete() draws and updates after resampling.
+  // FastSLAM 1.0: the whole update. The filters that draw after resampling: the weight only
+  // (the predictive likelihood of the observations of known landmarks); Complete() draws and
+  // updates. The sigma-point particle filter: the proposal, the draw, the importance weight and
+  // the landmark updates.
   Status Advance(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot,
                  double* log_w) {
-    if (ml_) return AdvanceUnknown(scan, begin, end, slot, log_w);
-    if (scan.observations.empty()) return Status::Ok();
+    if (ml_) return AdvanceUnknown(scan, step, begin, end, slot, log_w);
+    if (scan.observations.empty() && !traits_.draws_every_scan()) return Status::Ok();
     for (size_t i = begin; i < end; ++i) {
       double lw = 0;
-      if (config_.filter == FastSlamFilter::kFastSlam2) {
-        Eigen::Matrix3d sigma;
-        GROVE_RETURN_IF_ERROR(Proposal(scan, i, &proposal_mu_[i], &sigma, &lw));
-        proposal_sigma_[i] = Upper(sigma);
-      } else {
+      if (traits_.pose == FilterTraits::Pose::kSampledMotion) {
         GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &lw));
+      } else {
+        Eigen::Vector3d mu = ToVector(pose_[i]);
+        Eigen::Matrix3d sigma = Stored(cov_[i]);
+        for (const LandmarkObservation& z : scan.observations) {
+          const Landmark* l = trie_.Find(maps_[i], static_cast<uint64_t>(z.id));
+          if (l == nullptr) continue;
+          double w = 0;
+          GROVE_RETURN_IF_ERROR(ProposalStepOf(i, z, *l, &mu, &sigma, &w));
+          lw += w;
+        }
+        if (traits_.draws_after_resampling) {
+          proposal_mu_[i] = mu;
+          proposal_sigma_[i] = Store(sigma);
+        } else {
+          // The importance ratio replaces the predictive likelihood.
+          GROVE_RETURN_IF_ERROR(DrawAndWeigh(scan, step, i, nullptr, mu, sigma, &lw));
+          double unused = 0;
+          GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &unused));
+        }
       }
       log_w[i] += lw;
     }
     return Status::Ok();
   }
 
-  // FastSLAM 2.0, after resampling: the draw from the proposal Advance() computed (a copy has
-  // its parent's), keyed by the particle's new index, then the landmark updates from the drawn
-  // pose. Nothing for FastSLAM 1.0.
+  // The filters that draw after resampling: the draw from the proposal Advance() computed (a
+  // copy has its parent's), keyed by the particle's new index, then the landmark updates from
+  // the drawn pose (for differential evolution, Population() does them after moving the poses).
   Status Complete(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot) {
-    if (scan.observations.empty() || config_.filter != FastSlamFilter::kFastSlam2) {
-      return Status::Ok();
-    }
+    if (!traits_.draws_after_resampling) return Status::Ok();
+    if (scan.observations.empty() && !traits_.draws_every_scan()) return Status::Ok();
     for (size_t i = begin; i < end; ++i) {
-      // The proposal Advance() computed, gathered with the particle.
-      const Eigen::Vector3d& mu = proposal_mu_[i];
-      const Eigen::Matrix3d sigma = Full(proposal_sigma_[i]);
-      RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), StreamPurpose::kProposal);
-      const Eigen::Vector3d normals(rs.NextNormal(), rs.NextNormal(), rs.NextNormal());
-      VehiclePose drawn;
-      Status s = SamplePose(mu, sigma, normals, &drawn);
-      if (!s.ok()) {
-        return FailedPreconditionError(fmt::format("particle {}'s proposal: {}", i, s.message()));
-      }
-      pose_[i] = drawn;
-      unit_[i] = Unit{std::cos(drawn.heading_rad), std::sin(drawn.heading_rad)};
-      cov_[i] = PoseCovariance{};
-      if (ml_) {
-        // The matches Advance() found from the predicted mean (a copy has its parent's).
-        Scratch& sc = scratch_[slot];
-        sc.query = pending_[i];
-        Decide(sc.query.matches, scan.observations.size(), params_, &sc.decisions);
-        GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
-        continue;
-      }
-      double unused = 0;
-      GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &unused));
+      GROVE_RETURN_IF_ERROR(Draw(step, i, proposal_mu_[i], Stored(proposal_sigma_[i]), &pose_[i]));
+      unit_[i] = Unit{std::cos(pose_[i].heading_rad), std::sin(pose_[i].heading_rad)};
+      cov_[i] = restart_covariance();
+      if (traits_.evolution || scan.observations.empty()) continue;
+      GROVE_RETURN_IF_ERROR(UpdateMap(scan, i, slot));
     }
     return Status::Ok();
+  }
+
+  // Differential evolution (kDeSrcd) over the drawn poses, then their landmark updates; nothing
+  // for the other filters. DE/best/1/bin (Storn and Price; the seed's Eqs. 29-31): for each
+  // generation, each particle i forms the trial u from the mutant v = x_best + F (x_r1 - x_r2)
+  // (r1, r2 distinct and not i) by binomial crossover (coordinate j from v when a uniform draw is
+  // below Cr or j = j_rand, else from x_i), and u replaces x_i when its fitness is strictly
+  // higher. The fitness (Eq. 32) is log exp(-1/2 sum_j v_j^T R^-1 v_j) over the scan's
+  // observations of landmarks in particle i's own map (its associations under unknown
+  // association), v_j = z_j - h(x, landmark mean). Generations are synchronous (every trial is
+  // formed from the generation's poses), every draw comes from the stream (seed, step, particle,
+  // kDifferentialEvolution + 256 generation): the same at any thread count. With fewer than 3
+  // particles there are no r1, r2, and without an observation of a mapped landmark no fitness:
+  // then nothing moves.
+  Status Population(const ScanStep& scan, uint64_t step, WorkerPool& workers) {
+    if (!traits_.evolution || scan.observations.empty()) return Status::Ok();
+    std::atomic<bool> evidence{false};
+    GROVE_RETURN_IF_ERROR(RunInBatches(workers, n_, static_cast<size_t>(config_.batch),
+                                       &batch_status_, [&](int, size_t b, size_t e) {
+                                         for (size_t i = b; i < e; ++i) {
+                                           int terms = 0;
+                                           fitness_[i] = Fitness(scan, i, pose_[i], &terms);
+                                           // Relaxed: read after the loop's join.
+                                           if (terms > 0) {
+                                             evidence.store(true, std::memory_order_relaxed);
+                                           }
+                                         }
+                                         return Status::Ok();
+                                       }));
+    // Without an observation of a mapped landmark every fitness is 0 and there is nothing to
+    // improve.
+    if (n_ >= 3 && evidence.load(std::memory_order_relaxed)) {
+      std::vector<VehiclePose> trial(n_);
+      std::vector<double> trial_fitness(n_);
+      for (int64_t g = 0; g < config_.de_generations; ++g) {
+        const size_t best = static_cast<size_t>(std::max_element(fitness_.begin(), fitness_.end()) -
+                                                fitness_.begin());
+        const VehiclePose x_best = pose_[best];
+        const uint32_t purpose =
+            StreamPurpose::kDifferentialEvolution + 256 * static_cast<uint32_t>(g);
+        GROVE_RETURN_IF_ERROR(RunInBatches(workers, n_, static_cast<size_t>(config_.batch),
+                                           &batch_status_, [&](int, size_t b, size_t e) {
+                                             for (size_t i = b; i < e; ++i) {
+                                               RandomStream rs(config_.seed, step + 1,
+                                                               static_cast<uint32_t>(i), purpose);
+                                               trial[i] = TrialPose(i, x_best, &rs);
+                                               trial_fitness[i] = Fitness(scan, i, trial[i]);
+                                             }
+                                             return Status::Ok();
+                                           }));
+        for (size_t i = 0; i < n_; ++i) {
+          ++evolution_.trials;
+          if (trial_fitness[i] > fitness_[i]) {
+            ++evolution_.accepted;
+            pose_[i] = trial[i];
+            fitness_[i] = trial_fitness[i];
+          }
+        }
+      }
+    }
+    return RunInBatches(
+        workers, n_, static_cast<size_t>(config_.batch), &batch_status_,
+        [&](int slot, size_t b, size_t e) -> Status {
+          for (size_t i = b; i < e; ++i) {
+            unit_[i] = Unit{std::cos(pose_[i].heading_rad), std::sin(pose_[i].heading_rad)};
+            GROVE_RETURN_IF_ERROR(UpdateMap(scan, i, slot));
+          }
+          return Status::Ok();
+        });
+  }
+
+  // Differential evolution's fitness of `pose` for particle i at this scan (public for tests):
+  // the seed's Eq. 32 as a logarithm, -1/2 sum_j v_j^T R^-1 v_j over the scan's observations of
+  // landmarks in particle i's map (under unknown association its associations, from the query
+  // Advance() kept).
+  // *terms (may be null) gets the number of observations summed.
+  double Fitness(const ScanStep& scan, size_t i, const VehiclePose& pose,
+                 int* terms = nullptr) const {
+    const Eigen::Matrix2d r = SensorCovariance(noise_);
+    double f = 0;
+    if (terms != nullptr) *terms = 0;
+    auto add = [&](const LandmarkObservation& z, const Landmark& l) {
+      if (terms != nullptr) ++*terms;
+      const Eigen::Vector2d v =
+          Innovation(RangeBearing{z.range_m, z.bearing_rad}, Observe(pose, l.x_m, l.y_m));
+      f -= 0.5 * (v(0) * v(0) / r(0, 0) + v(1) * v(1) / r(1, 1));
+    };
+    if (ml_) {
+      thread_local std::vector<Match> matches;
+      thread_local std::vector<Decision> decisions;
+      matches = pending_[i].matches;  // Decide() reorders them
+      Decide(matches, scan.observations.size(), params_, &decisions);
+      for (size_t j = 0; j < decisions.size(); ++j) {
+        if (decisions[j].kind != Decision::kAssociated) continue;
+        add(scan.observations[j], *trie_.Find(maps_[i], decisions[j].key));
+      }
+    } else {
+      for (const LandmarkObservation& z : scan.observations) {
+        const Landmark* l = trie_.Find(maps_[i], static_cast<uint64_t>(z.id));
+        if (l != nullptr) add(z, *l);
+      }
+    }
+    return std::isfinite(f) ? f : -std::numeric_limits<double>::infinity();
   }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     GatherValues(parents, workers, &pose_);
     GatherValues(parents, workers, &unit_);
     GatherValues(parents, workers, &cov_);
-    if (config_.filter == FastSlamFilter::kFastSlam2) {
+    if (traits_.draws_after_resampling) {
       GatherValues(parents, workers, &proposal_mu_);
       GatherValues(parents, workers, &proposal_sigma_);
     }
@@ -324,6 +537,8 @@ class FastSlamModel {
     w->Put<uint8_t>(segment_start_ ? 1 : 0);
     w->Put<double>(max_range_);
     w->PutBytes(counts_.data(), counts_.size() * sizeof(AssociationCounts));
+    w->Put<int64_t>(evolution_.trials);
+    w->Put<int64_t>(evolution_.accepted);
     trie_.Save(maps_.roots(), w);
     SegmentHistory::Save(paths_.roots(), w);
   }
@@ -351,6 +566,7 @@ class FastSlamModel {
       for (double v : {c.xx, c.xy, c.xh, c.yy, c.yh, c.hh}) {
         if (!std::isfinite(v)) return r->Error("pose covariances", "a value is not finite");
       }
+      // Variances, or a factor's diagonal.
       if (!(c.xx >= 0 && c.yy >= 0 && c.hh >= 0)) {
         return r->Error("pose covariances", "a variance is negative");
       }
@@ -371,6 +587,12 @@ class FastSlamModel {
            {c.associated, c.created, c.ignored, c.removed, c.dropped, c.tagged, c.wrong}) {
         if (v < 0) return r->Error("association counts", "a count is negative");
       }
+    }
+    EvolutionCounts evolution;
+    GROVE_RETURN_IF_ERROR(r->Get("evolution trials", &evolution.trials));
+    GROVE_RETURN_IF_ERROR(r->Get("evolution accepted", &evolution.accepted));
+    if (!(evolution.accepted >= 0 && evolution.accepted <= evolution.trials)) {
+      return r->Error("evolution counts", "negative, or more accepted than tried");
     }
     std::vector<typename Trie::Node*> roots;
     GROVE_RETURN_IF_ERROR(trie_.Load(r, n_, 0, &ValidLandmark, &roots));
@@ -400,6 +622,7 @@ class FastSlamModel {
     segment_start_ = segment == 1;
     max_range_ = max_range;
     counts_.swap(counts);
+    evolution_ = evolution;
     maps_.Replace(std::move(roots));
     paths_.Replace(std::move(heads));
     return Status::Ok();
@@ -422,8 +645,15 @@ class FastSlamModel {
     return PoseCovariance{m(0, 0), 0.5 * (m(0, 1) + m(1, 0)), 0.5 * (m(0, 2) + m(2, 0)),
                           m(1, 1), 0.5 * (m(1, 2) + m(2, 1)), m(2, 2)};
   }
-  Eigen::Matrix3d Covariance(size_t i) const { return Full(cov_[i]); }
-  void SetCovariance(size_t i, const Eigen::Matrix3d& m) { cov_[i] = Upper(m); }
+  // The stored pose covariance as a matrix: the covariance, or the lower factor.
+  Eigen::Matrix3d Stored(const PoseCovariance& c) const {
+    if (!traits_.square_root_pose()) return Full(c);
+    return (Eigen::Matrix3d() << c.xx, 0, 0, c.xy, c.yy, 0, c.xh, c.yh, c.hh).finished();
+  }
+  PoseCovariance Store(const Eigen::Matrix3d& m) const {
+    if (!traits_.square_root_pose()) return Upper(m);
+    return PoseCovariance{m(0, 0), m(1, 0), m(2, 0), m(1, 1), m(2, 1), m(2, 2)};
+  }
 
   // Sigma <- Gv Sigma Gv^T + Gu Q Gu^T on the upper triangle, for the Jacobians' shape: Gv is
   // the identity but for its heading column (gv(0,2), gv(1,2)) and Q is diagonal. Writing
@@ -446,6 +676,16 @@ class FastSlamModel {
     *p = out;
   }
 
+  // The unscented or central-difference prediction of (mean, m) over the control.
+  Status SigmaPointPredict(const ControlStep& c, Eigen::Vector3d* mean, Eigen::Matrix3d* m) const {
+    if (traits_.pose == FilterTraits::Pose::kUnscented) {
+      return UnscentedPredict(geometry_, c.v_mps, c.steer_rad, c.dt_s, control_noise_, rule_, mean,
+                              m);
+    }
+    return CentralDifferencePredict(geometry_, c.v_mps, c.steer_rad, c.dt_s, control_noise_,
+                                    config_.cd_step, mean, m);
+  }
+
   // FastSLAM 1.0: particle `index`'s own control for step `step`, drawn from N(u, Q); false
   // when the vehicle model cannot use the drawn steering angle.
   bool NoisyTerms(const ControlStep& c, uint64_t step, uint32_t index, ControlTerms* u) const {
@@ -465,24 +705,150 @@ class FastSlamModel {
         i, FastSlamVehicleName(config_.vehicle)));
   }
 
-  // FastSLAM 2.0's proposal for particle i: its predicted pose refined by each observation of a
-  // known landmark in turn; *log_w gets the sum of their predictive log-likelihoods.
-  Status Proposal(const ScanStep& scan, size_t i, Eigen::Vector3d* mu, Eigen::Matrix3d* sigma,
-                  double* log_w) const {
-    *mu = ToVector(pose_[i]);
-    *sigma = Covariance(i);
-    for (const LandmarkObservation& z : scan.observations) {
-      const Landmark* l = trie_.Find(maps_[i], static_cast<uint64_t>(z.id));
-      if (l == nullptr) continue;
-      double w = 0;
-      Status s = ProposalStep(mu, sigma, *l, RangeBearing{z.range_m, z.bearing_rad}, noise_, &w);
-      if (!s.ok()) return ParticleError(i, z, s);
-      *log_w += w;
+  // ---- The filters' per-observation steps ----
+
+  // The covariance reading of a leaf.
+  Landmark CovarianceLeaf(const Landmark& leaf) const {
+    return traits_.square_root_map() ? WithCovariance(leaf) : leaf;
+  }
+  // The square-root reading of a leaf: the lower Cholesky factor of a covariance leaf (for a
+  // singular one, the triangular factor of its eigen-root).
+  Status SquareRootLeaf(const Landmark& leaf, Landmark* out) const {
+    *out = leaf;
+    if (traits_.square_root_map()) return Status::Ok();
+    Eigen::Matrix2d root;
+    if (!PsdSquareRoot<2>(Covariance(leaf), &root)) {
+      return FailedPreconditionError("the landmark covariance is not positive semi-definite");
+    }
+    SetCholeskyFactor(TriangularFactor<2, 2>(root), out);
+    return Status::Ok();
+  }
+
+  // One observation's proposal step on (mu, sigma) by the filter's pose step; *w gets its
+  // predictive log-likelihood.
+  Status ProposalStepOf(size_t i, const LandmarkObservation& z, const Landmark& leaf,
+                        Eigen::Vector3d* mu, Eigen::Matrix3d* sigma, double* w) const {
+    const RangeBearing rb{z.range_m, z.bearing_rad};
+    Status s;
+    switch (traits_.pose) {
+      case FilterTraits::Pose::kUnscented:
+        s = UnscentedProposalStep(mu, sigma, CovarianceLeaf(leaf), rb, noise_, rule_, w);
+        break;
+      case FilterTraits::Pose::kCentralDifference: {
+        Landmark root;
+        s = SquareRootLeaf(leaf, &root);
+        if (s.ok()) {
+          s = CentralDifferenceProposalStep(mu, sigma, root, rb, noise_, config_.cd_step, w);
+        }
+        break;
+      }
+      default:
+        s = ProposalStep(mu, sigma, CovarianceLeaf(leaf), rb, noise_, w);
+        break;
+    }
+    if (!s.ok()) return ParticleError(i, z, s);
+    return Status::Ok();
+  }
+
+  // A draw from N(mu, sigma) (sigma a covariance or a factor) keyed by (step, i).
+  Status Draw(uint64_t step, size_t i, const Eigen::Vector3d& mu, const Eigen::Matrix3d& sigma,
+              VehiclePose* out) const {
+    RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), StreamPurpose::kProposal);
+    const Eigen::Vector3d normals(rs.NextNormal(), rs.NextNormal(), rs.NextNormal());
+    Status s = traits_.square_root_pose() ? SamplePoseFromFactor(mu, sigma, normals, out)
+                                          : SamplePose(mu, sigma, normals, out);
+    if (!s.ok()) {
+      return FailedPreconditionError(fmt::format("particle {}'s proposal: {}", i, s.message()));
     }
     return Status::Ok();
   }
 
-  // The EKF update of each observed landmark from particle i's pose (new ones initialised);
+  // The sigma-point particle filter: draws particle i's pose from its proposal
+  // N(mu, sigma sigma^T) and sets *lw to the importance weight at the drawn x,
+  //   sum_j log p(z_j | x, landmark_j) + log N(x; prediction) - log N(x; proposal),
+  // over the scan's observations of known landmarks (p(z | x, landmark) = N(z; h(x), Hl P Hl^T +
+  // R), the landmark marginalised), or with `decisions` (unknown association) over the
+  // associated ones plus log p0 for each other detection. The pose covariance restarts.
+  Status DrawAndWeigh(const ScanStep& scan, uint64_t step, size_t i,
+                      const std::vector<Decision>* decisions, const Eigen::Vector3d& mu,
+                      const Eigen::Matrix3d& sigma, double* lw) {
+    const Eigen::Vector3d prior_mu = ToVector(pose_[i]);
+    const Eigen::Matrix3d prior = Stored(cov_[i]);
+    VehiclePose x;
+    GROVE_RETURN_IF_ERROR(Draw(step, i, mu, sigma, &x));
+    double w = 0;
+    for (size_t j = 0; j < scan.observations.size(); ++j) {
+      const LandmarkObservation& z = scan.observations[j];
+      const Landmark* l = nullptr;
+      if (decisions != nullptr) {
+        if ((*decisions)[j].kind != Decision::kAssociated) {
+          w += log_p0_;
+          continue;
+        }
+        l = trie_.Find(maps_[i], (*decisions)[j].key);
+      } else {
+        l = trie_.Find(maps_[i], static_cast<uint64_t>(z.id));
+        if (l == nullptr) continue;
+      }
+      double ll = 0;
+      Status s = ObservationLogLikelihood(x, RangeBearing{z.range_m, z.bearing_rad}, noise_,
+                                          CovarianceLeaf(*l), &ll);
+      if (!s.ok()) return ParticleError(i, z, s);
+      w += ll;
+    }
+    const Eigen::Vector3d xv = ToVector(x);
+    if (!(prior.diagonal().array() > 0).all() || !(sigma.diagonal().array() > 0).all()) {
+      return FailedPreconditionError(
+          fmt::format("particle {}: a pose covariance is singular: the importance ratio is not "
+                      "defined",
+                      i));
+    }
+    w += LogDensityOfFactor<3>(prior, PoseDifference(xv, prior_mu)) -
+         LogDensityOfFactor<3>(sigma, PoseDifference(xv, mu));
+    if (!std::isfinite(w)) {
+      return FailedPreconditionError(
+          fmt::format("particle {}'s importance weight is not finite", i));
+    }
+    *lw = w;
+    pose_[i] = x;
+    unit_[i] = Unit{std::cos(x.heading_rad), std::sin(x.heading_rad)};
+    cov_[i] = restart_covariance();
+    return Status::Ok();
+  }
+
+  // A leaf's update by z from a known pose, by the filter's landmark step.
+  Status UpdateLeaf(const VehiclePose& pose, const RangeBearing& z, Landmark* l, double* ll) const {
+    switch (traits_.map) {
+      case FilterTraits::Map::kUnscented:
+        return UnscentedUpdateLandmark(pose, z, noise_, rule_, l, ll);
+      case FilterTraits::Map::kCentralDifference:
+        return CentralDifferenceUpdateLandmark(pose, z, noise_, config_.cd_step, l, ll);
+      default:
+        return UpdateLandmark(pose, z, noise_, l, ll);
+    }
+  }
+  // A new leaf from z seen at `pose` (U-FastSLAM initialises as the EKF does: Kim's add_feature).
+  Landmark NewLeaf(const VehiclePose& pose, const RangeBearing& z) const {
+    if (traits_.map == FilterTraits::Map::kCentralDifference) {
+      return CentralDifferenceInitLandmark(pose, z, noise_, config_.cd_step);
+    }
+    return InitLandmark(pose, z, noise_);
+  }
+
+  // The landmark updates of particle i's scan from its pose now.
+  Status UpdateMap(const ScanStep& scan, size_t i, int slot) {
+    if (ml_) {
+      // The matches Advance() found from the predicted mean (a copy has its parent's).
+      Scratch& sc = scratch_[slot];
+      sc.query = pending_[i];
+      Decide(sc.query.matches, scan.observations.size(), params_, &sc.decisions);
+      return ApplyScan(scan, i, slot, &sc);
+    }
+    double unused = 0;
+    return UpdateLandmarks(scan, i, slot, &unused);
+  }
+
+  // The update of each observed landmark from particle i's pose (new ones initialised);
   // *log_w gets the sum of the known ones' log-likelihoods.
   Status UpdateLandmarks(const ScanStep& scan, size_t i, int slot, double* log_w) {
     const VehiclePose pose = pose_[i];
@@ -493,9 +859,9 @@ class FastSlamModel {
       const bool ok = trie_.Update(&maps_[i], static_cast<uint64_t>(z.id), slot,
                                    [&](Landmark& l, bool existed) {
                                      if (!existed) {
-                                       l = InitLandmark(pose, rb, noise_);
+                                       l = NewLeaf(pose, rb);
                                      } else {
-                                       s = UpdateLandmark(pose, rb, noise_, &l, &ll);
+                                       s = UpdateLeaf(pose, rb, &l, &ll);
                                      }
                                    });
       if (!ok) return NoMemory(i, "map");
@@ -503,6 +869,34 @@ class FastSlamModel {
       *log_w += ll;
     }
     return Status::Ok();
+  }
+
+  // ---- Differential evolution ----
+
+  // Particle i's trial pose (DE/best/1/bin). REQUIRES: n_ >= 3.
+  VehiclePose TrialPose(size_t i, const VehiclePose& best, RandomStream* rs) const {
+    auto other = [&](size_t a, size_t b) {
+      for (;;) {
+        const size_t k = static_cast<size_t>(rs->NextUniform() * static_cast<double>(n_));
+        if (k < n_ && k != a && k != b) return k;
+      }
+    };
+    const size_t r1 = other(i, i);
+    const size_t r2 = other(i, r1);
+    const int j_rand = std::min(2, static_cast<int>(rs->NextUniform() * 3));
+    const VehiclePose& a = pose_[r1];
+    const VehiclePose& b = pose_[r2];
+    const double mutant[3] = {
+        best.x_m + config_.de_scale * (a.x_m - b.x_m),
+        best.y_m + config_.de_scale * (a.y_m - b.y_m),
+        best.heading_rad + config_.de_scale * WrapAngle(a.heading_rad - b.heading_rad)};
+    const double target[3] = {pose_[i].x_m, pose_[i].y_m, pose_[i].heading_rad};
+    double u[3];
+    for (int j = 0; j < 3; ++j) {
+      const bool cross = rs->NextUniform() < config_.de_crossover || j == j_rand;
+      u[j] = cross ? mutant[j] : target[j];
+    }
+    return VehiclePose{u[0], u[1], WrapAngle(u[2])};
   }
 
   // ---- Unknown association ----
@@ -533,9 +927,11 @@ class FastSlamModel {
     return Status::Ok();
   }
 
-  Status AdvanceUnknown(const ScanStep& scan, size_t begin, size_t end, int slot, double* log_w) {
+  Status AdvanceUnknown(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot,
+                        double* log_w) {
     Scratch& sc = scratch_[slot];
-    if (scan.observations.empty()) {
+    const bool sampled = traits_.pose == FilterTraits::Pose::kSampledMotion;
+    if (scan.observations.empty() && !traits_.draws_every_scan()) {
       // Nothing to weigh or draw; the evidence of what is in view still falls.
       if (config_.evidence == FastSlamEvidence::kOff) return Status::Ok();
       for (size_t i = begin; i < end; ++i) {
@@ -544,37 +940,37 @@ class FastSlamModel {
       }
       return Status::Ok();
     }
-    const bool fs2 = config_.filter == FastSlamFilter::kFastSlam2;
     for (size_t i = begin; i < end; ++i) {
       GROVE_RETURN_IF_ERROR(DecideScan(scan, i, pose_[i], &sc));
       double lw = 0;
-      Eigen::Vector3d mu;
-      Eigen::Matrix3d sigma;
-      if (fs2) {
-        mu = ToVector(pose_[i]);
-        sigma = Covariance(i);
-      }
+      Eigen::Vector3d mu = ToVector(pose_[i]);
+      Eigen::Matrix3d sigma = Stored(cov_[i]);
       for (size_t j = 0; j < sc.decisions.size(); ++j) {
         const Decision& d = sc.decisions[j];
         if (d.kind != Decision::kAssociated) {
           lw += log_p0_;
-        } else if (!fs2) {
+        } else if (sampled) {
           lw += d.log_likelihood;
         } else {
-          const LandmarkObservation& z = scan.observations[j];
-          const Landmark* l = trie_.Find(maps_[i], d.key);
           double w = 0;
-          Status s =
-              ProposalStep(&mu, &sigma, *l, RangeBearing{z.range_m, z.bearing_rad}, noise_, &w);
-          if (!s.ok()) return ParticleError(i, z, s);
+          GROVE_RETURN_IF_ERROR(ProposalStepOf(i, scan.observations[j],
+                                               *trie_.Find(maps_[i], d.key), &mu, &sigma, &w));
           lw += w;
         }
       }
-      if (fs2) {
+      if (sampled) {
+        GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
+      } else if (traits_.draws_after_resampling) {
         proposal_mu_[i] = mu;
-        proposal_sigma_[i] = Upper(sigma);
+        proposal_sigma_[i] = Store(sigma);
         pending_[i] = sc.query;
+        if (scan.observations.empty() && config_.evidence == FastSlamEvidence::kOn) {
+          // The evidence of an empty scan is applied now, from the predicted mean (Complete()
+          // only draws).
+          GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
+        }
       } else {
+        GROVE_RETURN_IF_ERROR(DrawAndWeigh(scan, step, i, &sc.decisions, mu, sigma, &lw));
         GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
       }
       log_w[i] += lw;
@@ -609,7 +1005,6 @@ class FastSlamModel {
     }
     return Status::Ok();
   }
-
   // Applies particle i's decisions in sc from its pose now (the view in sc is the one the
   // decisions were made from; see the file comment).
   Status ApplyScan(const ScanStep& scan, size_t i, int slot, Scratch* sc) {
@@ -626,7 +1021,7 @@ class FastSlamModel {
       Status s;
       int32_t tag = -1;
       const bool ok = trie_.Update(&maps_[i], d.key, slot, [&](Landmark& l, bool) {
-        s = UpdateLandmark(pose, RangeBearing{z.range_m, z.bearing_rad}, noise_, &l, nullptr);
+        s = UpdateLeaf(pose, RangeBearing{z.range_m, z.bearing_rad}, &l, nullptr);
         if (l.evidence < (1 << 30)) ++l.evidence;
         tag = l.tag;
       });
@@ -679,7 +1074,7 @@ class FastSlamModel {
     for (size_t j = 0; j < sc->decisions.size(); ++j) {
       if (sc->decisions[j].kind != Decision::kNew) continue;
       const LandmarkObservation& z = scan.observations[j];
-      Landmark l = InitLandmark(pose, RangeBearing{z.range_m, z.bearing_rad}, noise_);
+      Landmark l = NewLeaf(pose, RangeBearing{z.range_m, z.bearing_rad});
       l.evidence = 1;
       l.tag = z.id >= 0 ? static_cast<int32_t>(z.id) : -1;
       GROVE_RETURN_IF_ERROR(Insert(i, slot, l));
@@ -694,10 +1089,16 @@ class FastSlamModel {
   static Status ParticleError(size_t i, const LandmarkObservation& z, const Status& s) {
     return Status(s.code(), fmt::format("particle {}, landmark {}: {}", i, z.id, s.message()));
   }
+  static Status ParticleStatus(size_t i, const Status& s) {
+    return Status(s.code(), fmt::format("particle {}: {}", i, s.message()));
+  }
 
   const FastSlamConfig config_;
+  const FilterTraits traits_;
   const VehicleGeometry geometry_;
   const SensorNoise noise_;
+  const ControlNoise control_noise_;
+  const UnscentedRule rule_;
   const size_t n_;
   Eigen::Matrix2d q_;
   Trie trie_;
@@ -707,9 +1108,14 @@ class FastSlamModel {
   std::vector<VehiclePose> pose_;
   std::vector<Unit> unit_;
   std::vector<PoseCovariance> cov_;
-  // FastSLAM 2.0: each particle's proposal of the current scan, from Advance() to Complete().
+  // Each particle's proposal of the current scan, from Advance() to Complete() (the filters that
+  // draw after resampling).
   std::vector<Eigen::Vector3d> proposal_mu_;
   std::vector<PoseCovariance> proposal_sigma_;
+  // Differential evolution: each particle's fitness, the counts and the loops' batch statuses.
+  std::vector<double> fitness_;
+  EvolutionCounts evolution_;
+  std::vector<Status> batch_status_;
   bool segment_start_ = true;
   // Unknown association.
   const bool ml_;
@@ -717,7 +1123,7 @@ class FastSlamModel {
   const double log_p0_;
   double max_range_ = 0;                   // the longest detection range so far
   std::vector<AssociationCounts> counts_;  // per particle, along its ancestry
-  // FastSLAM 2.0: each particle's matches of the current scan, from Advance() to Complete().
+  // Each particle's matches of the current scan, from Advance() to Complete().
   std::vector<ScanQuery> pending_;
   std::vector<Scratch> scratch_;  // per worker slot
 };

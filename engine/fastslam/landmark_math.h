@@ -142,6 +142,14 @@ inline void SetCholeskyFactor(const Eigen::Matrix2d& factor, Landmark* l) {
   l->yy = factor(1, 1);
 }
 
+// The landmark with its square-root reading turned into the covariance reading (P = L L^T).
+inline Landmark WithCovariance(const Landmark& l) {
+  Landmark c = l;
+  const Eigen::Matrix2d f = CholeskyFactor(l);
+  SetCovariance(f * f.transpose(), &c);
+  return c;
+}
+
 inline Eigen::Vector3d ToVector(const VehiclePose& p) { return {p.x_m, p.y_m, p.heading_rad}; }
 inline VehiclePose ToPose(const Eigen::Vector3d& v) { return {v(0), v(1), v(2)}; }
 

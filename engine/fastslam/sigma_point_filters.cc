@@ -326,11 +326,4 @@ Status SamplePoseFromFactor(const Eigen::Vector3d& mu, const Eigen::Matrix3d& fa
   return Status::Ok();
 }
 
-double CentralDifferenceInitBound(double range_m, const SensorNoise& noise, double h) {
-  const double sr = std::max(noise.sigma_range_m, kMinSigma);
-  const double sb = std::max(noise.sigma_bearing_rad, kMinSigma);
-  const double r2sb2 = range_m * range_m * sb * sb;
-  return std::max(sr * sr + r2sb2 * sb * sb * (h * h - 1) / 4, r2sb2);
-}
-
 }  // namespace grove::fastslam

@@ -125,19 +125,6 @@ Landmark CentralDifferenceInitLandmark(const VehiclePose& pose, const RangeBeari
 Status SamplePoseFromFactor(const Eigen::Vector3d& mu, const Eigen::Matrix3d& factor,
                             const Eigen::Vector3d& standard_normals, VehiclePose* out);
 
-// The landmark with its square-root reading turned into the covariance reading (P = L L^T).
-inline Landmark WithCovariance(const Landmark& l) {
-  Landmark c = l;
-  SetCovariance(CholeskyFactor(l) * CholeskyFactor(l).transpose(), &c);
-  return c;
-}
-
-// The largest eigenvalue a central-difference initialisation can give a landmark seen at range
-// r (bounds data association's search radius): the factor's columns are sigma_r and a
-// second-order term s <= r sb^2 sqrt(h^2 - 1) / 2 along the ray, and r sin(h sb) / h <= r sb
-// across it, so lambda_max <= max(sr^2 + r^2 sb^4 (h^2 - 1) / 4, r^2 sb^2).
-double CentralDifferenceInitBound(double range_m, const SensorNoise& noise, double h);
-
 }  // namespace grove::fastslam
 
 #endif  // GROVE_ENGINE_FASTSLAM_SIGMA_POINT_FILTERS_H_

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <map>
+#include <string>
 #include <vector>
 
 #include "concurrency/random_stream.h"
@@ -197,35 +198,53 @@ TEST(ParticleFilterTest, ReportsTheLowestFailingBatchAtAnyThreadCount) {
   }
 }
 
-// The population phase sees every particle's weight after Advance and before normalising.
-class BestOnlyModel {
+// The population phase runs once the particles are drawn and sees all of them: after Advance
+// (before normalising) for a model without Complete, after resampling and Complete for one with
+// it.
+template <bool kCompletes>
+class PhaseOrderModel {
  public:
   size_t size() const { return 100; }
   Status Advance(const int&, uint64_t, size_t b, size_t e, int, double* log_w) {
-    for (size_t i = b; i < e; ++i) log_w[i] += static_cast<double>(i % 3);
+    for (size_t i = b; i < e; ++i) {
+      log_w[i] += static_cast<double>(i % 3);
+      drawn_[i] = 1;
+    }
     return Status::Ok();
   }
-  Status Population(const int&, uint64_t, std::span<double> log_w, WorkerPool&) {
-    // Only particle 0 keeps weight: everything else is moved to zero.
-    for (size_t i = 1; i < log_w.size(); ++i) log_w[i] = -INFINITY;
-    ++calls;
+  Status Complete(const int&, uint64_t, size_t b, size_t e, int) requires kCompletes {
+    for (size_t i = b; i < e; ++i) drawn_[i] = 2;
     return Status::Ok();
   }
-  void Gather(std::span<const uint32_t>, WorkerPool&) {}
+  Status Population(const int&, uint64_t, WorkerPool&) {
+    seen_ = drawn_;
+    events_.push_back("population");
+    return Status::Ok();
+  }
+  void Gather(std::span<const uint32_t>, WorkerPool&) { events_.push_back("gather"); }
   void ReleaseDead(WorkerPool&) {}
-  int calls = 0;
+  std::vector<std::string> events_;
+  std::vector<int> drawn_ = std::vector<int>(100, 0), seen_;
 };
 
-TEST(ParticleFilterTest, PopulationPhaseRunsBeforeNormalising) {
+TEST(ParticleFilterTest, PopulationPhaseRunsAfterTheDraw) {
   WorkerPool workers(2);
-  BestOnlyModel model;
   FilterOptions options;
-  options.resample_threshold = 0.01;
-  ParticleFilter<BestOnlyModel> filter(&model, &workers, options);
-  ASSERT_TRUE(filter.Update(0).ok());
-  EXPECT_EQ(model.calls, 1);
-  EXPECT_DOUBLE_EQ(filter.log_weights()[0], 0.0);
-  EXPECT_NEAR(filter.ess(), 1.0, 1e-12);
+  options.resample_threshold = 1.0;  // resample every step
+  {
+    PhaseOrderModel<false> model;
+    ParticleFilter<PhaseOrderModel<false>> filter(&model, &workers, options);
+    ASSERT_TRUE(filter.Update(0).ok());
+    EXPECT_EQ(model.events_, (std::vector<std::string>{"population", "gather"}));
+    EXPECT_EQ(model.seen_, std::vector<int>(100, 1));
+  }
+  {
+    PhaseOrderModel<true> model;
+    ParticleFilter<PhaseOrderModel<true>> filter(&model, &workers, options);
+    ASSERT_TRUE(filter.Update(0).ok());
+    EXPECT_EQ(model.events_, (std::vector<std::string>{"gather", "population"}));
+    EXPECT_EQ(model.seen_, std::vector<int>(100, 2));
+  }
 }
 
 TEST(ParticleFilterTest, MapsOfResampledParticlesAreSharedNotCopied) {

@@ -286,7 +286,10 @@ FastSlamConfig Unknown(FastSlamFilter filter) {
 
 class Evidence : public ::testing::TestWithParam<FastSlamFilter> {};
 INSTANTIATE_TEST_SUITE_P(Filters, Evidence,
-                         ::testing::Values(FastSlamFilter::kFastSlam1, FastSlamFilter::kFastSlam2),
+                         ::testing::Values(FastSlamFilter::kFastSlam1, FastSlamFilter::kFastSlam2,
+                                           FastSlamFilter::kUnscented, FastSlamFilter::kSrcd,
+                                           FastSlamFilter::kSrcdAided,
+                                           FastSlamFilter::kSrcdParticle, FastSlamFilter::kDeSrcd),
                          [](const auto& info) { return FastSlamFilterName(info.param); });
 
 // A standing vehicle: a landmark seen once and then in view but never detected again is

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <numbers>
@@ -59,13 +60,23 @@ FastSlamConfig Config(FastSlamFilter filter, int64_t particles, int threads = 1)
 }
 
 class ByFilter : public ::testing::TestWithParam<FastSlamFilter> {};
-INSTANTIATE_TEST_SUITE_P(Filters, ByFilter,
-                         ::testing::Values(FastSlamFilter::kFastSlam1, FastSlamFilter::kFastSlam2),
+// Every filter of FastSlamFilter.
+const auto kAllFilters =
+    ::testing::Values(FastSlamFilter::kFastSlam1, FastSlamFilter::kFastSlam2,
+                      FastSlamFilter::kUnscented, FastSlamFilter::kSrcd, FastSlamFilter::kSrcdAided,
+                      FastSlamFilter::kSrcdParticle, FastSlamFilter::kDeSrcd);
+
+INSTANTIATE_TEST_SUITE_P(Filters, ByFilter, kAllFilters,
                          [](const auto& info) { return FastSlamFilterName(info.param); });
 
 // Zero noise, one particle, known association: the trajectory is the truth and every landmark
-// its true position, to round-off.
+// its true position, to round-off. The sigma-point pose steps restart their covariance at
+// eps I after every draw (kPoseRestartVariance, as Kim's code), a pose noise of 1.5e-8 m and rad
+// per scan: over the loop their heading wanders by about 1e-7 rad and the path by about 1e-5 m.
 TEST_P(ByFilter, NoiseFreeRunReproducesTheTruth) {
+  const fastslam::FilterTraits traits = fastslam::TraitsOf(GetParam());
+  const double tolerance_m = traits.draws_every_scan() ? 1e-4 : 1e-9;
+  const double tolerance_rad = traits.draws_every_scan() ? 1e-6 : 1e-12;
   const BaileySimulation sim = Simulate(NoiseFree());
   FastSlamConfig config = Config(GetParam(), 1);
   config.sigma_speed_mps = config.sigma_steer_rad = 0;
@@ -85,15 +96,15 @@ TEST_P(ByFilter, NoiseFreeRunReproducesTheTruth) {
     worst_heading =
         std::max(worst_heading, std::fabs(fastslam::WrapAngle(p.heading_rad - t.heading_rad)));
   }
-  EXPECT_LT(worst, 1e-9);
-  EXPECT_LT(worst_heading, 1e-12);
+  EXPECT_LT(worst, tolerance_m);
+  EXPECT_LT(worst_heading, tolerance_rad);
   StatusOr<std::vector<LandmarkEstimate>> landmarks = (*slam)->HeaviestLandmarks();
   ASSERT_TRUE(landmarks.ok());
   ASSERT_FALSE(landmarks->empty());
   for (const LandmarkEstimate& l : *landmarks) {
     const tools::BaileyPoint& truth = sim.landmarks.at(static_cast<size_t>(l.id));
-    EXPECT_NEAR(l.x_m, truth.x_m, 1e-9) << l.id;
-    EXPECT_NEAR(l.y_m, truth.y_m, 1e-9) << l.id;
+    EXPECT_NEAR(l.x_m, truth.x_m, tolerance_m) << l.id;
+    EXPECT_NEAR(l.y_m, truth.y_m, tolerance_m) << l.id;
   }
   // The heaviest particle's path is the one particle's: the mean.
   StatusOr<std::vector<StampedPose>> heaviest = (*slam)->HeaviestTrajectory();
@@ -175,10 +186,9 @@ class ByFilterAndAssociation : public ::testing::TestWithParam<FilterAndAssociat
 };
 INSTANTIATE_TEST_SUITE_P(
     Filters, ByFilterAndAssociation,
-    ::testing::Combine(::testing::Values(FastSlamFilter::kFastSlam1, FastSlamFilter::kFastSlam2),
-                       ::testing::Values(FastSlamAssociation::kKnown,
-                                         FastSlamAssociation::kMaximumLikelihood,
-                                         FastSlamAssociation::kExclusive)),
+    ::testing::Combine(kAllFilters, ::testing::Values(FastSlamAssociation::kKnown,
+                                                      FastSlamAssociation::kMaximumLikelihood,
+                                                      FastSlamAssociation::kExclusive)),
     [](const auto& info) { return FilterAndAssociationName(info.param); });
 
 TEST_P(ByFilterAndAssociation, SameResultAtAnyThreadCount) {
@@ -539,6 +549,40 @@ TEST(UnknownAssociationAccuracy, FastSlam2OnTheWebmapStaysWithinItsBounds) {
     }
   }
   EXPECT_LT(rmse[1], 7.5);
+}
+
+// Every filter on one loop of the webmap with Bailey's noise, 30 particles, known association,
+// seeds 1..3: the mean position RMSE of the weighted-mean path stays under 12 m. Measured when
+// written (GCC 12, x86-64): FastSLAM 1.0 9.7 m (4.95, 6.15, 17.95), FastSLAM 2.0 4.5, U-FastSLAM
+// 4.4, SRCD 4.3, SRCD-aided 6.1, SRCD-PF 3.9, DE-SRCD 5.7; a filter whose weights ignore the map
+// or whose updates pull the wrong way leaves the loop by tens of metres.
+TEST_P(ByFilter, WebmapLoopStaysWithinItsErrorBound) {
+  tools::BaileySimOptions o = tools::WebmapPreset();
+  o.loops = 1;
+  double sum = 0;
+  for (uint64_t seed : {1, 2, 3}) {
+    o.seed = seed;
+    const BaileySimulation sim = Simulate(o);
+    FastSlamConfig config = Config(GetParam(), 30, 2);
+    config.seed = seed;
+    auto slam = FastSlam::Create(config);
+    ASSERT_TRUE(slam.ok());
+    Feed(sim, slam->get());
+    std::map<double, Pose2> estimate;
+    for (const StampedPose& p : (*slam)->MeanTrajectory()) estimate[p.t_s] = p.pose;
+    double sq = 0;
+    size_t n = 0;
+    for (const tools::BaileyPose& t : sim.truth) {
+      const Pose2& p = estimate.at(t.t_s);
+      sq += std::pow(p.x_m - t.x_m, 2) + std::pow(p.y_m - t.y_m, 2);
+      ++n;
+    }
+    const double rmse = std::sqrt(sq / n);
+    std::printf("%s seed %llu: position RMSE %.2f m\n", FastSlamFilterName(GetParam()),
+                static_cast<unsigned long long>(seed), rmse);
+    sum += rmse;
+  }
+  EXPECT_LT(sum / 3, 12.0);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <numbers>
 #include <random>
 
+#include "engine/fastslam/data_association.h"
 #include "engine/fastslam/landmark_math.h"
 #include "engine/fastslam/sigma_point_filters.h"
 #include "engine/fastslam/vehicle_model.h"
@@ -319,7 +320,7 @@ TEST(SigmaPointFilters, CentralDifferenceInitIsCloseToTheEkfAndWithinItsBound) {
     const Landmark cd = CentralDifferenceInitLandmark(pose, z, noise, std::sqrt(3.0));
     const Eigen::Matrix2d p = Covariance(WithCovariance(cd));
     const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(p).eigenvalues()(1);
-    EXPECT_LE(largest, CentralDifferenceInitBound(z.range_m, noise, std::sqrt(3.0)) * (1 + 1e-9))
+    EXPECT_LE(largest, InitCovarianceBound(z.range_m, noise, std::sqrt(3.0)) * (1 + 1e-9))
         << "seed 13, trial " << trial;
   }
   // Small noise: the EKF's G R G^T.

@@ -44,6 +44,25 @@ enum class FastSlamFilter {
   // the pose is drawn from the result, and the weight is the product of each observation's
   // predictive likelihood.
   kFastSlam2,
+  // The seed's family (paper 003, Ankışhan et al.; engine/fastslam/sigma_point_filters.h and the
+  // README give every reading). Each draws its pose after resampling (as kFastSlam2) unless said.
+  // U-FastSLAM (Kim, Sakthivel, Chung 2008): the scaled unscented transform for the vehicle's
+  // prediction and proposal, the landmark updates and the weights (ut_alpha, ut_beta, ut_kappa).
+  kUnscented,
+  // SRCD-FastSLAM (the seed's Section 3.1): square-root central-difference Kalman filters
+  // (cd_step h) for the vehicle, the landmarks (Cholesky factors in the leaves) and the weights.
+  kSrcd,
+  // SRCD-aided FastSLAM (grove's reading of the seed's Table 1): FastSLAM 2.0's EKF proposal and
+  // weight for the vehicle; the square-root central-difference filter for the landmarks.
+  kSrcdAided,
+  // SRCD particle-filter FastSLAM (grove's reading: van der Merwe's sigma-point particle filter
+  // with the SR-CDKF): the SR-CDKF proposal for the vehicle, drawn before the weight; the weight
+  // is the importance ratio p(z | x) p(x | prediction) / q(x) at the drawn pose; EKF landmarks.
+  kSrcdParticle,
+  // DE-SRCD-FastSLAM (the seed's Section 3.2): kSrcd, and after each scan's draw differential
+  // evolution DE/best/1/bin (de_scale F, de_crossover Cr, de_generations) moves the drawn poses
+  // towards a higher fitness (Eq. 32) before they update their maps.
+  kDeSrcd,
 };
 
 enum class FastSlamVehicle {
@@ -115,6 +134,23 @@ struct FastSlamConfig {
   // NEFFECTIVE = 0.75 * NPARTICLES).
   double resample_threshold = 0.75;
 
+  // ---- The seed's family (filter kUnscented ... kDeSrcd) ----
+
+  // U-FastSLAM's scaled unscented transform. Ranges: alpha (0, 10], beta [0, 100],
+  // kappa (-4, 100]. Defaults: Kim's 0.9, 2, 0.
+  double ut_alpha = 0.9;
+  double ut_beta = 2;
+  double ut_kappa = 0;
+  // The central-difference half-step h of the SRCD filters. Range: [1, 10]. Default: sqrt(3),
+  // optimal for Gaussian variables.
+  double cd_step = 1.7320508075688772;
+  // Differential evolution (kDeSrcd): scale factor F, crossover probability Cr, and the number
+  // of generations per scan. Ranges: [0, 2], [0, 1], 0..1000. Defaults: the seed's F = 0.4,
+  // Cr = 0.8; 10 generations (the seed gives no number).
+  double de_scale = 0.4;
+  double de_crossover = 0.8;
+  int64_t de_generations = 10;
+
   // ---- Unknown data association (association != kKnown) ----
 
   // Default: kKnown.
@@ -155,7 +191,10 @@ struct FastSlamConfig {
 // A gate as a squared Mahalanobis distance.
 double FastSlamGateDistance2(double gate, FastSlamGateUnit unit);
 
-const char* FastSlamFilterName(FastSlamFilter filter);     // "fastslam1", "fastslam2"
+// "fastslam1", "fastslam2", "ufastslam", "srcd", "srcd_aided", "srcd_pf", "de_srcd".
+const char* FastSlamFilterName(FastSlamFilter filter);
+// The filter named `name` (FastSlamFilterName's names); false for another name.
+bool FastSlamFilterFromName(std::string_view name, FastSlamFilter* filter);
 const char* FastSlamVehicleName(FastSlamVehicle vehicle);  // "bailey", "guivant_nebot"
 
 // Every field of FastSlamConfig: name, type, range, effect and meaning, in the struct's order.
@@ -194,6 +233,12 @@ struct AssociationCounts {
   int64_t wrong = 0;       // ... whose ids differ
 };
 
+// What differential evolution did (kDeSrcd), over the whole run.
+struct EvolutionCounts {
+  int64_t trials = 0;    // trial poses evaluated
+  int64_t accepted = 0;  // ... that replaced their particle's pose (a strictly higher fitness)
+};
+
 struct FastSlamSummary : FilterSummary {
   int64_t controls = 0;           // Control() calls
   int64_t scans = 0;              // Scan() calls
@@ -201,6 +246,7 @@ struct FastSlamSummary : FilterSummary {
   int64_t predict_steps = 0;      // filter steps that only predicted
   int64_t landmarks = 0;          // in the heaviest particle's map
   AssociationCounts association;  // the heaviest particle's (unknown association)
+  EvolutionCounts evolution;      // kDeSrcd
   MemoryUse map_memory;
   MemoryUse trajectory_memory;
   // One paragraph for a terminal.
@@ -234,6 +280,11 @@ class FastSlam {
   Pose2 HeaviestPose() const;
   // The weighted mean pose at the start and after every step.
   const std::vector<StampedPose>& MeanTrajectory() const;
+  // The covariance of the particles' poses about their weighted mean after the last step
+  // (weighted; heading differences wrapped to (-pi, pi]); the particles' own Gaussians between
+  // scans are not added. After a scan every particle holds a drawn pose, so this is the filter's
+  // estimate of its pose uncertainty there (the pose NEES uses it).
+  Pose2Covariance PoseCovariance() const;
   // The heaviest particle's path at the same times, traced through its ancestry.
   StatusOr<std::vector<StampedPose>> HeaviestTrajectory() const;
   // The heaviest particle's landmarks in id order.

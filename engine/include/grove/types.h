@@ -16,6 +16,11 @@ struct Pose2 {
   double heading_rad = 0;
 };
 
+// A pose's covariance (x and y in m, heading in rad), its upper triangle.
+struct Pose2Covariance {
+  double xx = 0, xy = 0, xh = 0, yy = 0, yh = 0, hh = 0;
+};
+
 struct StampedPose {
   double t_s = 0;
   Pose2 pose;
