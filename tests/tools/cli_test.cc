@@ -781,4 +781,28 @@ TEST_F(CliTest, VictoriaParkBadDataStopsWithTheFileAndLine) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+TEST_F(CliTest, FastSlamMonteCarloHelpAndBadOptions) {
+  Outcome o = Grove("fastslam montecarlo --help");
+  EXPECT_EQ(o.exit_code, 0);
+  for (const char* option : {"--scenario", "--filters", "--runs", "--out", "--particles", "--seed",
+                             "--threads", "--loops", "--no-progress"}) {
+    EXPECT_NE(o.out.find(option), std::string::npos) << option << "\n" << o.out;
+  }
+  const std::string out = (dir_ / "mc").string();
+  o = Grove("fastslam montecarlo --scenario sim3 --filters srcd --runs abc --out " + out);
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  o = Grove("fastslam montecarlo --scenario sim3 --filters srcd,nope --runs 2 --out " + out);
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_EQ(o.err.rfind("grove: error: --filters = \"srcd,nope\": unknown filter \"nope\"", 0), 0u)
+      << o.err;
+  o = Grove("fastslam montecarlo --scenario sim3 --filters srcd --runs 0 --out " + out);
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_NE(o.err.find("--runs = 0"), std::string::npos) << o.err;
+  o = Grove("fastslam montecarlo --scenario sim3 --filters srcd --particles 0 --runs 1 --out " +
+            out);
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_NE(o.err.find("--particles = \"0\""), std::string::npos) << o.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 }  // namespace

@@ -1,6 +1,6 @@
 // grove: the command-line front end. Subcommands:
 //   grove footslam run|simulate|evaluate|render ...
-//   grove fastslam run|victoria-park|simulate|evaluate ...
+//   grove fastslam run|victoria-park|simulate|evaluate|montecarlo ...
 //   grove bench paper|scaling ...
 #include <fmt/format.h>
 
@@ -14,6 +14,7 @@
 #include "grove/footslam.h"
 #include "tools/bench_commands.h"
 #include "tools/cli/run_flags.h"
+#include "tools/fastslam_montecarlo.h"
 #include "tools/fastslam_run.h"
 #include "tools/fastslam_simulator.h"
 #include "tools/footslam_run.h"
@@ -124,6 +125,49 @@ int Main(int argc, char** argv) {
       ->capture_default_str();
   fs_simulate->add_option("--seed", fs_seed, "Seed, a non-negative integer")->capture_default_str();
   fs_simulate->add_option("--out", fs_out, "Output directory")->required();
+  CLI::App* fs_mc = fastslam->add_subcommand(
+      "montecarlo",
+      "Monte Carlo runs of the filters on the seed paper's Simulations I-III: MSE tables with "
+      "95 % intervals, MSE, NEES and box-plot charts; rerunning into --out reuses finished runs");
+  gt::MonteCarloOptions mc_options;
+  bool mc_no_progress = false;
+  fs_mc
+      ->add_option("--scenario", mc_options.scenario,
+                   "sim1 (webmap, known association), sim2 (its own map, unknown association), "
+                   "sim3 (small robot, known association), or a scenario FILE.json (keys map, "
+                   "preset, association, loops, sigma_speed_mps, sigma_steer_rad, sigma_range_m, "
+                   "sigma_bearing_rad, max_range_m)")
+      ->required();
+  fs_mc
+      ->add_option("--filters", mc_options.filters,
+                   "Comma list of filters: fastslam1, fastslam2, ufastslam, srcd, srcd_aided, "
+                   "srcd_pf, de_srcd")
+      ->required();
+  fs_mc
+      ->add_option("--runs", mc_options.runs,
+                   "Monte Carlo runs per filter and particle count, 1..100000")
+      ->required();
+  fs_mc
+      ->add_option("--out", mc_options.out_dir,
+                   "Output directory: runs/<filter>_p<particles>/run_<r>.csv|json, table.md, "
+                   "table.csv, summary.json and the charts")
+      ->required();
+  fs_mc->add_option("--particles", mc_options.particles,
+                    "Comma list of particle counts; every filter runs at each (default: the "
+                    "seed's per scenario and filter: sim2 30, de_srcd 3; sim3 100, de_srcd 10; "
+                    "sim1 100)");
+  fs_mc
+      ->add_option("--seed", mc_options.seed,
+                   "S: run r uses seed S + r for the simulator and the filter")
+      ->capture_default_str();
+  fs_mc
+      ->add_option("--threads", mc_options.threads,
+                   "Jobs run in parallel on this many threads, each filter on one (0: every "
+                   "hardware thread); results do not depend on it")
+      ->capture_default_str();
+  fs_mc->add_option("--loops", mc_options.loops,
+                    "Loops through the waypoints, 1..1000 (default: the scenario's)");
+  fs_mc->add_flag("--no-progress", mc_no_progress, "No progress output");
 
   // ---- bench ----
   CLI::App* bench = app.add_subcommand("bench", "Reproduce the paper's figures; measure scaling");
@@ -225,6 +269,10 @@ int Main(int argc, char** argv) {
         fs_park_flags.Prepare(&config, &fs_park_options.run, {{fs_park_data, "--data"}});
     if (code >= 0) return code;
     return gt::RunFastSlamCommand(config, fs_park_options);
+  }
+  if (*fs_mc) {
+    mc_options.progress = !mc_no_progress;
+    return gt::FastSlamMonteCarloCommand(mc_options);
   }
   if (*fs_evaluate) {
     return gt::FastSlamEvaluateCommand(fs_eval_truth, fs_eval_trajectory, fs_eval_landmarks,
