@@ -1218,21 +1218,24 @@ int FastSlamMonteCarloCommand(const MonteCarloOptions& options) {
         .log_x = true,
         .log_y = true};
     if (particle_list.size() > 1) {
+      std::string all_counts;
+      for (int64_t n : particle_list) {
+        all_counts += (all_counts.empty() ? "" : ", ") + std::to_string(n);
+      }
+      // The counts go into the title, not the legend, so that the plot keeps its width.
+      accuracy.title = fmt::format("{}: accuracy against CPU time ({})\neach line: {} particles",
+                                   scenario.spec.name, runs_text, all_counts);
       for (FastSlamFilter filter : *filters) {
         std::vector<std::pair<int64_t, size_t>> points;
         for (size_t gi = 0; gi < groups.size(); ++gi) {
           if (groups[gi].filter == filter) points.push_back({groups[gi].particles, gi});
         }
         std::sort(points.begin(), points.end());
-        std::string counts;
-        ChartSeries series{.style = ChartStyle::kLinePoints};
+        ChartSeries series{.label = FastSlamFilterName(filter), .style = ChartStyle::kLinePoints};
         for (const auto& [n, gi] : points) {
-          counts += (counts.empty() ? "" : ", ") + std::to_string(n);
           series.x.push_back(Mean(results[gi].cpu_s));
           series.y.push_back(Mean(results[gi].mse_mean));
         }
-        series.label =
-            fmt::format("{} (particles {}, in that order)", FastSlamFilterName(filter), counts);
         accuracy.series.push_back(std::move(series));
       }
       to_draw.push_back({"accuracy_vs_cpu", &accuracy});

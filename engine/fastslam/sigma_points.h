@@ -126,6 +126,27 @@ Status CholeskyRankOne(Mat<N, N>* l, const Vec<N>& v, double sigma) {
   return Status::Ok();
 }
 
+// The images under f of the 2L + 1 points mean (into *y0) and mean +- spread * root.col(k)
+// (into ys->col(k) and ys->col(L + k)), with output component `angle` (-1: none) unwrapped to
+// within pi of y0's. False when f fails at a point.
+template <int L, int M, typename F>
+bool TransformPoints(const Vec<L>& mean, const Mat<L, L>& root, double spread, int angle, F& f,
+                     Vec<M>* y0, Mat<M, 2 * L>* ys) {
+  if (!f(mean, y0)) return false;
+  for (int k = 0; k < L; ++k) {
+    const Vec<L> step = spread * root.col(k);
+    Vec<M> y;
+    if (!f(Vec<L>(mean + step), &y)) return false;
+    ys->col(k) = y;
+    if (!f(Vec<L>(mean - step), &y)) return false;
+    ys->col(L + k) = y;
+  }
+  if (angle >= 0) {
+    for (int k = 0; k < 2 * L; ++k) (*ys)(angle, k) = UnwrapNear((*ys)(angle, k), (*y0)(angle));
+  }
+  return true;
+}
+
 // y = f(x) for x ~ N(mean, root root^T) by the scaled unscented transform. f(x, &y) -> bool
 // (false: x cannot be evaluated, and the transform returns false). Component `angle` of y (-1
 // for none) is an angle. Outputs: the mean of y, its covariance and the cross-covariance
@@ -134,19 +155,8 @@ template <int L, int M, typename F>
 bool UnscentedTransform(const Vec<L>& mean, const Mat<L, L>& root, const UnscentedWeights& w,
                         int angle, F&& f, Vec<M>* y_mean, Mat<M, M>* y_cov, Mat<L, M>* cross) {
   Vec<M> y0;
-  if (!f(mean, &y0)) return false;
   Mat<M, 2 * L> ys;
-  for (int k = 0; k < L; ++k) {
-    const Vec<L> step = w.spread * root.col(k);
-    Vec<M> y;
-    if (!f(Vec<L>(mean + step), &y)) return false;
-    ys.col(k) = y;
-    if (!f(Vec<L>(mean - step), &y)) return false;
-    ys.col(L + k) = y;
-  }
-  if (angle >= 0) {
-    for (int k = 0; k < 2 * L; ++k) ys(angle, k) = UnwrapNear(ys(angle, k), y0(angle));
-  }
+  if (!TransformPoints<L, M>(mean, root, w.spread, angle, f, &y0, &ys)) return false;
   const Vec<M> m = w.wm0 * y0 + w.wi * ys.rowwise().sum();
   const Vec<M> d0 = y0 - m;
   Mat<M, M> cov = w.wc0 * d0 * d0.transpose();
@@ -173,19 +183,8 @@ bool CentralDifferenceTransform(const Vec<L>& mean, const Mat<L, L>& factor,
                                 const Mat<M, M>* noise_root, Vec<M>* y_mean, Mat<M, M>* y_factor,
                                 Mat<M, L>* first_order) {
   Vec<M> y0;
-  if (!f(mean, &y0)) return false;
   Mat<M, 2 * L> ys;
-  for (int k = 0; k < L; ++k) {
-    const Vec<L> step = w.h * factor.col(k);
-    Vec<M> y;
-    if (!f(Vec<L>(mean + step), &y)) return false;
-    ys.col(k) = y;
-    if (!f(Vec<L>(mean - step), &y)) return false;
-    ys.col(L + k) = y;
-  }
-  if (angle >= 0) {
-    for (int k = 0; k < 2 * L; ++k) ys(angle, k) = UnwrapNear(ys(angle, k), y0(angle));
-  }
+  if (!TransformPoints<L, M>(mean, factor, w.h, angle, f, &y0, &ys)) return false;
   constexpr int kCols = 2 * L + M;
   Mat<M, kCols> compound = Mat<M, kCols>::Zero();
   for (int k = 0; k < L; ++k) {

@@ -10,43 +10,14 @@
 #include <random>
 #include <string>
 
+#include "tests/fastslam/matrix_testing.h"
+
 namespace grove::fastslam {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-template <int N>
-Eigen::Matrix<double, N, N> RandomSpd(std::mt19937_64& rng, double scale) {
-  std::normal_distribution<double> normal(0, 1);
-  Eigen::Matrix<double, N, N> a;
-  for (int i = 0; i < N; ++i) {
-    for (int j = 0; j < N; ++j) a(i, j) = normal(rng);
-  }
-  return scale * (a * a.transpose() + 0.2 * Eigen::Matrix<double, N, N>::Identity());
-}
-
-template <int R, int C>
-Eigen::Matrix<double, R, C> RandomMatrix(std::mt19937_64& rng, double scale) {
-  std::normal_distribution<double> normal(0, scale);
-  Eigen::Matrix<double, R, C> a;
-  for (int i = 0; i < R; ++i) {
-    for (int j = 0; j < C; ++j) a(i, j) = normal(rng);
-  }
-  return a;
-}
-
-// |a - b| <= rel * max(1, |b|) in the Frobenius norm.
-template <typename A, typename B>
-::testing::AssertionResult MatrixNear(const A& a, const B& b, double rel) {
-  const double err = (a - b).norm();
-  const double bound = rel * std::max(1.0, b.norm());
-  if (err <= bound) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "difference " << err << " > " << bound << "\nactual\n"
-                                       << a << "\nexpected\n"
-                                       << b;
-}
 
 // The closed-form log density of N(v; 0, c) by explicit inverse and determinant.
 template <int N>

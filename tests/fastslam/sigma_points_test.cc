@@ -14,41 +14,12 @@
 #include "engine/fastslam/landmark_math.h"
 #include "engine/fastslam/sigma_point_filters.h"
 #include "engine/fastslam/vehicle_model.h"
+#include "tests/fastslam/matrix_testing.h"
 
 namespace grove::fastslam {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-
-template <int N>
-Mat<N, N> RandomSpd(std::mt19937_64& rng, double scale) {
-  std::normal_distribution<double> normal(0, 1);
-  Mat<N, N> a;
-  for (int i = 0; i < N; ++i) {
-    for (int j = 0; j < N; ++j) a(i, j) = normal(rng);
-  }
-  return scale * (a * a.transpose() + 0.2 * Mat<N, N>::Identity());
-}
-
-template <int R, int C>
-Mat<R, C> RandomMatrix(std::mt19937_64& rng, double scale) {
-  std::normal_distribution<double> normal(0, scale);
-  Mat<R, C> a;
-  for (int i = 0; i < R; ++i) {
-    for (int j = 0; j < C; ++j) a(i, j) = normal(rng);
-  }
-  return a;
-}
-
-template <typename A, typename B>
-::testing::AssertionResult Near(const A& a, const B& b, double rel) {
-  const double err = (a - b).norm();
-  const double bound = rel * std::max(1.0, b.norm());
-  if (err <= bound) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "difference " << err << " > " << bound << "\nactual\n"
-                                       << a << "\nexpected\n"
-                                       << b;
-}
 
 template <int N>
 bool LowerWithNonNegativeDiagonal(const Mat<N, N>& s) {
@@ -79,7 +50,7 @@ TEST(TriangularFactorTest, FactorsTheCompoundMatrix) {
     const Mat<3, 8> b = RandomMatrix<3, 8>(rng, 2.0);
     const Mat<3, 3> s = TriangularFactor<3, 8>(b);
     EXPECT_TRUE(LowerWithNonNegativeDiagonal<3>(s)) << "seed 7, trial " << trial << "\n" << s;
-    EXPECT_TRUE(Near(Mat<3, 3>(s * s.transpose()), Mat<3, 3>(b * b.transpose()), 1e-12))
+    EXPECT_TRUE(MatrixNear(Mat<3, 3>(s * s.transpose()), Mat<3, 3>(b * b.transpose()), 1e-12))
         << "seed 7, trial " << trial;
   }
 }
@@ -93,11 +64,11 @@ TEST(CholeskyRankOneTest, UpdateAndDowndateMatchRecomputedFactors) {
     Mat<4, 4> up = l;
     ASSERT_TRUE(CholeskyRankOne<4>(&up, v, +1).ok());
     const Mat<4, 4> expected_up = Mat<4, 4>(a + v * v.transpose()).llt().matrixL();
-    EXPECT_TRUE(Near(up, expected_up, 1e-11)) << "seed 11, trial " << trial;
+    EXPECT_TRUE(MatrixNear(up, expected_up, 1e-11)) << "seed 11, trial " << trial;
     // And back down.
     Mat<4, 4> down = up;
     ASSERT_TRUE(CholeskyRankOne<4>(&down, v, -1).ok()) << "seed 11, trial " << trial;
-    EXPECT_TRUE(Near(down, l, 1e-9)) << "seed 11, trial " << trial;
+    EXPECT_TRUE(MatrixNear(down, l, 1e-9)) << "seed 11, trial " << trial;
   }
 }
 
@@ -140,9 +111,9 @@ TEST(SigmaPointTransforms, ExactOnLinearGaussianProblems) {
       Mat<2, 2> yc;
       Mat<4, 2> xc;
       ASSERT_TRUE((UnscentedTransform<4, 2>(m, root, w, -1, f, &ym, &yc, &xc)));
-      EXPECT_TRUE(Near(ym, y_mean, 1e-12)) << "seed 3, trial " << trial;
-      EXPECT_TRUE(Near(yc, y_cov, 1e-12)) << "seed 3, trial " << trial;
-      EXPECT_TRUE(Near(xc, cross, 1e-12)) << "seed 3, trial " << trial;
+      EXPECT_TRUE(MatrixNear(ym, y_mean, 1e-12)) << "seed 3, trial " << trial;
+      EXPECT_TRUE(MatrixNear(yc, y_cov, 1e-12)) << "seed 3, trial " << trial;
+      EXPECT_TRUE(MatrixNear(xc, cross, 1e-12)) << "seed 3, trial " << trial;
     }
     for (double h : {std::sqrt(3.0), 1.5}) {
       Vec<2> ym;
@@ -150,9 +121,11 @@ TEST(SigmaPointTransforms, ExactOnLinearGaussianProblems) {
       Mat<2, 4> d;
       ASSERT_TRUE((CentralDifferenceTransform<4, 2>(m, root, CentralDifferenceWeightsFor(4, h), -1,
                                                     f, nullptr, &ym, &ys, &d)));
-      EXPECT_TRUE(Near(ym, y_mean, 1e-12)) << "seed 3, trial " << trial;
-      EXPECT_TRUE(Near(Mat<2, 2>(ys * ys.transpose()), y_cov, 1e-12)) << "seed 3, trial " << trial;
-      EXPECT_TRUE(Near(Mat<4, 2>(root * d.transpose()), cross, 1e-12)) << "seed 3, trial " << trial;
+      EXPECT_TRUE(MatrixNear(ym, y_mean, 1e-12)) << "seed 3, trial " << trial;
+      EXPECT_TRUE(MatrixNear(Mat<2, 2>(ys * ys.transpose()), y_cov, 1e-12))
+          << "seed 3, trial " << trial;
+      EXPECT_TRUE(MatrixNear(Mat<4, 2>(root * d.transpose()), cross, 1e-12))
+          << "seed 3, trial " << trial;
     }
   }
 }
@@ -189,8 +162,9 @@ TEST(SigmaPointTransforms, SquareRootAndUnscentedUpdatesEqualTheKalmanFilter) {
     Mat<3, 3> sx = root;
     double ll = 0;
     ASSERT_TRUE((SquareRootUpdate<3, 2>(root * d.transpose(), s_z, z - z_hat, &x, &sx, &ll)).ok());
-    EXPECT_TRUE(Near(x, kf_mean, 1e-10)) << "seed 5, trial " << trial;
-    EXPECT_TRUE(Near(Mat<3, 3>(sx * sx.transpose()), kf_cov, 1e-10)) << "seed 5, trial " << trial;
+    EXPECT_TRUE(MatrixNear(x, kf_mean, 1e-10)) << "seed 5, trial " << trial;
+    EXPECT_TRUE(MatrixNear(Mat<3, 3>(sx * sx.transpose()), kf_cov, 1e-10))
+        << "seed 5, trial " << trial;
     EXPECT_TRUE(LowerWithNonNegativeDiagonal<3>(sx));
     EXPECT_NEAR(ll, kf_ll, 1e-10) << "seed 5, trial " << trial;
     // UKF.
@@ -200,8 +174,9 @@ TEST(SigmaPointTransforms, SquareRootAndUnscentedUpdatesEqualTheKalmanFilter) {
                                           &sy, &xc)));
     sy += r;
     const Mat<3, 2> ku = xc * sy.inverse();
-    EXPECT_TRUE(Near(Vec<3>(m + ku * (z - z_hat)), kf_mean, 1e-10)) << "seed 5, trial " << trial;
-    EXPECT_TRUE(Near(Mat<3, 3>(p - ku * sy * ku.transpose()), kf_cov, 1e-10));
+    EXPECT_TRUE(MatrixNear(Vec<3>(m + ku * (z - z_hat)), kf_mean, 1e-10))
+        << "seed 5, trial " << trial;
+    EXPECT_TRUE(MatrixNear(Mat<3, 3>(p - ku * sy * ku.transpose()), kf_cov, 1e-10));
   }
 }
 
@@ -265,7 +240,7 @@ TEST(SigmaPointFilters, AgreeWithTheEkfOnNearLinearProblems) {
   for (const Landmark* x : estimates) {
     EXPECT_NEAR(x->x_m, ekf.x_m, 1e-4);
     EXPECT_NEAR(x->y_m, ekf.y_m, 1e-4);
-    EXPECT_TRUE(Near(Covariance(*x), Covariance(ekf), 1e-3));
+    EXPECT_TRUE(MatrixNear(Covariance(*x), Covariance(ekf), 1e-3));
   }
   EXPECT_NEAR(ll_ukf, ll_ekf, 1e-2);
   EXPECT_NEAR(ll_cd, ll_ekf, 1e-2);
@@ -280,10 +255,10 @@ TEST(SigmaPointFilters, AgreeWithTheEkfOnNearLinearProblems) {
   ASSERT_TRUE(UnscentedProposalStep(&mu_ukf, &s_ukf, l, z, noise, UnscentedRule{}, &w_ukf).ok());
   ASSERT_TRUE(
       CentralDifferenceProposalStep(&mu_cd, &f_cd, root, z, noise, std::sqrt(3.0), &w_cd).ok());
-  EXPECT_TRUE(Near(mu_ukf, mu_ekf, 1e-4));
-  EXPECT_TRUE(Near(mu_cd, mu_ekf, 1e-4));
-  EXPECT_TRUE(Near(s_ukf, s_ekf, 1e-3));
-  EXPECT_TRUE(Near(Eigen::Matrix3d(f_cd * f_cd.transpose()), s_ekf, 1e-3));
+  EXPECT_TRUE(MatrixNear(mu_ukf, mu_ekf, 1e-4));
+  EXPECT_TRUE(MatrixNear(mu_cd, mu_ekf, 1e-4));
+  EXPECT_TRUE(MatrixNear(s_ukf, s_ekf, 1e-3));
+  EXPECT_TRUE(MatrixNear(Eigen::Matrix3d(f_cd * f_cd.transpose()), s_ekf, 1e-3));
   EXPECT_NEAR(w_ukf, w_ekf, 1e-2);
   EXPECT_NEAR(w_cd, w_ekf, 1e-2);
 
@@ -304,10 +279,10 @@ TEST(SigmaPointFilters, AgreeWithTheEkfOnNearLinearProblems) {
                                                         q.sigma_steer_rad * q.sigma_steer_rad)
                                             .asDiagonal() *
                                         gu.transpose();
-  EXPECT_TRUE(Near(m_ukf, ToVector(moved), 1e-5));
-  EXPECT_TRUE(Near(m_cd, ToVector(moved), 1e-5));
-  EXPECT_TRUE(Near(c_ukf, ekf_cov, 1e-4));
-  EXPECT_TRUE(Near(Eigen::Matrix3d(c_cd * c_cd.transpose()), ekf_cov, 1e-4));
+  EXPECT_TRUE(MatrixNear(m_ukf, ToVector(moved), 1e-5));
+  EXPECT_TRUE(MatrixNear(m_cd, ToVector(moved), 1e-5));
+  EXPECT_TRUE(MatrixNear(c_ukf, ekf_cov, 1e-4));
+  EXPECT_TRUE(MatrixNear(Eigen::Matrix3d(c_cd * c_cd.transpose()), ekf_cov, 1e-4));
 }
 
 TEST(SigmaPointFilters, CentralDifferenceInitIsCloseToTheEkfAndWithinItsBound) {
@@ -332,7 +307,7 @@ TEST(SigmaPointFilters, CentralDifferenceInitIsCloseToTheEkfAndWithinItsBound) {
   // The means differ by the second-order bias r (1 - cos(h sb)) / h^2 ~ r sb^2 / 2 = 1e-5 m.
   EXPECT_NEAR(cd.x_m, ekf.x_m, 3e-5);
   EXPECT_NEAR(cd.y_m, ekf.y_m, 3e-5);
-  EXPECT_TRUE(Near(Covariance(cd), Covariance(ekf), 1e-6));
+  EXPECT_TRUE(MatrixNear(Covariance(cd), Covariance(ekf), 1e-6));
 }
 
 TEST(SigmaPointFilters, UnusableSigmaPointsAreReported) {
