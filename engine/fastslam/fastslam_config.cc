@@ -66,7 +66,7 @@ const std::vector<ConfigField<FastSlamConfig>>& FastSlamConfigFields() {
                 "de_srcd: differential evolution's scale factor F"),
       RealField("de_crossover", &C::de_crossover, I::Closed(0, 1), kChangesResults,
                 "de_srcd: differential evolution's crossover probability Cr"),
-      IntegerField("de_generations", &C::de_generations, 0, 1000, kChangesResults,
+      IntegerField("de_generations", &C::de_generations, 0, 255, kChangesResults,
                    "de_srcd: differential evolution's generations per scan"),
       ChoiceField("association", &C::association, {"known", "ml", "ml_exclusive"}, kChangesResults,
                   "Data association: known (observation ids), ml (maximum likelihood with "

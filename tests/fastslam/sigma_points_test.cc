@@ -244,6 +244,10 @@ TEST(SigmaPointFilters, AgreeWithTheEkfOnNearLinearProblems) {
   }
   EXPECT_NEAR(ll_ukf, ll_ekf, 1e-2);
   EXPECT_NEAR(ll_cd, ll_ekf, 1e-2);
+  // And with each other.
+  EXPECT_TRUE(MatrixNear(Mean(ukf), Mean(cd_cov), 1e-4));
+  EXPECT_TRUE(MatrixNear(Covariance(ukf), Covariance(cd_cov), 1e-3));
+  EXPECT_NEAR(ll_ukf, ll_cd, 1e-2);
 
   // The proposal step.
   const Eigen::Vector3d mu(1.0, -2.0, 0.3);
@@ -261,6 +265,8 @@ TEST(SigmaPointFilters, AgreeWithTheEkfOnNearLinearProblems) {
   EXPECT_TRUE(MatrixNear(Eigen::Matrix3d(f_cd * f_cd.transpose()), s_ekf, 1e-3));
   EXPECT_NEAR(w_ukf, w_ekf, 1e-2);
   EXPECT_NEAR(w_cd, w_ekf, 1e-2);
+  EXPECT_TRUE(MatrixNear(mu_ukf, mu_cd, 1e-4));
+  EXPECT_NEAR(w_ukf, w_cd, 1e-2);
 
   // The prediction over one control with small noise.
   const VehicleGeometry g{FastSlamVehicle::kBailey, 4.0};

@@ -145,8 +145,9 @@ struct FastSlamConfig {
   // optimal for Gaussian variables.
   double cd_step = 1.7320508075688772;
   // Differential evolution (kDeSrcd): scale factor F, crossover probability Cr, and the number
-  // of generations per scan. Ranges: [0, 2], [0, 1], 0..1000. Defaults: the seed's F = 0.4,
-  // Cr = 0.8; 10 generations (the seed gives no number).
+  // of generations per scan. Ranges: [0, 2], [0, 1], 0..255 (each generation draws from a random
+  // stream of its own). Defaults: the seed's F = 0.4, Cr = 0.8; 10 generations (the seed gives
+  // no number).
   double de_scale = 0.4;
   double de_crossover = 0.8;
   int64_t de_generations = 10;
