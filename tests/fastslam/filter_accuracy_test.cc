@@ -1,0 +1,66 @@
+// The accuracy of every filter on a short scenario (labelled accuracy: run in the release pass
+// only, not under the sanitizers).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "grove/fastslam.h"
+#include "tools/fastslam_simulator.h"
+
+namespace grove {
+namespace {
+
+class AllFilters : public ::testing::TestWithParam<FastSlamFilter> {};
+INSTANTIATE_TEST_SUITE_P(Filters, AllFilters,
+                         ::testing::Values(FastSlamFilter::kFastSlam1, FastSlamFilter::kFastSlam2,
+                                           FastSlamFilter::kUnscented, FastSlamFilter::kSrcd,
+                                           FastSlamFilter::kSrcdAided,
+                                           FastSlamFilter::kSrcdParticle, FastSlamFilter::kDeSrcd),
+                         [](const auto& info) { return FastSlamFilterName(info.param); });
+
+// Every filter on one loop of the webmap with Bailey's noise, 30 particles, known association,
+// seeds 1..3: the mean position RMSE of the weighted-mean path stays under 12 m. Measured when
+// written (GCC 12, x86-64): FastSLAM 1.0 9.7 m (4.95, 6.15, 17.95), FastSLAM 2.0 4.5, U-FastSLAM
+// 4.4, SRCD 4.3, SRCD-aided 6.1, SRCD-PF 3.9, DE-SRCD 5.7; a filter whose weights ignore the map
+// or whose updates pull the wrong way leaves the loop by tens of metres.
+TEST_P(AllFilters, WebmapLoopStaysWithinItsErrorBound) {
+  tools::BaileySimOptions o = tools::WebmapPreset();
+  o.loops = 1;
+  double sum = 0;
+  for (uint64_t seed : {1, 2, 3}) {
+    o.seed = seed;
+    StatusOr<tools::BaileyMap> map = tools::ParseBaileyMap("webmap", tools::EmbeddedBaileyWebmap());
+    ASSERT_TRUE(map.ok()) << map.status().message();
+    StatusOr<tools::BaileySimulation> sim = tools::SimulateBailey(*map, o);
+    ASSERT_TRUE(sim.ok()) << sim.status().message();
+    FastSlamConfig config;
+    config.filter = GetParam();
+    config.particles = 30;
+    config.threads = 2;
+    config.batch = 8;
+    config.seed = seed;
+    auto slam = FastSlam::Create(config);
+    ASSERT_TRUE(slam.ok());
+    Status fed = tools::FeedSimulation(*sim, slam->get());
+    ASSERT_TRUE(fed.ok()) << fed.message();
+    std::map<double, Pose2> estimate;
+    for (const StampedPose& p : (*slam)->MeanTrajectory()) estimate[p.t_s] = p.pose;
+    double sq = 0;
+    size_t n = 0;
+    for (const tools::BaileyPose& t : sim->truth) {
+      const Pose2& p = estimate.at(t.t_s);
+      sq += std::pow(p.x_m - t.x_m, 2) + std::pow(p.y_m - t.y_m, 2);
+      ++n;
+    }
+    const double rmse = std::sqrt(sq / n);
+    std::printf("%s seed %llu: position RMSE %.2f m\n", FastSlamFilterName(GetParam()),
+                static_cast<unsigned long long>(seed), rmse);
+    sum += rmse;
+  }
+  EXPECT_LT(sum / 3, 12.0);
+}
+
+}  // namespace
+}  // namespace grove
