@@ -935,9 +935,12 @@ int FastSlamMonteCarloCommand(const MonteCarloOptions& options) {
     if (!ReadFinishedJob(dir, scenario, groups[jobs[i].group], jobs[i]).ok()) todo.push_back(i);
   }
   const int64_t reused = static_cast<int64_t>(jobs.size() - todo.size());
-  // The costliest first (most particles), so that the last jobs to start are short.
-  std::stable_sort(todo.begin(), todo.end(), [&](size_t a, size_t b) {
-    return groups[jobs[a].group].particles > groups[jobs[b].group].particles;
+  // The costliest first (most particles), so that the last jobs to start are short; ties in job
+  // order (std::sort with the index as tie-break: libstdc++ 12's stable_sort trips clang's
+  // deprecation warning).
+  std::sort(todo.begin(), todo.end(), [&](size_t a, size_t b) {
+    const int64_t pa = groups[jobs[a].group].particles, pb = groups[jobs[b].group].particles;
+    return pa != pb ? pa > pb : a < b;
   });
   const int hardware = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const int threads = options.threads == 0 ? hardware : static_cast<int>(options.threads);
