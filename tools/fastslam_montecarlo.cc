@@ -134,13 +134,12 @@ StatusOr<std::vector<FastSlamFilter>> ParseFilters(const std::string& text) {
   }
   std::vector<FastSlamFilter> filters;
   for (const std::string& item : SplitList(text)) {
-    auto it = std::find(names.begin(), names.end(), item);
-    if (it == names.end()) {
+    FastSlamFilter filter;
+    if (!FastSlamFilterFromName(item, &filter)) {
       return InvalidArgumentError(
           fmt::format("--filters = {}: unknown filter {}: must be a comma list of {}",
                       QuoteForMessage(text), QuoteForMessage(item), JoinNames(names)));
     }
-    const auto filter = static_cast<FastSlamFilter>(it - names.begin());
     if (std::find(filters.begin(), filters.end(), filter) != filters.end()) {
       return InvalidArgumentError(fmt::format("--filters = {}: {} is given twice",
                                               QuoteForMessage(text), QuoteForMessage(item)));
@@ -323,32 +322,6 @@ struct ScanSample {
   Pose2Covariance covariance;
 };
 
-// Feeds `sim` as FeedSimulation does (each control, then the scans from its time until the next
-// control's) and samples the mean pose and the pose covariance after every scan.
-Status FeedAndSample(const BaileySimulation& sim, FastSlam* slam, std::vector<ScanSample>* scans) {
-  size_t z = 0;
-  std::vector<LandmarkObservation> scan;
-  const auto& obs = sim.observations;
-  for (size_t k = 0; k < sim.controls.size(); ++k) {
-    const BaileyControl& c = sim.controls[k];
-    Status s = slam->Control(c.t_s, c.speed_mps, c.steer_rad);
-    if (!s.ok()) return Status(s.code(), fmt::format("control {}: {}", k, s.message()));
-    const double upper = k + 1 < sim.controls.size() ? sim.controls[k + 1].t_s : INFINITY;
-    while (z < obs.size() && obs[z].t_s < c.t_s) ++z;
-    while (z < obs.size() && obs[z].t_s < upper) {
-      const double t = obs[z].t_s;
-      scan.clear();
-      for (; z < obs.size() && obs[z].t_s == t; ++z) {
-        scan.push_back({obs[z].range_m, obs[z].bearing_rad, obs[z].id});
-      }
-      s = slam->Scan(t, scan);
-      if (!s.ok()) return Status(s.code(), fmt::format("scan at t = {}: {}", t, s.message()));
-      scans->push_back({t, slam->MeanPose(), slam->PoseCovariance()});
-    }
-  }
-  return Status::Ok();
-}
-
 // Runs one job and writes its CSV and JSON. Returns the status of the writes; the filter's own
 // failure is recorded in the JSON.
 Status RunMonteCarloJob(const MonteCarloScenario& scenario, const Group& group, const Job& job,
@@ -374,7 +347,10 @@ Status RunMonteCarloJob(const MonteCarloScenario& scenario, const Group& group, 
       if (!slam.ok()) {
         status = slam.status();
       } else {
-        status = FeedAndSample(*sim, slam->get(), &scans);
+        FastSlam& f = **slam;
+        status = FeedSimulation(*sim, &f, SIZE_MAX, nullptr, [&](double t) {
+          scans.push_back({t, f.MeanPose(), f.PoseCovariance()});
+        });
         cpu_s = ThreadCpuSeconds() - cpu0;
         steps = (*slam)->steps();
         trajectory = (*slam)->MeanTrajectory();

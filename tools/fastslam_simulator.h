@@ -61,6 +61,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -275,9 +276,11 @@ struct FeedTimes {
 
 // Feeds the first `controls` control rows of `sim` into `slam`, each followed by the scans from
 // its time until the next row's (a control first at a shared time), as `grove fastslam run`
-// merges its files. The first error stops it (the message names the row). `times` may be null.
+// merges its files, and calls after_scan(t) (when given) after each scan. The first error stops
+// it (the message names the row). `times` may be null.
 Status FeedSimulation(const BaileySimulation& sim, FastSlam* slam, size_t controls = SIZE_MAX,
-                      FeedTimes* times = nullptr);
+                      FeedTimes* times = nullptr,
+                      const std::function<void(double t_s)>& after_scan = nullptr);
 
 // `grove fastslam simulate`: reads the map (the bundled webmap when map_path is empty), takes the
 // preset (empty: "webmap") with `seed`, simulates and writes controls.csv, observations.csv,

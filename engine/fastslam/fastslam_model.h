@@ -269,11 +269,13 @@ class FastSlamModel {
   Status Predict(const ControlStep& c, uint64_t step, size_t begin, size_t end, int slot) {
     const bool ekf = traits_.pose == FilterTraits::Pose::kEkf;
     const bool sigma_points = traits_.draws_every_scan();
+    if ((ekf || sigma_points) && !SteeringUsable(geometry_, c.steer_rad)) {
+      return BadSteering(begin);
+    }
     // FastSLAM 2.0 moves every particle with the same control: its terms once per batch.
     ControlTerms shared;
     Unit turn{1, 0};
-    if (ekf || sigma_points) {
-      if (!SteeringUsable(geometry_, c.steer_rad)) return BadSteering(begin);
+    if (ekf) {
       shared = ControlTermsOf(geometry_, c.v_mps, c.steer_rad, c.dt_s);
       turn = Unit{std::cos(shared.turn_rad), std::sin(shared.turn_rad)};
     }
