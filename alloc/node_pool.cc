@@ -76,18 +76,24 @@ struct NodePool::Page {
 };
 
 struct alignas(kFalseSharingBytes) NodePool::Heap {
+  explicit Heap(int slot_count) : outgoing(slot_count, nullptr) {}
+  int slot = 0;
   Page* current = nullptr;  // the page allocations come from
   Page* avail = nullptr;    // other pages that have free nodes
   char* slab_cursor = nullptr;
   char* slab_end = nullptr;
   std::vector<void*> slabs;
-  // Written only by the owning slot (load + store, no read-modify-write); relaxed because it is
-  // a statistic: readers need a recent value, not an ordering with the nodes themselves.
+  // This slot's frees of other slots' nodes not yet pushed, by owner slot (owner only).
+  std::vector<RemoteBatch*> outgoing;
+  // Written only by the owning slot (load + store, no read-modify-write); relaxed because they
+  // are statistics: readers need a recent value, not an ordering with the nodes themselves.
   std::atomic<int64_t> live{0};
+  std::atomic<int64_t> outgoing_count{0};  // nodes in `outgoing`
   // Pushed by other threads, drained by the owner. Release on push publishes the node's `next`
-  // to the owner's acquire exchange.
+  // (the batch's contents) to the owner's acquire exchange.
   alignas(kFalseSharingBytes) std::atomic<FreeNode*> remote{nullptr};
-  // Nodes on `remote` not yet drained; relaxed: a statistic, like `live`.
+  std::atomic<RemoteBatch*> remote_batches{nullptr};
+  // Nodes on `remote` and in `remote_batches` not yet drained; relaxed: a statistic.
   std::atomic<int64_t> remote_pending{0};
 };
 
@@ -99,10 +105,22 @@ NodePool::NodePool(size_t node_bytes, int slots)
   first_node_offset_ = static_cast<uint32_t>(header);
   nodes_per_page_ = static_cast<uint32_t>((kPageBytes - header) / node_bytes_);
   heaps_.reserve(slots);
-  for (int i = 0; i < slots; ++i) heaps_.push_back(std::make_unique<Heap>());
+  for (int i = 0; i < slots; ++i) {
+    heaps_.push_back(std::make_unique<Heap>(slots));
+    heaps_.back()->slot = i;
+  }
 }
 
 NodePool::~NodePool() {
+  for (auto& heap : heaps_) {
+    for (RemoteBatch* b : heap->outgoing) delete b;
+    RemoteBatch* b = heap->remote_batches.load(std::memory_order_acquire);
+    while (b != nullptr) {
+      RemoteBatch* next = b->next;
+      delete b;
+      b = next;
+    }
+  }
   for (auto& heap : heaps_) {
     for (void* slab : heap->slabs) munmap(slab, kSlabBytes);
   }
@@ -137,6 +155,52 @@ void NodePool::Free(void* p, int slot) {
     owner->live.store(owner->live.load(std::memory_order_relaxed) - 1, std::memory_order_relaxed);
     return;
   }
+  if (slot < 0) {
+    PushNode(owner, p);
+    return;
+  }
+  Heap* heap = heaps_[slot].get();
+  RemoteBatch*& batch = heap->outgoing[owner->slot];
+  if (batch == nullptr) {
+    batch = new (std::nothrow) RemoteBatch;
+    if (batch == nullptr) {
+      PushNode(owner, p);
+      return;
+    }
+    batch->count = 0;
+  }
+  batch->nodes[batch->count++] = p;
+  if (batch->count == kRemoteBatch) {
+    PushBatch(owner, batch);
+    batch = nullptr;
+    heap->outgoing_count.store(
+        heap->outgoing_count.load(std::memory_order_relaxed) - (kRemoteBatch - 1),
+        std::memory_order_relaxed);
+  } else {
+    heap->outgoing_count.store(heap->outgoing_count.load(std::memory_order_relaxed) + 1,
+                               std::memory_order_relaxed);
+  }
+}
+
+void NodePool::Flush(int slot) {
+  Heap* heap = heaps_[slot].get();
+  int64_t pushed = 0;
+  for (size_t owner = 0; owner < heap->outgoing.size(); ++owner) {
+    RemoteBatch*& batch = heap->outgoing[owner];
+    if (batch == nullptr || batch->count == 0) continue;
+    pushed += batch->count;
+    PushBatch(heaps_[owner].get(), batch);
+    batch = nullptr;
+  }
+  if (pushed != 0) {
+    heap->outgoing_count.store(heap->outgoing_count.load(std::memory_order_relaxed) - pushed,
+                               std::memory_order_relaxed);
+  }
+}
+
+void NodePool::PushNode(Heap* owner, void* p) {
+  // Counted before it is visible, so the owner's drain never takes the count below zero.
+  owner->remote_pending.fetch_add(1, std::memory_order_relaxed);
   FreeNode* node = static_cast<FreeNode*>(p);
   FreeNode* head = owner->remote.load(std::memory_order_relaxed);
   do {
@@ -145,7 +209,16 @@ void NodePool::Free(void* p, int slot) {
     // retry with the new head.
   } while (!owner->remote.compare_exchange_weak(head, node, std::memory_order_release,
                                                 std::memory_order_relaxed));
-  owner->remote_pending.fetch_add(1, std::memory_order_relaxed);
+}
+
+void NodePool::PushBatch(Heap* owner, RemoteBatch* batch) {
+  owner->remote_pending.fetch_add(batch->count, std::memory_order_relaxed);
+  RemoteBatch* head = owner->remote_batches.load(std::memory_order_relaxed);
+  do {
+    batch->next = head;
+    // Release: the owner's acquire exchange must see the batch's contents.
+  } while (!owner->remote_batches.compare_exchange_weak(head, batch, std::memory_order_release,
+                                                        std::memory_order_relaxed));
 }
 
 void NodePool::LocalFree(Heap* heap, Page* page, void* node) {
@@ -164,17 +237,33 @@ void NodePool::LocalFree(Heap* heap, Page* page, void* node) {
 }
 
 void NodePool::DrainRemote(Heap* heap) {
-  if (heap->remote.load(std::memory_order_relaxed) == nullptr) return;
-  // Acquire pairs with the producers' release CAS: every `next` in the list is visible.
-  FreeNode* node = heap->remote.exchange(nullptr, std::memory_order_acquire);
   int64_t drained = 0;
-  while (node != nullptr) {
-    FreeNode* next = node->next;
-    Page* page = reinterpret_cast<Page*>(reinterpret_cast<uintptr_t>(node) & ~(kPageBytes - 1));
-    LocalFree(heap, page, node);
-    node = next;
-    ++drained;
+  auto page_of = [](void* node) {
+    return reinterpret_cast<Page*>(reinterpret_cast<uintptr_t>(node) & ~(kPageBytes - 1));
+  };
+  if (heap->remote_batches.load(std::memory_order_relaxed) != nullptr) {
+    // Acquire pairs with the producers' release CAS: every batch's contents are visible.
+    RemoteBatch* batch = heap->remote_batches.exchange(nullptr, std::memory_order_acquire);
+    while (batch != nullptr) {
+      for (int k = 0; k < batch->count; ++k)
+        LocalFree(heap, page_of(batch->nodes[k]), batch->nodes[k]);
+      drained += batch->count;
+      RemoteBatch* next = batch->next;
+      delete batch;
+      batch = next;
+    }
   }
+  if (heap->remote.load(std::memory_order_relaxed) != nullptr) {
+    // Acquire pairs with the producers' release CAS: every `next` in the list is visible.
+    FreeNode* node = heap->remote.exchange(nullptr, std::memory_order_acquire);
+    while (node != nullptr) {
+      FreeNode* next = node->next;
+      LocalFree(heap, page_of(node), node);
+      node = next;
+      ++drained;
+    }
+  }
+  if (drained == 0) return;
   heap->remote_pending.fetch_sub(drained, std::memory_order_relaxed);
   heap->live.store(heap->live.load(std::memory_order_relaxed) - drained, std::memory_order_relaxed);
 }
@@ -237,6 +326,9 @@ void NodePool::Free(void* p, int slot) {
   heaps_[slot < 0 ? 0 : slot]->live.fetch_sub(1, std::memory_order_relaxed);
 }
 
+void NodePool::Flush(int) {}
+void NodePool::PushNode(Heap*, void*) {}
+void NodePool::PushBatch(Heap*, RemoteBatch*) {}
 void NodePool::LocalFree(Heap*, Page*, void*) {}
 void NodePool::DrainRemote(Heap*) {}
 NodePool::Page* NodePool::Refill(Heap*) { return nullptr; }
@@ -247,7 +339,8 @@ void NodePool::NotePeak() const {
   int64_t live = 0;
   for (const auto& heap : heaps_) {
     live += heap->live.load(std::memory_order_relaxed) -
-            heap->remote_pending.load(std::memory_order_relaxed);
+            heap->remote_pending.load(std::memory_order_relaxed) -
+            heap->outgoing_count.load(std::memory_order_relaxed);
   }
   int64_t peak = peak_live_.load(std::memory_order_relaxed);
   // Relaxed: the peak is a statistic; the CAS loop only keeps it monotone.
@@ -261,7 +354,8 @@ PoolStats NodePool::Stats() const {
   stats.node_bytes = static_cast<int64_t>(node_bytes_);
   for (const auto& heap : heaps_) {
     stats.live_nodes += heap->live.load(std::memory_order_relaxed) -
-                        heap->remote_pending.load(std::memory_order_relaxed);
+                        heap->remote_pending.load(std::memory_order_relaxed) -
+                        heap->outgoing_count.load(std::memory_order_relaxed);
   }
   stats.peak_live_nodes = peak_live_.load(std::memory_order_relaxed);
   stats.reserved_bytes = reserved_bytes_.load(std::memory_order_relaxed);

@@ -87,7 +87,10 @@ class Ancestry {
         __builtin_prefetch(n, 1);
         ring[tail++ % kRing] = n;
       }
-      if (head == tail) return;
+      if (head == tail) {
+        pool_.Flush(slot);
+        return;
+      }
       Node* n = ring[head++ % kRing];
       if (!n->rc.Release()) continue;
       Node* parent = n->parent;

@@ -308,8 +308,10 @@ class PersistentTrie {
         }
         FreeNode(n, slot);
       }
-      if (drop_head == drop.size() && dead_head == dead.size() && next == roots.size()) return;
+      if (drop_head == drop.size() && dead_head == dead.size() && next == roots.size()) break;
     }
+    inner_pool_.Flush(slot);
+    bottom_pool_.Flush(slot);
   }
 
   // Calls f(key, const Leaf&) for every leaf of one version in increasing key order.

@@ -82,11 +82,15 @@ TEST(NodePoolTest, CrossThreadFreeReturnsNodeToOwner) {
   std::vector<void*> nodes;
   for (int i = 0; i < 1000; ++i) nodes.push_back(pool.Allocate(0));
   std::thread other([&] {
-    for (void* p : nodes) pool.Free(p, 1);  // slot 1 frees slot 0's nodes
+    // Slot 1 frees slot 0's nodes: full batches go to the owner as they fill, the rest at the
+    // flush.
+    for (void* p : nodes) pool.Free(p, 1);
+    EXPECT_EQ(pool.Stats().live_nodes, 0);
+    pool.Flush(1);
   });
   other.join();
   EXPECT_EQ(pool.Stats().live_nodes, 0);
-  // The owner gets them back once its current page runs out and it drains its remote list.
+  // The owner gets them back once its current page runs out and it drains its remote lists.
   std::set<void*> old(nodes.begin(), nodes.end());
   std::vector<void*> again;
   int reused = 0;
@@ -98,6 +102,37 @@ TEST(NodePoolTest, CrossThreadFreeReturnsNodeToOwner) {
     EXPECT_EQ(reused, 1000);
   }
   for (void* p : again) pool.Free(p, kForeignSlot);
+  EXPECT_EQ(pool.Stats().live_nodes, 0);
+}
+
+// A full batch of remote frees reaches the owner without a flush; a partial one waits for it.
+TEST(NodePoolTest, RemoteFreesReachTheOwnerInFullBatchesOrAtFlush) {
+  if (!NodePool::kPooling) GTEST_SKIP() << "pooling is off in this build";
+  NodePool pool(48, 2);
+  constexpr int kFull = NodePool::kRemoteBatch;
+  std::vector<void*> nodes;
+  for (int i = 0; i < kFull + 5; ++i) nodes.push_back(pool.Allocate(0));
+  std::thread other([&] {
+    for (void* p : nodes) pool.Free(p, 1);  // one full batch and 5 left in slot 1's batch
+  });
+  other.join();
+  EXPECT_EQ(pool.Stats().live_nodes, 0);
+  // Exhaust the owner's current page so that it drains: exactly the full batch comes back.
+  std::set<void*> freed(nodes.begin(), nodes.end());
+  auto reuse_after = [&](int allocations) {
+    std::vector<void*> got;
+    int reused = 0;
+    for (int i = 0; i < allocations; ++i) {
+      got.push_back(pool.Allocate(0));
+      reused += static_cast<int>(freed.count(got.back()));
+    }
+    for (void* p : got) pool.Free(p, 0);
+    return reused;
+  };
+  EXPECT_EQ(reuse_after(5000), kFull);
+  std::thread flusher([&] { pool.Flush(1); });
+  flusher.join();
+  EXPECT_EQ(reuse_after(20000), kFull + 5);
   EXPECT_EQ(pool.Stats().live_nodes, 0);
 }
 
