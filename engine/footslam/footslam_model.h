@@ -72,6 +72,9 @@ class FootSlamModel {
     Hex start = grid_->HexAt(config.start_x_m, config.start_y_m);
     start_hex_ = start;
     hex_.assign(n_, start);
+    uint64_t start_key = 0;
+    KeyOf(start, &start_key);  // the grid is centred on the start: always on it
+    key_.assign(n_, start_key);
     for (size_t i = 0; i < n_; ++i) {
       RandomStream rs(config.seed, 0, static_cast<uint32_t>(i), StreamPurpose::kInit);
       heading_error_[i] = config.initial_heading_sigma_rad * rs.NextNormal();
@@ -112,8 +115,7 @@ class FootSlamModel {
       }
       for (int depth = 0; depth < levels; ++depth) {
         const size_t j = i + kPathGap * static_cast<size_t>(levels - depth);
-        uint64_t key;
-        if (j < end && KeyOf(hex_[j], &key)) map_->PrefetchPath(j, key, depth);
+        if (j < end) map_->PrefetchPath(j, key_[j], depth);
       }
       RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), StreamPurpose::kMotion);
       if (config_.heading_drift_sigma_rad > 0) {
@@ -141,12 +143,14 @@ class FootSlamModel {
       bool outside = false, no_memory = false;
       // A particle that leaves the grid ends the run: stop walking there, so a step of any
       // length costs at most the grid's width.
+      bool first = true;
       Hex end_hex = grid_->Traverse(hex_[i], x_[i], y_[i], nx, ny, [&](const Crossing& c) {
-        uint64_t key;
-        if (!KeyOf(c.from, &key)) {
+        uint64_t key = key_[i];  // the first crossing leaves the particle's hexagon
+        if (!first && !KeyOf(c.from, &key)) {
           outside = true;
           return false;
         }
+        first = false;
         EdgeCounts before;
         if (!map_->Cross(i, key, c.edge, slot, &before)) {
           no_memory = true;
@@ -173,6 +177,7 @@ class FootSlamModel {
       heading_[i] = heading;
       heading_unit_[i] = {cos_heading, sin_heading};
       hex_[i] = end_hex;
+      key_[i] = end_key;
     }
     return Status::Ok();
   }
@@ -185,6 +190,7 @@ class FootSlamModel {
     GatherValues(parents, workers, &heading_error_);
     GatherValues(parents, workers, &scale_);
     GatherValues(parents, workers, &hex_);
+    GatherValues(parents, workers, &key_);
     history_roots_.Gather(parents, workers);
     map_->Gather(parents, workers);
   }
@@ -259,6 +265,7 @@ class FootSlamModel {
         return r->Error("hexagon", "particle " + std::to_string(i) +
                                        " is not on the grid or not in the hexagon of its position");
       }
+      key_[i] = key;
     }
     if (steps >= UINT32_MAX) return r->Error("step", "too many steps");
     std::vector<PoseHistory::Node*> heads;
@@ -320,6 +327,7 @@ class FootSlamModel {
   std::vector<Unit> heading_unit_;
   Hex start_hex_;
   std::vector<Hex> hex_;
+  std::vector<uint64_t> key_;  // KeyOf(hex_[i]): the H-tree key of the particle's hexagon
   VersionSet<PoseHistory> history_roots_;
 };
 
