@@ -11,15 +11,17 @@
 
 namespace grove {
 
-// Returns next[k] = a reference to (*current)[parents[k]]. The first copy of each parent takes
+// Sets next[k] to a reference to (*current)[parents[k]]. The first copy of each parent takes
 // the parent's own reference over and the others call share(), so a parent with c copies costs
 // c - 1 increments; the taken-over entries of *current become nullptr, so what is left in
 // *current is exactly the references of the dead generation, to be released.
 // REQUIRES: parents nondecreasing (as every resampling scheme here produces them).
+// `next` receives the result; a buffer kept between generations spares an allocation and a fill.
 template <typename Handle, typename Share>
-std::vector<Handle> GatherShared(std::span<const uint32_t> parents, std::vector<Handle>* current,
-                                 WorkerPool& workers, Share share) {
-  std::vector<Handle> next(parents.size());
+void GatherShared(std::span<const uint32_t> parents, std::vector<Handle>* current,
+                  WorkerPool& workers, Share share, std::vector<Handle>* next_out) {
+  next_out->resize(parents.size());
+  std::vector<Handle>& next = *next_out;
   auto first = [&](size_t k) { return k == 0 || parents[k - 1] != parents[k]; };
   workers.ParallelFor(parents.size(), 2048, [&](int, size_t b, size_t e) {
     for (size_t k = b; k < e; ++k) {
@@ -33,18 +35,26 @@ std::vector<Handle> GatherShared(std::span<const uint32_t> parents, std::vector<
       if (first(k)) (*current)[parents[k]] = nullptr;
     }
   });
-  return next;
 }
 
 // The next generation of a per-particle value (a pose, an error state): (*v)[k] becomes the old
 // (*v)[parents[k]], in parallel.
+// `spare` is a buffer the caller keeps between generations (it ends up holding the old values):
+// once it has grown, a gather neither allocates nor fills memory on the driving thread alone.
+template <typename T>
+void GatherValues(std::span<const uint32_t> parents, WorkerPool& workers, std::vector<T>* v,
+                  std::vector<T>* spare) {
+  spare->resize(parents.size());
+  workers.ParallelFor(parents.size(), 4096, [&](int, size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k) (*spare)[k] = (*v)[parents[k]];
+  });
+  v->swap(*spare);
+}
+
 template <typename T>
 void GatherValues(std::span<const uint32_t> parents, WorkerPool& workers, std::vector<T>* v) {
-  std::vector<T> next(parents.size());
-  workers.ParallelFor(parents.size(), 4096, [&](int, size_t b, size_t e) {
-    for (size_t k = b; k < e; ++k) next[k] = (*v)[parents[k]];
-  });
-  v->swap(next);
+  std::vector<T> next;
+  GatherValues(parents, workers, v, &next);
 }
 
 }  // namespace grove

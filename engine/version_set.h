@@ -59,9 +59,9 @@ class VersionSet {
   // kept as the dead generation until ReleaseDead(). REQUIRES: parents nondecreasing.
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     GROVE_DCHECK(dead_.empty());
-    std::vector<Root> next = GatherShared(parents, &roots_, workers, &Store::Share);
+    GatherShared(parents, &roots_, workers, &Store::Share, &spare_);
     dead_.swap(roots_);
-    roots_.swap(next);
+    roots_.swap(spare_);
   }
 
   // Frees the dead generation's references (what no live version shares), in parallel.
@@ -69,6 +69,8 @@ class VersionSet {
     workers.ParallelFor(dead_.size(), 1024, [&](int slot, size_t b, size_t e) {
       store_->ReleaseMany(std::span<Root const>(dead_).subspan(b, e - b), slot);
     });
+    // The released buffer is the next Gather's output.
+    spare_.swap(dead_);
     dead_.clear();
   }
 
@@ -92,6 +94,7 @@ class VersionSet {
   Store* store_;
   std::vector<Root> roots_;
   std::vector<Root> dead_;
+  std::vector<Root> spare_;  // no references: a buffer for the next Gather
 };
 
 }  // namespace grove

@@ -183,14 +183,12 @@ class FootSlamModel {
   }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
-    GatherValues(parents, workers, &x_);
-    GatherValues(parents, workers, &y_);
-    GatherValues(parents, workers, &heading_);
-    GatherValues(parents, workers, &heading_unit_);
-    GatherValues(parents, workers, &heading_error_);
-    GatherValues(parents, workers, &scale_);
-    GatherValues(parents, workers, &hex_);
-    GatherValues(parents, workers, &key_);
+    for (std::vector<double>* v : {&x_, &y_, &heading_, &heading_error_, &scale_}) {
+      GatherValues(parents, workers, v, &spare_.doubles);
+    }
+    GatherValues(parents, workers, &heading_unit_, &spare_.units);
+    GatherValues(parents, workers, &hex_, &spare_.hexes);
+    GatherValues(parents, workers, &key_, &spare_.keys);
     history_roots_.Gather(parents, workers);
     map_->Gather(parents, workers);
   }
@@ -328,6 +326,13 @@ class FootSlamModel {
   Hex start_hex_;
   std::vector<Hex> hex_;
   std::vector<uint64_t> key_;  // KeyOf(hex_[i]): the H-tree key of the particle's hexagon
+  // Gather's buffers, kept between generations.
+  struct {
+    std::vector<double> doubles;
+    std::vector<Unit> units;
+    std::vector<Hex> hexes;
+    std::vector<uint64_t> keys;
+  } spare_;
   VersionSet<PoseHistory> history_roots_;
 };
 
