@@ -53,15 +53,21 @@ std::string MachineDescription() {
 }
 
 // Runs `body` in a child process so that its memory (peak RSS) is its own; the child writes its
-// result to `result_path`. Returns the child's exit status.
+// result to `result_path`. Returns the child's exit status; *cpu_s (when given) receives the
+// child's CPU time, user and system, summed over its threads.
 template <typename F>
-int InChild(F&& body) {
+int InChild(F&& body, double* cpu_s = nullptr) {
   std::fflush(nullptr);
   pid_t pid = fork();
   if (pid < 0) return -1;
   if (pid == 0) _exit(body());
   int status = 0;
-  waitpid(pid, &status, 0);
+  rusage usage{};
+  wait4(pid, &status, 0, &usage);
+  if (cpu_s != nullptr) {
+    *cpu_s = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+             1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+  }
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
@@ -119,60 +125,80 @@ int PaperBenchCommand(const PaperBenchOptions& options) {
     std::vector<Sample> samples;
     int64_t steps = 0;
     double run_s = 0;
+    double cpu_s = 0;
     double peak_rss_mib = 0;
     bool stopped = false;
+    std::vector<double> all_run_s;  // every repetition's, in order
   };
   std::vector<Result> results;
   for (const PaperConfig& pc : kPaperConfigs) {
     if (!options.only.empty() && options.only != pc.name) continue;
-    std::string series_path = fmt::format("{}/.series-{}", options.out_dir, getpid());
-    int code = InChild([&]() -> int {
-      FootSlamConfig config;
-      config.particles = options.particles;
-      config.threads = options.threads;
-      config.map = pc.map;
-      config.degree = pc.degree;
-      config.grid_size = pc.grid;
-      config.alphabet = pc.alphabet;
-      auto slam = FootSlam::Create(config);
-      if (!slam.ok()) return 10;
-      std::string out;
-      auto start = Clock::now();
-      double next_sample = 0;
-      int64_t done = 0;
-      for (const StepRecord& step : *walk) {
-        if (!(*slam)->Step(step.t_s, step.dx_m, step.dy_m).ok()) return 11;
-        ++done;
-        double run_s = std::chrono::duration<double>(Clock::now() - start).count();
-        if (step.t_s >= next_sample || done == static_cast<int64_t>(walk->size())) {
-          next_sample = step.t_s + 5;
-          out += fmt::format("{} {} {} {}\n", step.t_s - walk_start, run_s,
-                             CurrentRssBytes() / 1048576.0,
-                             (*slam)->Summary().map_memory.live_bytes / 1048576.0);
-        }
-        if (pc.map == FootSlamMapKind::kNaive && run_s > options.naive_limit_s) break;
+    // Repetitions alternate with nothing else; the median run (by run time) is reported.
+    std::vector<Result> runs;
+    for (int rep = 0; rep < options.repeat; ++rep) {
+      double cpu_s = 0;
+      std::string series_path = fmt::format("{}/.series-{}", options.out_dir, getpid());
+      int code = InChild(
+          [&]() -> int {
+            FootSlamConfig config;
+            config.particles = options.particles;
+            config.threads = options.threads;
+            config.map = pc.map;
+            config.degree = pc.degree;
+            config.grid_size = pc.grid;
+            config.alphabet = pc.alphabet;
+            auto slam = FootSlam::Create(config);
+            if (!slam.ok()) return 10;
+            std::string out;
+            auto start = Clock::now();
+            double next_sample = 0;
+            int64_t done = 0;
+            for (const StepRecord& step : *walk) {
+              if (!(*slam)->Step(step.t_s, step.dx_m, step.dy_m).ok()) return 11;
+              ++done;
+              double run_s = std::chrono::duration<double>(Clock::now() - start).count();
+              if (step.t_s >= next_sample || done == static_cast<int64_t>(walk->size())) {
+                next_sample = step.t_s + 5;
+                out += fmt::format("{} {} {} {}\n", step.t_s - walk_start, run_s,
+                                   CurrentRssBytes() / 1048576.0,
+                                   (*slam)->Summary().map_memory.live_bytes / 1048576.0);
+              }
+              if (pc.map == FootSlamMapKind::kNaive && run_s > options.naive_limit_s) break;
+            }
+            out += fmt::format("# steps {} peak_rss_mib {}\n", done, PeakRssBytes() / 1048576.0);
+            return WriteFileAtomically(series_path, out).ok() ? 0 : 12;
+          },
+          &cpu_s);
+      if (code != 0)
+        return Fail(kExitRun, fmt::format("{}: the run failed (code {})", pc.name, code));
+      StatusOr<std::string> series = ReadWholeFile(series_path);
+      if (!series.ok()) return Fail(kExitRun, series.status().message());
+      const std::string& text = *series;
+      std::remove(series_path.c_str());
+      Result r;
+      r.config = &pc;
+      r.samples = ParseSamples(text.substr(0, text.find('#')));
+      size_t tail = text.find("# steps");
+      if (tail != std::string::npos) {
+        std::sscanf(text.c_str() + tail, "# steps %ld peak_rss_mib %lf", &r.steps, &r.peak_rss_mib);
       }
-      out += fmt::format("# steps {} peak_rss_mib {}\n", done, PeakRssBytes() / 1048576.0);
-      return WriteFileAtomically(series_path, out).ok() ? 0 : 12;
-    });
-    if (code != 0)
-      return Fail(kExitRun, fmt::format("{}: the run failed (code {})", pc.name, code));
-    StatusOr<std::string> series = ReadWholeFile(series_path);
-    if (!series.ok()) return Fail(kExitRun, series.status().message());
-    const std::string& text = *series;
-    std::remove(series_path.c_str());
-    Result r;
-    r.config = &pc;
-    r.samples = ParseSamples(text.substr(0, text.find('#')));
-    size_t tail = text.find("# steps");
-    if (tail != std::string::npos) {
-      std::sscanf(text.c_str() + tail, "# steps %ld peak_rss_mib %lf", &r.steps, &r.peak_rss_mib);
+      r.run_s = r.samples.empty() ? 0 : r.samples.back().run_s;
+      r.cpu_s = cpu_s;
+      r.stopped = r.steps < static_cast<int64_t>(walk->size());
+      std::fprintf(stderr, "%-16s %5ld steps in %7.2f s (CPU %.2f s), peak RSS %7.1f MiB%s\n",
+                   pc.name, r.steps, r.run_s, r.cpu_s, r.peak_rss_mib,
+                   r.stopped ? " (stopped: time limit)" : "");
+      runs.push_back(std::move(r));
     }
-    r.run_s = r.samples.empty() ? 0 : r.samples.back().run_s;
-    r.stopped = r.steps < static_cast<int64_t>(walk->size());
-    std::fprintf(stderr, "%-16s %5ld steps in %7.2f s, peak RSS %7.1f MiB%s\n", pc.name, r.steps,
-                 r.run_s, r.peak_rss_mib, r.stopped ? " (stopped: time limit)" : "");
-    results.push_back(std::move(r));
+    std::vector<double> all;
+    for (const Result& r : runs) all.push_back(r.run_s);
+    std::vector<size_t> order(runs.size());
+    for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::sort(order.begin(), order.end(),
+              [&](size_t a, size_t b) { return runs[a].run_s < runs[b].run_s; });
+    Result median = std::move(runs[order[order.size() / 2]]);
+    median.all_run_s = std::move(all);
+    results.push_back(std::move(median));
   }
 
   // CSV, charts and a markdown table.
@@ -238,21 +264,24 @@ int PaperBenchCommand(const PaperBenchOptions& options) {
     double walked = r.samples.empty() ? 0 : r.samples.back().walk_s;
     double peak_map = 0;
     for (const Sample& s : r.samples) peak_map = std::max(peak_map, s.map_mib);
+    const auto [lo, hi] = std::minmax_element(r.all_run_s.begin(), r.all_run_s.end());
     table.push_back({r.config->name, fmt::format("{}{}", r.steps, r.stopped ? " (stopped)" : ""),
                      fmt::format("{:.0f}", walked), fmt::format("{:.2f}", r.run_s),
+                     fmt::format("{:.2f}-{:.2f}", *lo, *hi), fmt::format("{:.2f}", r.cpu_s),
                      fmt::format("{:.3f}", walked > 0 ? r.run_s / walked : 0),
                      fmt::format("{:.0f}", ns), fmt::format("{:.2f}", ratio),
                      fmt::format("{:.0f}", r.peak_rss_mib), fmt::format("{:.1f}", peak_map)});
   }
   std::string md = fmt::format(
       "# grove bench paper\n\nMachine: {}\n\nWalk: simulated open area, {} minutes ({} steps), "
-      "{} particles, {} threads.\n\n",
+      "{} particles, {} threads; each configuration run {} times, the median run (by run time) "
+      "reported, its CPU time (user + system, all threads) beside it.\n\n",
       MachineDescription(), options.minutes, walk->size(), options.particles,
-      options.threads == 0 ? std::thread::hardware_concurrency() : options.threads);
-  md += MarkdownTable(
-      {"configuration", "steps run", "walk s", "run s", "run / walk time", "ns per particle-step",
-       "last/first minute time per step", "peak RSS MiB", "peak live map MiB"},
-      table);
+      options.threads == 0 ? std::thread::hardware_concurrency() : options.threads, options.repeat);
+  md += MarkdownTable({"configuration", "steps run", "walk s", "run s", "run s, all runs", "CPU s",
+                       "run / walk time", "ns per particle-step", "last/first minute time per step",
+                       "peak RSS MiB", "peak live map MiB"},
+                      table);
   const std::string& dir = options.out_dir;
   s = WriteFileAtomically(
       dir + "/paper.csv",

@@ -16,6 +16,7 @@ struct PaperBenchOptions {
   int threads = 0;             // 0: all cores
   double naive_limit_s = 180;  // the naive run stops after this much run time
   std::string only;            // run only the configuration with this name (empty: all)
+  int repeat = 1;              // runs per configuration; the median run is reported
 };
 int PaperBenchCommand(const PaperBenchOptions& options);
 

@@ -469,6 +469,7 @@ TEST_F(CliTest, OutOfRangeValuesAreRefusedNamingTheOption) {
        "--only = \"bogus\": must be one of", 2},
       {"bench scaling --steps 0 --out " + (dir_ / "b").string(), "--steps", 2},
       {"bench paper --naive-limit -1 --out " + (dir_ / "b").string(), "--naive-limit", 2},
+      {"bench paper --repeat 0 --out " + (dir_ / "b").string(), "--repeat", 2},
   };
   for (const Case& c : cases) {
     Outcome o = Grove(c.args);

@@ -191,6 +191,8 @@ int Main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   paper->add_option("--only", paper_options.only, "Run one configuration, e.g. 'htree s=16 T=5'");
+  paper->add_option("--repeat", paper_options.repeat, "Runs per configuration (median reported)")
+      ->check(CLI::Range(1, 1000));
   CLI::App* scaling =
       bench->add_subcommand("scaling", "Throughput against threads and particle counts");
   gt::ScalingBenchOptions scaling_options;
