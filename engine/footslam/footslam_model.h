@@ -19,6 +19,7 @@
 #include <span>
 #include <vector>
 
+#include "concurrency/normal_batch.h"
 #include "concurrency/random_stream.h"
 #include "concurrency/worker_pool.h"
 #include "engine/ancestry.h"
@@ -80,6 +81,11 @@ class FootSlamModel {
       heading_error_[i] = config.initial_heading_sigma_rad * rs.NextNormal();
       scale_[i] = 1.0 + config.scale_sigma * rs.NextNormal();
     }
+    for (double sigma : {config.heading_drift_sigma_rad, config.scale_drift_sigma,
+                         config.step_length_sigma_m, config.heading_sigma_rad}) {
+      motion_draws_ += sigma > 0 ? 1 : 0;
+    }
+    motion_draws_ += config.position_sigma_m > 0 ? 2 : 0;
     if (config.weighting == FootSlamWeighting::kPriorRatio) log_edge_bias_ = std::log(6.0);
     for (uint32_t c = 0; c < kLogTable; ++c) {
       log_edge_[c] = std::log(c + config.prior_count) + log_edge_bias_;
@@ -108,6 +114,9 @@ class FootSlamModel {
     // `depth` of that path loaded, one level deeper every kPathGap particles.
     int levels = map_->height();
     if (levels > kMaxPathLevels) levels = kMaxPathLevels;
+    double noise_block[kMaxBatchNormals][kNoiseBlock];
+    double* noise[kMaxBatchNormals];
+    for (int k = 0; k < kMaxBatchNormals; ++k) noise[k] = noise_block[k];
     for (size_t i = begin; i < end; ++i) {
       if (i + kPrefetchAhead < end) {
         if (levels == 0) map_->Prefetch(i + kPrefetchAhead);
@@ -117,22 +126,31 @@ class FootSlamModel {
         const size_t j = i + kPathGap * static_cast<size_t>(levels - depth);
         if (j < end) map_->PrefetchPath(j, key_[j], depth);
       }
-      RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), StreamPurpose::kMotion);
-      if (config_.heading_drift_sigma_rad > 0) {
-        heading_error_[i] += config_.heading_drift_sigma_rad * rs.NextNormal();
+      // The motion's deviates: the first motion_draws_ of the particle's stream for this step,
+      // drawn kNoiseBlock particles at a time.
+      const size_t at = (i - begin) % kNoiseBlock;
+      if (at == 0 && motion_draws_ > 0) {
+        DrawNormals(config_.seed, step + 1, StreamPurpose::kMotion, static_cast<uint32_t>(i),
+                    static_cast<uint32_t>(std::min(end, i + kNoiseBlock)),
+                    std::span<double* const>(noise, static_cast<size_t>(motion_draws_)));
       }
-      if (config_.scale_drift_sigma > 0) scale_[i] += config_.scale_drift_sigma * rs.NextNormal();
+      int draw = 0;
+      auto normal = [&] { return noise[draw++][at]; };
+      if (config_.heading_drift_sigma_rad > 0) {
+        heading_error_[i] += config_.heading_drift_sigma_rad * normal();
+      }
+      if (config_.scale_drift_sigma > 0) scale_[i] += config_.scale_drift_sigma * normal();
       double length = odo_length * scale_[i];
-      if (config_.step_length_sigma_m > 0) length += config_.step_length_sigma_m * rs.NextNormal();
+      if (config_.step_length_sigma_m > 0) length += config_.step_length_sigma_m * normal();
       double heading = odo_heading + heading_error_[i];
-      if (config_.heading_sigma_rad > 0) heading += config_.heading_sigma_rad * rs.NextNormal();
+      if (config_.heading_sigma_rad > 0) heading += config_.heading_sigma_rad * normal();
       const double cos_heading = std::cos(heading);
       const double sin_heading = std::sin(heading);
       double nx = x_[i] + length * cos_heading;
       double ny = y_[i] + length * sin_heading;
       if (config_.position_sigma_m > 0) {
-        nx += config_.position_sigma_m * rs.NextNormal();
-        ny += config_.position_sigma_m * rs.NextNormal();
+        nx += config_.position_sigma_m * normal();
+        ny += config_.position_sigma_m * normal();
       }
       if (!std::isfinite(nx) || !std::isfinite(ny) || !std::isfinite(heading)) {
         return FailedPreconditionError(fmt::format(
@@ -315,6 +333,8 @@ class FootSlamModel {
   static constexpr size_t kPathGap = 2;
   static constexpr int kMaxPathLevels = 8;
   static constexpr uint32_t kLogTable = 256;
+  static constexpr size_t kNoiseBlock = 256;
+  int motion_draws_ = 0;  // normal deviates per particle-step: one per noise term in use
   double log_edge_bias_ = 0;
   double log_edge_[kLogTable];
   double log_total_[kLogTable];
