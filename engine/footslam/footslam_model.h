@@ -21,6 +21,7 @@
 
 #include "concurrency/normal_batch.h"
 #include "concurrency/random_stream.h"
+#include "concurrency/sin_cos.h"
 #include "concurrency/worker_pool.h"
 #include "engine/ancestry.h"
 #include "engine/checkpoint_io.h"
@@ -66,8 +67,9 @@ class FootSlamModel {
     x_.assign(n_, config.start_x_m);
     y_.assign(n_, config.start_y_m);
     heading_.assign(n_, config.start_heading_rad);
-    heading_unit_.assign(n_,
-                         {std::cos(config.start_heading_rad), std::sin(config.start_heading_rad)});
+    Unit start_unit;
+    SinCosReference(&config.start_heading_rad, 1, &start_unit.s, &start_unit.c);
+    heading_unit_.assign(n_, start_unit);
     heading_error_.resize(n_);
     scale_.resize(n_);
     Hex start = grid_->HexAt(config.start_x_m, config.start_y_m);
@@ -117,6 +119,8 @@ class FootSlamModel {
     double noise_block[kMaxBatchNormals][kNoiseBlock];
     double* noise[kMaxBatchNormals];
     for (int k = 0; k < kMaxBatchNormals; ++k) noise[k] = noise_block[k];
+    double block_length[kNoiseBlock], block_heading[kNoiseBlock];
+    double block_sin[kNoiseBlock], block_cos[kNoiseBlock];
     for (size_t i = begin; i < end; ++i) {
       if (i + kPrefetchAhead < end) {
         if (levels == 0) map_->Prefetch(i + kPrefetchAhead);
@@ -126,31 +130,42 @@ class FootSlamModel {
         const size_t j = i + kPathGap * static_cast<size_t>(levels - depth);
         if (j < end) map_->PrefetchPath(j, key_[j], depth);
       }
-      // The motion's deviates: the first motion_draws_ of the particle's stream for this step,
-      // drawn kNoiseBlock particles at a time.
+      // The motion, kNoiseBlock particles at a time: the deviates (the first motion_draws_ of
+      // each particle's stream for this step), the error states, lengths and headings, then
+      // the headings' sines and cosines.
       const size_t at = (i - begin) % kNoiseBlock;
-      if (at == 0 && motion_draws_ > 0) {
-        DrawNormals(config_.seed, step + 1, StreamPurpose::kMotion, static_cast<uint32_t>(i),
-                    static_cast<uint32_t>(std::min(end, i + kNoiseBlock)),
-                    std::span<double* const>(noise, static_cast<size_t>(motion_draws_)));
+      if (at == 0) {
+        const size_t block_end = std::min(end, i + kNoiseBlock);
+        if (motion_draws_ > 0) {
+          DrawNormals(config_.seed, step + 1, StreamPurpose::kMotion, static_cast<uint32_t>(i),
+                      static_cast<uint32_t>(block_end),
+                      std::span<double* const>(noise, static_cast<size_t>(motion_draws_)));
+        }
+        for (size_t k = i; k < block_end; ++k) {
+          const size_t b = k - i;
+          int draw = 0;
+          auto normal = [&] { return noise[draw++][b]; };
+          if (config_.heading_drift_sigma_rad > 0) {
+            heading_error_[k] += config_.heading_drift_sigma_rad * normal();
+          }
+          if (config_.scale_drift_sigma > 0) scale_[k] += config_.scale_drift_sigma * normal();
+          double length = odo_length * scale_[k];
+          if (config_.step_length_sigma_m > 0) length += config_.step_length_sigma_m * normal();
+          double heading = odo_heading + heading_error_[k];
+          if (config_.heading_sigma_rad > 0) heading += config_.heading_sigma_rad * normal();
+          block_length[b] = length;
+          block_heading[b] = heading;
+        }
+        SinCos(block_heading, block_end - i, block_sin, block_cos);
       }
-      int draw = 0;
-      auto normal = [&] { return noise[draw++][at]; };
-      if (config_.heading_drift_sigma_rad > 0) {
-        heading_error_[i] += config_.heading_drift_sigma_rad * normal();
-      }
-      if (config_.scale_drift_sigma > 0) scale_[i] += config_.scale_drift_sigma * normal();
-      double length = odo_length * scale_[i];
-      if (config_.step_length_sigma_m > 0) length += config_.step_length_sigma_m * normal();
-      double heading = odo_heading + heading_error_[i];
-      if (config_.heading_sigma_rad > 0) heading += config_.heading_sigma_rad * normal();
-      const double cos_heading = std::cos(heading);
-      const double sin_heading = std::sin(heading);
-      double nx = x_[i] + length * cos_heading;
-      double ny = y_[i] + length * sin_heading;
-      if (config_.position_sigma_m > 0) {
-        nx += config_.position_sigma_m * normal();
-        ny += config_.position_sigma_m * normal();
+      const double heading = block_heading[at];
+      const double cos_heading = block_cos[at];
+      const double sin_heading = block_sin[at];
+      double nx = x_[i] + block_length[at] * cos_heading;
+      double ny = y_[i] + block_length[at] * sin_heading;
+      if (config_.position_sigma_m > 0) {  // the last two deviates
+        nx += config_.position_sigma_m * noise[motion_draws_ - 2][at];
+        ny += config_.position_sigma_m * noise[motion_draws_ - 1][at];
       }
       if (!std::isfinite(nx) || !std::isfinite(ny) || !std::isfinite(heading)) {
         return FailedPreconditionError(fmt::format(
@@ -262,8 +277,11 @@ class FootSlamModel {
       }
     }
     // Derived state: the same calls on the same values as in Advance(), so bit-identical.
-    for (size_t i = 0; i < n_; ++i)
-      heading_unit_[i] = {std::cos(heading_[i]), std::sin(heading_[i])};
+    for (size_t i = 0; i < n_; ++i) {
+      double c, s;
+      SinCosReference(&heading_[i], 1, &s, &c);
+      heading_unit_[i] = {c, s};
+    }
     GROVE_RETURN_IF_ERROR(r->GetBytes("hexagon", hex_.data(), n_ * sizeof(Hex)));
     // Every hexagon of the grid lies within this distance of the start on each axis.
     const double extent = (layout_->grid_size() + 2.0) * 2.0 * grid_->radius_m();
@@ -301,7 +319,8 @@ class FootSlamModel {
   double x(size_t i) const { return x_[i]; }
   double y(size_t i) const { return y_[i]; }
   double heading(size_t i) const { return heading_[i]; }
-  // std::cos(heading(i)) and std::sin(heading(i)), kept from the motion that set the heading.
+  // cos(heading(i)) and sin(heading(i)) by SinCos (within 2 ulp of std::cos and std::sin),
+  // kept from the motion that set the heading.
   double cos_heading(size_t i) const { return heading_unit_[i].c; }
   double sin_heading(size_t i) const { return heading_unit_[i].s; }
   double scale(size_t i) const { return scale_[i]; }
