@@ -133,7 +133,7 @@ int PaperBenchCommand(const PaperBenchOptions& options) {
   std::vector<Result> results;
   for (const PaperConfig& pc : kPaperConfigs) {
     if (!options.only.empty() && options.only != pc.name) continue;
-    // Repetitions alternate with nothing else; the median run (by run time) is reported.
+    // The repetitions run one after another; the median run (by run time) is reported.
     std::vector<Result> runs;
     for (int rep = 0; rep < options.repeat; ++rep) {
       double cpu_s = 0;
@@ -192,11 +192,10 @@ int PaperBenchCommand(const PaperBenchOptions& options) {
     }
     std::vector<double> all;
     for (const Result& r : runs) all.push_back(r.run_s);
-    std::vector<size_t> order(runs.size());
-    for (size_t k = 0; k < order.size(); ++k) order[k] = k;
-    std::sort(order.begin(), order.end(),
-              [&](size_t a, size_t b) { return runs[a].run_s < runs[b].run_s; });
-    Result median = std::move(runs[order[order.size() / 2]]);
+    const auto middle = runs.begin() + static_cast<std::ptrdiff_t>(runs.size() / 2);
+    std::nth_element(runs.begin(), middle, runs.end(),
+                     [](const Result& a, const Result& b) { return a.run_s < b.run_s; });
+    Result median = std::move(*middle);
     median.all_run_s = std::move(all);
     results.push_back(std::move(median));
   }
