@@ -7,18 +7,15 @@
 #include <string>
 
 #include "alloc/node_pool.h"
-
-#ifndef GROVE_COMMIT
-#define GROVE_COMMIT "unknown"
-#endif
-#ifndef GROVE_BUILD_TYPE
-#define GROVE_BUILD_TYPE "unknown"
-#endif
+#include "grove/version.h"
 
 int main(int argc, char** argv) {
-  benchmark::AddCustomContext("grove_commit", GROVE_COMMIT);
-  benchmark::AddCustomContext("compiler", __VERSION__);
-  benchmark::AddCustomContext("build_type", GROVE_BUILD_TYPE);
+  const grove::VersionInfo version = grove::Version();
+  benchmark::AddCustomContext("grove_version", version.version);
+  benchmark::AddCustomContext("grove_commit", version.commit);
+  benchmark::AddCustomContext("compiler", version.compiler);
+  benchmark::AddCustomContext("build_type", version.build_type);
+  benchmark::AddCustomContext("simd", version.simd_target + " of " + version.simd_targets);
   benchmark::AddCustomContext("allocator", "jemalloc (linked into this executable)");
   benchmark::AddCustomContext("node_pool", grove::NodePool::kPooling ? "on" : "off");
 #ifndef NDEBUG

@@ -259,5 +259,17 @@ uint32_t DrawNormals(uint64_t seed, uint64_t step, uint32_t purpose, uint32_t be
 
 int64_t DrawNormalsTarget() { return HWY_DYNAMIC_DISPATCH(TargetImpl)(); }
 
+std::string SimdTargetsCompiled() {
+  std::string names;
+  // Lower bits are the better targets on x86 (HWY_AVX3 < HWY_AVX2 < ... < HWY_EMU128).
+  for (int64_t rest = HWY_TARGETS; rest != 0; rest &= rest - 1) {
+    if (!names.empty()) names += ' ';
+    names += SimdTargetName(rest & -rest);
+  }
+  return names;
+}
+
+std::string SimdTargetName(int64_t target) { return hwy::TargetName(target); }
+
 }  // namespace grove
 #endif  // HWY_ONCE

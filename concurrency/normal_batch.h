@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <span>
+#include <string>
 
 namespace grove {
 
@@ -31,6 +32,10 @@ uint32_t DrawNormals(uint64_t seed, uint64_t step, uint32_t purpose, uint32_t be
 // The Highway target DrawNormals dispatches to now (HWY_AVX3, HWY_AVX2, ...: a bit of
 // hwy/detect_targets.h), for tests and benchmark labels.
 int64_t DrawNormalsTarget();
+// The Highway targets compiled in, best first, by name ("AVX3 AVX2 SSE4 SSSE3 EMU128"), and the
+// name of one target (hwy::TargetName).
+std::string SimdTargetsCompiled();
+std::string SimdTargetName(int64_t target);
 
 }  // namespace grove
 

@@ -20,6 +20,7 @@
 #include "tools/fastslam_run.h"
 #include "tools/fastslam_simulator.h"
 #include "tools/footslam_run.h"
+#include "tools/output_set.h"
 #include "tools/report_tables.h"
 #include "tools/victoria_park.h"
 #include "tools/walk_simulator.h"
@@ -539,7 +540,8 @@ int FastSlamAccuracyBenchCommand(const FastSlamAccuracyOptions& options) {
       options.seeds, MarkdownTable(header, rows));
   s = WriteFileAtomically(
       options.out_dir + "/fastslam_accuracy.json",
-      nlohmann::json{{"machine", MachineDescription()}, {"runs", runs}}.dump(2));
+      nlohmann::json{{"machine", MachineDescription()}, {"grove", VersionJson()}, {"runs", runs}}
+          .dump(2));
   if (s.ok()) s = WriteFileAtomically(options.out_dir + "/fastslam_accuracy.md", md);
   if (!s.ok()) return Fail(kExitOutput, s.message());
   std::printf("%s", md.c_str());
@@ -617,6 +619,7 @@ int FastSlamSpeedBenchCommand(const FastSlamSpeedOptions& options) {
                     rows));
   s = WriteFileAtomically(options.out_dir + "/fastslam_speed.json",
                           nlohmann::json{{"machine", MachineDescription()},
+                                         {"grove", VersionJson()},
                                          {"whole_webmap_s", whole},
                                          {"whole_webmap_filter_s", filter_times},
                                          {"throughput", points}}
@@ -731,7 +734,8 @@ int VictoriaParkBenchCommand(const VictoriaParkBenchOptions& options) {
                     rows));
   s = WriteFileAtomically(
       options.out_dir + "/victoria_park.json",
-      nlohmann::json{{"machine", MachineDescription()}, {"runs", points}}.dump(2));
+      nlohmann::json{{"machine", MachineDescription()}, {"grove", VersionJson()}, {"runs", points}}
+          .dump(2));
   if (s.ok()) s = WriteFileAtomically(options.out_dir + "/victoria_park.md", md);
   if (!s.ok()) return Fail(kExitOutput, s.message());
   std::printf("%s", md.c_str());

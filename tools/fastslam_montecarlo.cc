@@ -23,9 +23,9 @@
 #include <utility>
 #include <variant>
 
+#include "engine/config_json.h"
 #include "tools/atomic_file.h"
 #include "tools/chart.h"
-#include "tools/config_json.h"
 #include "tools/csv_reader.h"
 #include "tools/mc_statistics.h"
 #include "tools/output_set.h"
@@ -1251,7 +1251,8 @@ int FastSlamMonteCarloCommand(const MonteCarloOptions& options) {
                     {"high", interval.high}}},
                   {"groups", group_json},
                   {"tables", {"table.md", "table.csv"}},
-                  {"charts", charts}};
+                  {"charts", charts},
+                  {"grove", VersionJson()}};
   s = WriteFileAtomically(dir + "/summary.json", summary.dump(2) + "\n");
   if (!s.ok()) return Fail(kExitOutput, s.message());
   std::printf("%s", md.c_str());

@@ -15,7 +15,7 @@
 #include <memory>
 #include <numbers>
 
-#include "tools/config_json.h"
+#include "engine/config_json.h"
 #include "tools/fastslam_inputs.h"
 #include "tools/filter_outputs.h"
 #include "tools/map_render.h"

@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-#include "tools/config_json.h"
+#include "engine/config_json.h"
 #include "tools/footslam_outputs.h"
 #include "tools/map_render.h"
 #include "tools/step_reader.h"

@@ -7,7 +7,7 @@ command -v clang-format >/dev/null || {
   echo "format: clang-format is not installed (apt-get install clang-format)" >&2
   exit 2
 }
-mapfile -t files < <(git ls-files '*.cc' '*.h')
+mapfile -t files < <(git ls-files '*.cc' '*.h' '*.c')
 if [ "${1:-}" = --check ]; then
   bad=()
   for f in "${files[@]}"; do

@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "grove/checksum.h"
+#include "grove/version.h"
 #include "tools/atomic_file.h"
 #include "tools/csv_reader.h"
 
@@ -123,7 +124,15 @@ Status OutputSet::Adopt(const std::string& name) {
   return Status::Ok();
 }
 
+nlohmann::json VersionJson() {
+  const VersionInfo v = Version();
+  return {{"version", v.version},         {"commit", v.commit},
+          {"compiler", v.compiler},       {"build_type", v.build_type},
+          {"simd_target", v.simd_target}, {"simd_targets", v.simd_targets}};
+}
+
 Status OutputSet::Commit(nlohmann::json summary) {
+  summary["grove"] = VersionJson();
   // Nothing is renamed unless every target can take a file.
   std::vector<std::string> targets = names_;
   targets.push_back("summary.json");

@@ -26,6 +26,9 @@
 
 namespace grove::tools {
 
+// grove::Version() as JSON: every summary.json and benchmark result carries it.
+nlohmann::json VersionJson();
+
 class OutputDirectory {
  public:
   // IoError when `path` cannot be a directory (a file is in the way, no permission), or

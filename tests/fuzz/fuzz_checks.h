@@ -41,9 +41,9 @@
 #include <vector>
 
 #include "engine/checkpoint_io.h"
+#include "engine/config_json.h"
 #include "grove/footslam.h"
 #include "grove/status.h"
-#include "tools/config_json.h"
 #include "tools/fastslam_inputs.h"
 #include "tools/output_readers.h"
 #include "tools/step_reader.h"
@@ -246,9 +246,9 @@ inline std::string CheckConfigJsonUnguarded(const uint8_t* data, size_t size) {
   constexpr char kName[] = "fuzz_config.json";
   const std::string text(reinterpret_cast<const char*>(data), size);
   FootSlamConfig config;
-  const nlohmann::json before = tools::ConfigToJson(FootSlamConfigFields(), config);
-  const Status applied = tools::ApplyConfigJson(FootSlamConfigFields(), kName, text, &config);
-  const nlohmann::json after = tools::ConfigToJson(FootSlamConfigFields(), config);
+  const nlohmann::json before = ConfigToJson(FootSlamConfigFields(), config);
+  const Status applied = ApplyConfigJson(FootSlamConfigFields(), kName, text, &config);
+  const nlohmann::json after = ConfigToJson(FootSlamConfigFields(), config);
   if (!applied.ok()) {
     std::string failure = CheckError(applied, kName, text);
     if (!failure.empty()) return failure;

@@ -199,6 +199,22 @@ TEST_F(CliTest, HelpOnEveryLevel) {
   EXPECT_EQ(Grove("footslam bogus").exit_code, 2);
 }
 
+TEST_F(CliTest, VersionNamesTheBuild) {
+  Outcome o = Grove("--version");
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+  ASSERT_EQ(o.out.rfind("grove ", 0), 0u) << o.out;
+  const std::string version = o.out.substr(6, o.out.find(' ', 6) - 6);  // "0.2.0"
+  EXPECT_EQ(std::count(version.begin(), version.end(), '.'), 2) << o.out;
+  EXPECT_NE(o.out.find(" (commit "), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("; SIMD: "), std::string::npos) << o.out;
+  // The same in the run's manifest.
+  const fs::path out = dir_ / "out";
+  ASSERT_EQ(Grove("footslam run --no-progress --particles 20 --out " + out.string()).exit_code, 0);
+  const nlohmann::json summary = nlohmann::json::parse(Slurp(out / "summary.json"));
+  EXPECT_EQ(summary["grove"]["version"], version);
+  EXPECT_FALSE(summary["grove"]["simd_targets"].get<std::string>().empty());
+}
+
 // The outputs that must not depend on interruptions (summary.json holds timings).
 void ExpectSameOutputs(const fs::path& a, const fs::path& b) {
   for (const char* name :

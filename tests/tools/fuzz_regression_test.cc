@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "engine/config_json.h"
 #include "grove/footslam.h"
 #include "grove/status.h"
 #include "tests/fuzz/fuzz_checks.h"
-#include "tools/config_json.h"
 #include "tools/step_reader.h"
 
 #ifndef GROVE_FUZZ_CORPUS
@@ -87,8 +87,7 @@ TEST(ConfigJsonRegressionTest, NumberOverflowIsAnErrorNotAnException) {
   for (const std::string text : {"{\"hex_radius_m\": 1e400}", "-1e999"}) {
     FootSlamConfig config;
     Status status;
-    EXPECT_NO_THROW(status =
-                        tools::ApplyConfigJson(FootSlamConfigFields(), "c.json", text, &config))
+    EXPECT_NO_THROW(status = ApplyConfigJson(FootSlamConfigFields(), "c.json", text, &config))
         << text;
     EXPECT_EQ(status.code(), StatusCode::kInvalidArgument) << text;
     EXPECT_TRUE(status.message().starts_with("c.json:")) << status.message();
@@ -101,7 +100,7 @@ TEST(ConfigJsonRegressionTest, NumberOverflowIsAnErrorNotAnException) {
 TEST(ConfigJsonRegressionTest, UnknownKeyWithEscapedNewlineGivesOneLineMessage) {
   FootSlamConfig config;
   const Status status =
-      tools::ApplyConfigJson(FootSlamConfigFields(), "c.json", "{\"a\\nb\": 1}", &config);
+      ApplyConfigJson(FootSlamConfigFields(), "c.json", "{\"a\\nb\": 1}", &config);
   EXPECT_EQ(status.code(), StatusCode::kInvalidArgument);
   EXPECT_EQ(status.message().find('\n'), std::string::npos) << status.message();
 }
@@ -113,7 +112,7 @@ TEST(ConfigJsonRegressionTest, IntegerAboveInt64MaxIsRejectedNotWrapped) {
        {"{\"particles\": 18446744073709551615}", "{\"batch\": 9223372036854775808}",
         "{\"degree\": 18446744073709551600}"}) {
     FootSlamConfig config;
-    const Status status = tools::ApplyConfigJson(FootSlamConfigFields(), "c.json", text, &config);
+    const Status status = ApplyConfigJson(FootSlamConfigFields(), "c.json", text, &config);
     EXPECT_EQ(status.code(), StatusCode::kInvalidArgument) << text;
     EXPECT_EQ(config.particles, FootSlamConfig().particles) << text;
     EXPECT_EQ(config.batch, FootSlamConfig().batch) << text;

@@ -12,6 +12,7 @@
 
 #include "grove/fastslam.h"
 #include "grove/footslam.h"
+#include "grove/version.h"
 #include "tools/bench_commands.h"
 #include "tools/cli/run_flags.h"
 #include "tools/fastslam_montecarlo.h"
@@ -27,6 +28,9 @@ namespace gt = grove::tools;
 
 int Main(int argc, char** argv) {
   CLI::App app{"grove: particle-filter SLAM with shared persistent maps"};
+  app.set_version_flag(
+      "--version", [] { return grove::VersionString(); },
+      "The version, commit, compiler and SIMD targets of this build");
   app.require_subcommand(1);
   CLI::App* footslam = app.add_subcommand("footslam", "Pedestrian SLAM from step odometry");
   footslam->require_subcommand(1);

@@ -13,9 +13,9 @@
 #include <utility>
 #include <vector>
 
+#include "engine/config_json.h"
 #include "grove/config_fields.h"
 #include "tools/cli/config_flags.h"
-#include "tools/config_json.h"
 #include "tools/run_loop.h"
 
 namespace grove::tools {

@@ -5,10 +5,12 @@
 #include <cstdint>
 #include <string_view>
 
+#include "grove/export.h"
+
 namespace grove {
 
 // The CRC-32 of `data` continuing from `crc` (0 to start): Crc32(b, Crc32(a)) == Crc32(a + b).
-uint32_t Crc32(std::string_view data, uint32_t crc = 0);
+GROVE_EXPORT uint32_t Crc32(std::string_view data, uint32_t crc = 0);
 
 }  // namespace grove
 

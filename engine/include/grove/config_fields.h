@@ -29,6 +29,7 @@
 #include <variant>
 #include <vector>
 
+#include "grove/export.h"
 #include "grove/status.h"
 
 namespace grove {
@@ -75,12 +76,12 @@ struct FieldInfo {
 
 // The value as text: decimal integers, the shortest exact form of a double ("0.5", "1e+308",
 // "nan"), a choice's name.
-std::string FormatFieldValue(const FieldInfo& info, const FieldValue& value);
+GROVE_EXPORT std::string FormatFieldValue(const FieldInfo& info, const FieldValue& value);
 // InvalidArgument "name = value: must be ..." when `value` is outside the field's range.
-Status CheckFieldValue(const FieldInfo& info, const FieldValue& value);
+GROVE_EXPORT Status CheckFieldValue(const FieldInfo& info, const FieldValue& value);
 // Parses the text form of a value (a command-line flag): InvalidArgument
 // "name = \"text\": must be an integer" (a number, one of "a", "b"), then the range check.
-StatusOr<FieldValue> ParseFieldValue(const FieldInfo& info, std::string_view text);
+GROVE_EXPORT StatusOr<FieldValue> ParseFieldValue(const FieldInfo& info, std::string_view text);
 
 template <typename Config>
 struct ConfigField {

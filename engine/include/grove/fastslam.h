@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "grove/config_fields.h"
+#include "grove/export.h"
 #include "grove/resampling.h"
 #include "grove/status.h"
 #include "grove/types.h"
@@ -96,7 +97,7 @@ enum class FastSlamGateUnit {
 
 enum class FastSlamEvidence { kOff, kOn };
 
-struct FastSlamConfig {
+struct GROVE_EXPORT FastSlamConfig {
   // ---- Options that change results ----
 
   // Number of particles. Range: 1..2^31. Default: 100 (Bailey's NPARTICLES).
@@ -190,16 +191,16 @@ struct FastSlamConfig {
 };
 
 // A gate as a squared Mahalanobis distance.
-double FastSlamGateDistance2(double gate, FastSlamGateUnit unit);
+GROVE_EXPORT double FastSlamGateDistance2(double gate, FastSlamGateUnit unit);
 
 // "fastslam1", "fastslam2", "ufastslam", "srcd", "srcd_aided", "srcd_pf", "de_srcd".
-const char* FastSlamFilterName(FastSlamFilter filter);
+GROVE_EXPORT const char* FastSlamFilterName(FastSlamFilter filter);
 // The filter named `name` (FastSlamFilterName's names); false for another name.
-bool FastSlamFilterFromName(std::string_view name, FastSlamFilter* filter);
-const char* FastSlamVehicleName(FastSlamVehicle vehicle);  // "bailey", "guivant_nebot"
+GROVE_EXPORT bool FastSlamFilterFromName(std::string_view name, FastSlamFilter* filter);
+GROVE_EXPORT const char* FastSlamVehicleName(FastSlamVehicle vehicle);  // "bailey", "guivant_nebot"
 
 // Every field of FastSlamConfig: name, type, range, effect and meaning, in the struct's order.
-const std::vector<ConfigField<FastSlamConfig>>& FastSlamConfigFields();
+GROVE_EXPORT const std::vector<ConfigField<FastSlamConfig>>& FastSlamConfigFields();
 
 // One detection of a scan: range (m, >= 0), bearing (rad, in (-pi, pi], counter-clockwise from
 // the heading) and the landmark's id (known association: >= 0; unknown: -1 for none, or a
@@ -240,7 +241,7 @@ struct EvolutionCounts {
   int64_t accepted = 0;  // ... that replaced their particle's pose (a strictly higher fitness)
 };
 
-struct FastSlamSummary : FilterSummary {
+struct GROVE_EXPORT FastSlamSummary : FilterSummary {
   int64_t controls = 0;           // Control() calls
   int64_t scans = 0;              // Scan() calls
   int64_t observations = 0;       // detections over all scans
@@ -254,7 +255,7 @@ struct FastSlamSummary : FilterSummary {
   std::string BriefReport() const;
 };
 
-class FastSlam {
+class GROVE_EXPORT FastSlam {
  public:
   // Validates `config` and builds the engine; nothing is built when the config is invalid.
   static StatusOr<std::unique_ptr<FastSlam>> Create(const FastSlamConfig& config);

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "grove/config_fields.h"
+#include "grove/export.h"
 #include "grove/resampling.h"
 #include "grove/status.h"
 #include "grove/types.h"
@@ -47,7 +48,7 @@ enum class FootSlamWeighting {
   kPriorRatio,
 };
 
-struct FootSlamConfig {
+struct GROVE_EXPORT FootSlamConfig {
   // ---- Options that change results ----
 
   // Number of particles. Range: 1..2^31. Default: 30000.
@@ -116,10 +117,11 @@ struct FootSlamConfig {
   Status Validate() const;
 };
 
-const char* FootSlamMapKindName(FootSlamMapKind kind);  // "htree", "naive"
-bool ParseFootSlamMapKind(const std::string& name, FootSlamMapKind* kind);
-const char* FootSlamWeightingName(FootSlamWeighting weighting);  // "paper", "prior_ratio"
-bool ParseFootSlamWeighting(const std::string& name, FootSlamWeighting* weighting);
+GROVE_EXPORT const char* FootSlamMapKindName(FootSlamMapKind kind);  // "htree", "naive"
+GROVE_EXPORT bool ParseFootSlamMapKind(const std::string& name, FootSlamMapKind* kind);
+// "paper", "prior_ratio"
+GROVE_EXPORT const char* FootSlamWeightingName(FootSlamWeighting weighting);
+GROVE_EXPORT bool ParseFootSlamWeighting(const std::string& name, FootSlamWeighting* weighting);
 
 // One hexagon of a map: axial coordinates, centre and the six edge counters (weighted for a
 // cumulative map, whole numbers for one particle's map).
@@ -132,7 +134,7 @@ struct HexCounts {
 };
 
 // What a run asked for, what it used and what it cost.
-struct FootSlamSummary : FilterSummary {
+struct GROVE_EXPORT FootSlamSummary : FilterSummary {
   // Weighted means over the particles after the last step: the step-length scale error state
   // (1 = the odometry's length) and the heading error state (radians).
   double mean_scale = 1;
@@ -146,9 +148,9 @@ struct FootSlamSummary : FilterSummary {
 // Every field of FootSlamConfig: name, type, range, effect and meaning, in the struct's order.
 // Validate() checks these ranges; the grove command's JSON keys, flags and --print-config and
 // the checkpoint's field block come from this table.
-const std::vector<ConfigField<FootSlamConfig>>& FootSlamConfigFields();
+GROVE_EXPORT const std::vector<ConfigField<FootSlamConfig>>& FootSlamConfigFields();
 
-class FootSlam {
+class GROVE_EXPORT FootSlam {
  public:
   // Validates `config` and builds the engine; nothing is built when the config is invalid.
   static StatusOr<std::unique_ptr<FootSlam>> Create(const FootSlamConfig& config);

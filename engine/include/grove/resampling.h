@@ -4,14 +4,16 @@
 
 #include <string_view>
 
+#include "grove/export.h"
+
 namespace grove {
 
 enum class ResamplingScheme { kSystematic, kStratified, kResidual, kMultinomial };
 
 // "systematic", "stratified", "residual" or "multinomial".
-const char* ResamplingSchemeName(ResamplingScheme scheme);
+GROVE_EXPORT const char* ResamplingSchemeName(ResamplingScheme scheme);
 // Parses one of the names above; returns false for anything else.
-bool ParseResamplingScheme(std::string_view name, ResamplingScheme* scheme);
+GROVE_EXPORT bool ParseResamplingScheme(std::string_view name, ResamplingScheme* scheme);
 
 }  // namespace grove
 

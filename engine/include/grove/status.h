@@ -11,6 +11,8 @@
 #include <string_view>
 #include <utility>
 
+#include "grove/export.h"
+
 namespace grove {
 
 enum class StatusCode {
@@ -25,7 +27,7 @@ enum class StatusCode {
   kInternal,            // a broken invariant that was caught without aborting
 };
 
-class [[nodiscard]] Status {
+class [[nodiscard]] GROVE_EXPORT Status {
  public:
   Status() = default;
   Status(StatusCode code, std::string message) : code_(code), message_(std::move(message)) {}
@@ -60,12 +62,12 @@ inline Status DataLossError(std::string m) { return Status(StatusCode::kDataLoss
 inline Status IoError(std::string m) { return Status(StatusCode::kIoError, std::move(m)); }
 inline Status InternalError(std::string m) { return Status(StatusCode::kInternal, std::move(m)); }
 
-const char* StatusCodeName(StatusCode code);
+GROVE_EXPORT const char* StatusCodeName(StatusCode code);
 
 // `text` for a one-line message: in double quotes, every byte outside printable ASCII (and the
 // quote and backslash) as \xNN, cut after `max_bytes` bytes with "..." so that one bad field or
 // key cannot flood a terminal. Every message that shows text from a file or a user uses it.
-std::string QuoteForMessage(std::string_view text, size_t max_bytes = 64);
+GROVE_EXPORT std::string QuoteForMessage(std::string_view text, size_t max_bytes = 64);
 
 // A value or the Status saying why there is none. REQUIRES for value(): ok().
 // Built from an ok Status (a bug in the caller: there is no value) it holds an Internal error.

@@ -7,6 +7,8 @@
 #include <string>
 #include <string_view>
 
+#include "grove/export.h"
+
 namespace grove {
 
 // A pose in the map frame.
@@ -37,7 +39,7 @@ struct MemoryUse {
 
 // What a run asked for, what it used and what it cost, for every model (Ceres' Summary); each
 // model's summary adds its own fields.
-struct FilterSummary {
+struct GROVE_EXPORT FilterSummary {
   int64_t particles = 0;
   int threads_requested = 0;
   int threads_used = 0;

@@ -4,8 +4,8 @@
 // file, line and column. Text from the file is quoted and cut in every message
 // (QuoteForMessage); documents nested deeper than kMaxConfigDepth or larger than
 // kMaxConfigBytes are refused before they are parsed.
-#ifndef GROVE_TOOLS_CONFIG_JSON_H_
-#define GROVE_TOOLS_CONFIG_JSON_H_
+#ifndef GROVE_ENGINE_CONFIG_JSON_H_
+#define GROVE_ENGINE_CONFIG_JSON_H_
 
 #include <cstddef>
 #include <nlohmann/json.hpp>
@@ -15,7 +15,7 @@
 #include "grove/config_fields.h"
 #include "grove/status.h"
 
-namespace grove::tools {
+namespace grove {
 
 inline constexpr size_t kMaxConfigBytes = size_t{1} << 20;
 inline constexpr int kMaxConfigDepth = 32;
@@ -88,6 +88,6 @@ Status LoadConfigFile(const std::vector<ConfigField<Config>>& fields, const std:
   return ApplyConfigJson(fields, path, *text, config);
 }
 
-}  // namespace grove::tools
+}  // namespace grove
 
-#endif  // GROVE_TOOLS_CONFIG_JSON_H_
+#endif  // GROVE_ENGINE_CONFIG_JSON_H_

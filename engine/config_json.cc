@@ -1,4 +1,4 @@
-#include "tools/config_json.h"
+#include "engine/config_json.h"
 
 #include <fcntl.h>
 #include <fmt/format.h>
@@ -11,7 +11,7 @@
 #include <set>
 #include <system_error>
 
-namespace grove::tools {
+namespace grove {
 namespace {
 
 using nlohmann::json;
@@ -262,4 +262,4 @@ std::string NearestKey(const std::string& key, const std::vector<std::string>& k
   return best;
 }
 
-}  // namespace grove::tools
+}  // namespace grove

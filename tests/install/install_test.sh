@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Installs grove into a fresh prefix and builds and runs consumers against it the way an embedder
+# would, with nothing of the build or source tree on their include or library paths: the C++
+# example project through find_package(grove) (shared and static), and the C example through
+# pkg-config. Usage: install_test.sh BUILD_DIR SOURCE_DIR
+set -euo pipefail
+build=$1
+src=$2
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+prefix=$work/prefix
+walk=$src/tools/data/building_walk_steps.csv
+
+cmake --install "$build" --prefix "$prefix" >/dev/null
+echo "installed into $prefix:"
+(cd "$prefix" && find . -type f -o -type l | sort | sed 's/^/  /')
+
+# The installed headers name only installed headers.
+if grep -rhoE '#include "[^"]+"' "$prefix/include/grove" | grep -v '"grove/'; then
+  echo "FAIL: an installed header includes a private one" >&2
+  exit 1
+fi
+
+# C++: find_package(grove 0.2 CONFIG REQUIRED), the shared and the static library.
+cmake -S "$src/tools/examples/cpp_consumer" -B "$work/cpp" -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
+cmake --build "$work/cpp" -- --no-print-directory >/dev/null
+if ! ldd "$work/cpp/walk" | grep -q "libgrove.so.* => $prefix/"; then
+  echo "FAIL: walk does not load libgrove.so from the prefix:" >&2
+  ldd "$work/cpp/walk" >&2
+  exit 1
+fi
+if ldd "$work/cpp/walk_static" | grep -q libgrove; then
+  echo "FAIL: walk_static loads libgrove.so" >&2
+  exit 1
+fi
+"$work/cpp/walk" "$walk"
+"$work/cpp/walk_static" "$walk"
+
+# C99 through pkg-config.
+export PKG_CONFIG_PATH=$(dirname "$(find "$prefix" -name grove.pc)")
+libdir=$(pkg-config --variable=libdir grove)
+cc -std=c99 -Wall -Wextra -Werror -pedantic "$src/tools/examples/c_walk/walk.c" -o "$work/c_walk" \
+  $(pkg-config --cflags --libs grove) -Wl,-rpath,"$libdir"
+"$work/c_walk" "$walk"
+echo "install test passed"
