@@ -2,7 +2,7 @@
 # Installs grove into a fresh prefix and builds and runs consumers against it the way an embedder
 # would, with nothing of the build or source tree on their include or library paths: the C++
 # example project through find_package(grove) (shared and static), and the C example through
-# pkg-config. Usage: install_test.sh BUILD_DIR SOURCE_DIR
+# pkg-config, and the Python module. Usage: install_test.sh BUILD_DIR SOURCE_DIR [python]
 set -euo pipefail
 build=$1
 src=$2
@@ -43,4 +43,11 @@ libdir=$(pkg-config --variable=libdir grove)
 cc -std=c99 -Wall -Wextra -Werror -pedantic "$src/tools/examples/c_walk/walk.c" -o "$work/c_walk" \
   $(pkg-config --cflags --libs grove) -Wl,-rpath,"$libdir"
 "$work/c_walk" "$walk"
+
+# Python: the module from the prefix, when this build has one (a third argument "python").
+if [ "${3:-}" = python ]; then
+  (cd "$work" && PYTHONPATH="$prefix/lib/python3/dist-packages" PYTHONDONTWRITEBYTECODE=1 \
+    /usr/bin/python3 -c 'import grove, sys; print(grove.version()["string"]);
+assert grove.__file__.startswith(sys.argv[1]), grove.__file__' "$prefix")
+fi
 echo "install test passed"
