@@ -15,8 +15,14 @@
 // from its time until the next control's (zero-order hold); every call predicts from the last
 // time to its own with the held control, one Euler step per call. Scan() then updates.
 //
-// Thread safety: a FastSlam is driven by one thread at a time; it runs its own worker threads
-// inside each call. Two engines in one process share nothing.
+// Thread safety: a FastSlam is driven by one thread at a time (no two calls overlap, const
+// read-outs included); it runs its own worker threads inside each call. Two engines in one
+// process share nothing.
+//
+// Ownership: every read-out that returns a container (maps, trajectories, landmarks, checkpoint
+// bytes) returns a copy the caller owns: it stays valid after later steps and after the engine
+// is destroyed. Only references returned by const methods (config(), MeanTrajectory()) live in
+// the engine and change with the next step.
 #ifndef GROVE_FASTSLAM_H_
 #define GROVE_FASTSLAM_H_
 

@@ -12,8 +12,14 @@
 //   }
 //   std::vector<grove::HexCounts> map = (*slam)->CumulativeMap();
 //
-// Thread safety: a FootSlam is driven by one thread at a time; it runs its own worker threads
-// inside Step(). Two engines in one process share nothing.
+// Thread safety: a FootSlam is driven by one thread at a time (no two calls overlap, const
+// read-outs included); it runs its own worker threads inside Step(). Two engines in one
+// process share nothing.
+//
+// Ownership: every read-out that returns a container (maps, trajectories, landmarks, checkpoint
+// bytes) returns a copy the caller owns: it stays valid after later steps and after the engine
+// is destroyed. Only references returned by const methods (config(), MeanTrajectory()) live in
+// the engine and change with the next step.
 #ifndef GROVE_FOOTSLAM_H_
 #define GROVE_FOOTSLAM_H_
 
