@@ -8,10 +8,13 @@ build=$1
 src=$2
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+# Quiet steps write to $log, shown when one fails.
+log=$work/log
+trap 'echo "FAIL at line $LINENO; the last quiet step printed:" >&2; cat "$log" >&2' ERR
 prefix=$work/prefix
 walk=$src/tools/data/building_walk_steps.csv
 
-cmake --install "$build" --prefix "$prefix" >/dev/null
+cmake --install "$build" --prefix "$prefix" >"$log" 2>&1
 echo "installed into $prefix:"
 (cd "$prefix" && find . -type f -o -type l | sort | sed 's/^/  /')
 
@@ -23,14 +26,18 @@ fi
 
 # C++: find_package(grove 0.2 CONFIG REQUIRED), the shared and the static library.
 cmake -S "$src/tools/examples/cpp_consumer" -B "$work/cpp" -DCMAKE_BUILD_TYPE=Release \
-  -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
-cmake --build "$work/cpp" -- --no-print-directory >/dev/null
-if ! ldd "$work/cpp/walk" | grep -q "libgrove.so.* => $prefix/"; then
+  -DCMAKE_PREFIX_PATH="$prefix" >"$log" 2>&1
+cmake --build "$work/cpp" -- --no-print-directory >"$log" 2>&1
+# (ldd's output is read whole first: `ldd | grep -q` can fail under pipefail when grep stops
+# reading early.)
+libs=$(ldd "$work/cpp/walk")
+if ! grep -q "libgrove.so.* => $prefix/" <<<"$libs"; then
   echo "FAIL: walk does not load libgrove.so from the prefix:" >&2
-  ldd "$work/cpp/walk" >&2
+  echo "$libs" >&2
   exit 1
 fi
-if ldd "$work/cpp/walk_static" | grep -q libgrove; then
+libs=$(ldd "$work/cpp/walk_static")
+if grep -q libgrove <<<"$libs"; then
   echo "FAIL: walk_static loads libgrove.so" >&2
   exit 1
 fi
