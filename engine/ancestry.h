@@ -20,6 +20,7 @@
 #include <string>
 #include <type_traits>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "alloc/node_pool.h"
@@ -108,6 +109,46 @@ class Ancestry {
     std::vector<const Node*> path;
     for (; n != nullptr; n = n->parent) path.push_back(n);
     return std::vector<const Node*>(path.rbegin(), path.rend());
+  }
+
+  // The smoothed (fixed-interval) path: the final weights pushed back along the ancestry. For
+  // every step k in 0..last_step, calls add(k, w, value) once for each distinct entry that is
+  // some history's newest entry at or before step k, with w the sum of the weights of the
+  // histories that reach it there; a caller summing w * value gets sum_i weights[i] *
+  // value_i(k), the weighted mean of the ancestral values at k. Each distinct entry is visited
+  // once per step it stands for (once in all when every step has its entry, as in FootSLAM),
+  // not once per history. The order of the calls and of every sum of weights depends only on
+  // the ancestry's shape and the histories' order, never on addresses: the same bits at any
+  // thread count. REQUIRES: weights.size() == heads.size(); no head is newer than last_step.
+  template <typename Add>
+  static void Smooth(std::span<const Node* const> heads, std::span<const double> weights,
+                     uint32_t last_step, Add&& add) {
+    std::vector<std::pair<const Node*, double>> level, next;
+    std::unordered_map<const Node*, size_t> index;
+    auto merge = [&](const Node* n, double w) {
+      auto [it, added] = index.try_emplace(n, next.size());
+      if (added) {
+        next.emplace_back(n, w);
+      } else {
+        next[it->second].second += w;
+      }
+    };
+    for (size_t i = 0; i < heads.size(); ++i) {
+      if (heads[i] != nullptr) merge(heads[i], weights[i]);
+    }
+    for (int64_t k = last_step; k >= 0 && !next.empty(); --k) {
+      level.swap(next);
+      next.clear();
+      index.clear();
+      for (const auto& [n, w] : level) {
+        add(static_cast<uint32_t>(k), w, n->value);
+        if (n->step < k) {
+          merge(n, w);  // it also stands for the step before
+        } else if (n->parent != nullptr) {
+          merge(n->parent, w);
+        }
+      }
+    }
   }
 
   // Writes the distinct entries reachable from `heads`, each once and older ones first, then the

@@ -461,6 +461,7 @@ grove_pose PoseAt(const std::vector<StampedPose>& trajectory, const Pose2& pose)
 struct grove_footslam : grove::HandleBase {
   std::unique_ptr<grove::FootSlam> slam;
   grove::Kept<std::vector<grove::StampedPose>> heaviest_trajectory;
+  grove::Kept<std::vector<grove::StampedPose>> smoothed_trajectory;
   grove::Kept<std::vector<grove::HexCounts>> cumulative_map;
   grove::Kept<std::vector<grove::HexCounts>> heaviest_map;
   grove::Kept<std::string> checkpoint;
@@ -658,6 +659,16 @@ grove_status grove_footslam_heaviest_trajectory(grove_footslam* slam, grove_pose
     return grove::ComputedArray(
         slam, "grove_footslam_heaviest_trajectory", &slam->heaviest_trajectory,
         [&] { return slam->slam->HeaviestTrajectory(); }, out, capacity, count);
+  });
+}
+
+grove_status grove_footslam_smoothed_trajectory(grove_footslam* slam, grove_pose* out,
+                                                size_t capacity, size_t* count) {
+  if (slam == nullptr) return kNullHandle;
+  return grove::Guard(slam, [&] {
+    return grove::ComputedArray(
+        slam, "grove_footslam_smoothed_trajectory", &slam->smoothed_trajectory,
+        [&] { return slam->slam->SmoothedTrajectory(); }, out, capacity, count);
   });
 }
 

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "grove/footslam.h"
+#include "grove/version.h"
 #include "tools/atomic_file.h"
 #include "tools/chart.h"
 #include "tools/csv_reader.h"
@@ -49,8 +50,8 @@ std::string MachineDescription() {
   }
   long pages = sysconf(_SC_PHYS_PAGES);
   double gib = static_cast<double>(pages) * sysconf(_SC_PAGESIZE) / (1024.0 * 1024 * 1024);
-  return fmt::format("{}, {} hardware threads, {:.0f} GiB memory, compiler {}", model,
-                     std::thread::hardware_concurrency(), gib, __VERSION__);
+  return fmt::format("{}, {} hardware threads, {:.0f} GiB memory; {}", model,
+                     std::thread::hardware_concurrency(), gib, VersionString());
 }
 
 // Runs `body` in a child process so that its memory (peak RSS) is its own; the child writes its

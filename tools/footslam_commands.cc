@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 
 #include "tools/atomic_file.h"
@@ -79,7 +80,11 @@ int RenderCommand(const std::string& dir, double hex_radius_m, const std::string
   }
   auto hexes = ReadMapCsv(dir + "/map.csv");
   if (!hexes.ok()) return Fail(kExitInput, hexes.status().message());
-  auto path = ReadPathCsv(dir + "/trajectory.csv");
+  // The smoothed path, as the run drew it (runs before it existed: the heaviest particle's).
+  std::string path_file = dir + "/smoothed_trajectory.csv";
+  if (std::error_code ec; !std::filesystem::exists(path_file, ec))
+    path_file = dir + "/trajectory.csv";
+  auto path = ReadPathCsv(path_file);
   if (!path.ok()) return Fail(kExitInput, path.status().message());
   MapImage image;
   image.hex_radius_m = radius;

@@ -1,5 +1,6 @@
-// FootSLAM's output files: map.csv, map_best.csv, trajectory.csv, mean_trajectory.csv, the map
-// images and summary.json's FootSLAM fields, and the odometry path drawn beside the estimate.
+// FootSLAM's output files: map.csv, map_best.csv, trajectory.csv, mean_trajectory.csv,
+// smoothed_trajectory.csv, the map images and summary.json's FootSLAM fields, and the odometry
+// path drawn beside the estimate.
 #ifndef GROVE_TOOLS_FOOTSLAM_OUTPUTS_H_
 #define GROVE_TOOLS_FOOTSLAM_OUTPUTS_H_
 

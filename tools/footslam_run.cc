@@ -48,8 +48,13 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
     return {options_.steps_path};
   }
   std::vector<std::string> OutputNames() const override {
-    return {"map.csv", "map_best.csv", "trajectory.csv", "mean_trajectory.csv",
-            "map.png", "map.svg"};
+    return {"map.csv",
+            "map_best.csv",
+            "trajectory.csv",
+            "mean_trajectory.csv",
+            "smoothed_trajectory.csv",
+            "map.png",
+            "map.svg"};
   }
   std::string InputName() const override { return steps_name_; }
   const char* RecordsName() const override { return "steps"; }
@@ -96,10 +101,14 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
     GROVE_RETURN_IF_ERROR(out->Add("trajectory.csv", TrajectoryCsv(*trajectory)));
     GROVE_RETURN_IF_ERROR(
         out->Add("mean_trajectory.csv", TrajectoryCsv(engine_->MeanTrajectory())));
+    StatusOr<std::vector<StampedPose>> smoothed = engine_->SmoothedTrajectory();
+    if (!smoothed.ok()) return smoothed.status();
+    GROVE_RETURN_IF_ERROR(out->Add("smoothed_trajectory.csv", TrajectoryCsv(*smoothed)));
     if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
+    // The smoothed path: the best of the three paths on the simulator's walks (README).
     MapImage image = FootSlamImage(
-        config_.hex_radius_m, *cumulative, *trajectory, odometry_.points(),
-        fmt::format("FootSLAM, {} particles, {} steps: cumulative map, heaviest particle's path, "
+        config_.hex_radius_m, *cumulative, *smoothed, odometry_.points(),
+        fmt::format("FootSLAM, {} particles, {} steps: cumulative map, smoothed path, "
                     "raw odometry",
                     config_.particles, engine_->steps()));
     GROVE_RETURN_IF_ERROR(AddMapImages(out, image));

@@ -60,6 +60,7 @@ class FootSlam::Impl {
   virtual Pose2 HeaviestPose() const = 0;
   virtual Pose2 MeanPose() const = 0;
   virtual std::vector<StampedPose> HeaviestTrajectory() const = 0;
+  virtual StatusOr<std::vector<StampedPose>> SmoothedTrajectory() const = 0;
   virtual const std::vector<StampedPose>& MeanTrajectory() const = 0;
   virtual std::vector<HexCounts> CumulativeMap() const = 0;
   virtual std::vector<HexCounts> HeaviestMap() const = 0;
@@ -123,6 +124,44 @@ class Engine final : public FootSlam::Impl {
   }
   const std::vector<StampedPose>& MeanTrajectory() const override {
     return driver_.mean_trajectory();
+  }
+
+  StatusOr<std::vector<StampedPose>> SmoothedTrajectory() const override {
+    const size_t n = model_.size();
+    std::vector<const footslam::PoseHistory::Node*> heads(n);
+    std::vector<double> weights(n);
+    const std::span<const double> lw = driver_.filter().log_weights();
+    uint32_t last = 0;
+    for (size_t i = 0; i < n; ++i) {
+      heads[i] = model_.history(i);
+      weights[i] = std::exp(lw[i]);
+      if (heads[i] != nullptr) last = std::max(last, heads[i]->step);
+    }
+    const std::vector<double>& times = driver_.times();
+    if (last >= times.size()) {
+      return InternalError(fmt::format("smoothed path: a path entry of step {} but {} step times",
+                                       last, times.size()));
+    }
+    struct Sum {
+      double w = 0, x = 0, y = 0, c = 0, s = 0;
+    };
+    std::vector<Sum> sums(last + 1);
+    footslam::PoseHistory::Smooth(heads, weights, last,
+                                  [&](uint32_t k, double w, const footslam::PathPose& p) {
+                                    const Pose2 pose = model_.PoseOf(p);
+                                    Sum& s = sums[k];
+                                    s.w += w;
+                                    s.x += w * pose.x_m;
+                                    s.y += w * pose.y_m;
+                                    s.c += w * std::cos(pose.heading_rad);
+                                    s.s += w * std::sin(pose.heading_rad);
+                                  });
+    std::vector<StampedPose> out(last + 1);
+    for (uint32_t k = 0; k <= last; ++k) {
+      const Sum& s = sums[k];
+      out[k] = {times[k], Pose2{s.x / s.w, s.y / s.w, std::atan2(s.s, s.c)}};
+    }
+    return out;
   }
 
   std::vector<HexCounts> CumulativeMap() const override {
@@ -342,6 +381,10 @@ Pose2 FootSlam::MeanPose() const { return impl_->MeanPose(); }
 StatusOr<std::vector<StampedPose>> FootSlam::HeaviestTrajectory() const {
   return NoThrow(
       [&]() -> StatusOr<std::vector<StampedPose>> { return impl_->HeaviestTrajectory(); });
+}
+
+StatusOr<std::vector<StampedPose>> FootSlam::SmoothedTrajectory() const {
+  return NoThrow([&]() { return impl_->SmoothedTrajectory(); });
 }
 const std::vector<StampedPose>& FootSlam::MeanTrajectory() const { return impl_->MeanTrajectory(); }
 StatusOr<std::vector<HexCounts>> FootSlam::CumulativeMap() const {

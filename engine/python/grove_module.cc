@@ -750,6 +750,15 @@ void BindFootSlam(py::module_& m) {
           "Sets the time of the start pose (the first step must come after it); without it the "
           "start takes the first step's time. FailedPreconditionError after the first step.")
       .def(
+          "smoothed_trajectory",
+          [](const PyFootSlam& f) {
+            return TrajectoryArray(
+                ValueOrRaise(f.Locked([](FootSlam& e) { return e.SmoothedTrajectory(); })));
+          },
+          "The smoothed path, for offline mapping: at the times of mean_trajectory(), the "
+          "weighted mean under the final weights of the surviving particles' ancestral poses. "
+          "A new float64 array of shape (n, 4), columns t, x, y, heading.")
+      .def(
           "cumulative_map",
           [](const PyFootSlam& f) {
             return StructArray(

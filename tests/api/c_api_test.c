@@ -472,6 +472,25 @@ static void TestFootRuns(void) {
   CHECK(pose.t_s == heavy_a[kWalkSteps].t_s && fabs(pose.x_m - heavy_a[kWalkSteps].x_m) < 1e-5);
   CHECK(fabs(pose.y_m - heavy_a[kWalkSteps].y_m) < 1e-5);
   CHECK(fabs(pose.heading_rad - heavy_a[kWalkSteps].heading_rad) < 1e-5);
+  {
+    /* The smoothed path: one pose per step and the start, ending at the mean pose. */
+    size_t n_smoothed = 0, filled = 0;
+    grove_pose* smoothed;
+    CHECK_FOOT(a, grove_footslam_smoothed_trajectory(a, NULL, 0, &n_smoothed), GROVE_OK);
+    CHECK(n_smoothed == kWalkSteps + 1);
+    smoothed = (grove_pose*)malloc(n_smoothed * sizeof *smoothed);
+    CHECK(smoothed != NULL);
+    CHECK_FOOT(a, grove_footslam_smoothed_trajectory(a, smoothed, 1, &filled), GROVE_OUT_OF_RANGE);
+    CHECK(filled == n_smoothed);
+    CHECK_FOOT(a, grove_footslam_smoothed_trajectory(a, smoothed, n_smoothed, &filled), GROVE_OK);
+    CHECK(filled == n_smoothed && smoothed[kWalkSteps].t_s == mean_a[kWalkSteps].t_s);
+    CHECK(fabs(smoothed[kWalkSteps].x_m - mean_a[kWalkSteps].x_m) < 1e-4);
+    CHECK(fabs(smoothed[kWalkSteps].y_m - mean_a[kWalkSteps].y_m) < 1e-4);
+    for (i = 0; i < n_smoothed; ++i) CHECK(PoseFinite(&smoothed[i]));
+    CHECK_STATUS(grove_footslam_smoothed_trajectory(NULL, smoothed, 1, &filled),
+                 GROVE_INVALID_ARGUMENT);
+    free(smoothed);
+  }
   CheckMaps(a);
   CHECK_FOOT(a, grove_footslam_get_summary(a, &summary), GROVE_OK);
   CHECK(summary.filter.particles == c.particles);

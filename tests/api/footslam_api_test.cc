@@ -19,6 +19,7 @@ using testing::Walk;
 struct Result {
   std::vector<StampedPose> trajectory;
   std::vector<StampedPose> mean;
+  std::vector<StampedPose> smoothed;
   std::vector<HexCounts> cumulative;
   std::vector<HexCounts> best;
   int64_t resamplings;
@@ -32,8 +33,8 @@ Result RunWith(FootSlamConfig config, const std::vector<Step>& steps) {
     EXPECT_TRUE(st.ok()) << st.ToString();
   }
   return {ValueOf((*slam)->HeaviestTrajectory()), (*slam)->MeanTrajectory(),
-          ValueOf((*slam)->CumulativeMap()), ValueOf((*slam)->HeaviestMap()),
-          (*slam)->Summary().resamplings};
+          ValueOf((*slam)->SmoothedTrajectory()), ValueOf((*slam)->CumulativeMap()),
+          ValueOf((*slam)->HeaviestMap()),        (*slam)->Summary().resamplings};
 }
 
 FootSlamConfig Small() {
@@ -51,6 +52,8 @@ void ExpectSame(const Result& a, const Result& b) {
     ASSERT_EQ(a.trajectory[k].pose.y_m, b.trajectory[k].pose.y_m) << "pose " << k;
     ASSERT_EQ(a.mean[k].pose.x_m, b.mean[k].pose.x_m) << "mean pose " << k;
     ASSERT_EQ(a.mean[k].pose.heading_rad, b.mean[k].pose.heading_rad) << "mean pose " << k;
+    ASSERT_EQ(a.smoothed[k].pose.x_m, b.smoothed[k].pose.x_m) << "smoothed pose " << k;
+    ASSERT_EQ(a.smoothed[k].pose.heading_rad, b.smoothed[k].pose.heading_rad) << "smoothed " << k;
   }
   // Maps come in key order, which depends on the degree: compare them in (q, r) order.
   auto same_map = [](std::vector<HexCounts> x, std::vector<HexCounts> y) {
@@ -220,6 +223,44 @@ TEST(FootSlamApiTest, TrajectoryHasTheStartAndOnePosePerStep) {
   EXPECT_EQ(path[0].pose.x_m, 0.0);
   for (size_t k = 0; k < steps.size(); ++k) EXPECT_EQ(path[k + 1].t_s, steps[k].t);
   EXPECT_EQ((*slam)->MeanTrajectory().size(), steps.size() + 1);
+}
+
+// The smoothed path has the start and one pose per step, ends at the filtered mean (to the
+// history's single precision) and, for one particle, is that particle's path.
+TEST(FootSlamApiTest, SmoothedPathEndsAtTheMeanAndIsThePathOfALoneParticle) {
+  auto steps = Walk(300, 8);
+  FootSlamConfig c = Small();
+  Result r = RunWith(c, steps);
+  ASSERT_EQ(r.smoothed.size(), steps.size() + 1);
+  for (size_t k = 0; k < r.smoothed.size(); ++k) {
+    ASSERT_EQ(r.smoothed[k].t_s, r.mean[k].t_s) << "pose " << k;
+  }
+  const Pose2& last = r.smoothed.back().pose;
+  EXPECT_NEAR(last.x_m, r.mean.back().pose.x_m, 1e-4);
+  EXPECT_NEAR(last.y_m, r.mean.back().pose.y_m, 1e-4);
+  EXPECT_NEAR(last.heading_rad, r.mean.back().pose.heading_rad, 1e-5);
+  EXPECT_EQ(r.smoothed[0].pose.x_m, 0.0);  // every particle starts at the start
+  // Resampling happened, so the smoothed past differs from the filtered one somewhere.
+  ASSERT_GT(r.resamplings, 0);
+  double most = 0;
+  for (size_t k = 0; k < r.mean.size(); ++k) {
+    most = std::max(most, std::hypot(r.smoothed[k].pose.x_m - r.mean[k].pose.x_m,
+                                     r.smoothed[k].pose.y_m - r.mean[k].pose.y_m));
+  }
+  EXPECT_GT(most, 1e-3);
+
+  c.particles = 1;
+  Result one = RunWith(c, steps);
+  ASSERT_EQ(one.smoothed.size(), one.trajectory.size());
+  for (size_t k = 0; k < one.smoothed.size(); ++k) {
+    EXPECT_EQ(one.smoothed[k].pose.x_m, one.trajectory[k].pose.x_m) << "pose " << k;
+    EXPECT_EQ(one.smoothed[k].pose.y_m, one.trajectory[k].pose.y_m) << "pose " << k;
+    EXPECT_NEAR(
+        std::remainder(one.smoothed[k].pose.heading_rad - one.trajectory[k].pose.heading_rad,
+                       2 * M_PI),
+        0, 1e-12)
+        << "pose " << k;
+  }
 }
 
 TEST(FootSlamEstimateTest, PredictionGrowsWithParticlesAndTheNaiveMapWithSteps) {

@@ -146,5 +146,90 @@ TEST(AncestryTest, ReleaseManyFreesWhatReleaseFrees) {
   EXPECT_TRUE(one.CheckCounts({}).ok());
 }
 
+// Smooth() against brute force: every path walked whole, its weight added at every step. The
+// tree has resamplings (shared entries) and steps some paths skip (an entry standing for
+// several steps).
+TEST(AncestryTest, SmoothEqualsBruteForceOverEveryPath) {
+  PoseHistory history(1);
+  std::mt19937_64 rng(5);
+  constexpr int kPaths = 200;
+  constexpr uint32_t kSteps = 40;
+  std::vector<PoseHistory::Node*> paths(kPaths, nullptr);
+  for (uint32_t step = 0; step <= kSteps; ++step) {
+    if (step % 3 == 1) {  // resample
+      std::vector<PoseHistory::Node*> next(kPaths);
+      for (int k = 0; k < kPaths; ++k) next[k] = PoseHistory::Share(paths[rng() % kPaths]);
+      for (PoseHistory::Node* n : paths) history.Release(n, 0);
+      paths.swap(next);
+    }
+    for (int k = 0; k < kPaths; ++k) {
+      if (step > 0 && step < kSteps && rng() % 7 == 0) continue;  // no entry at this step
+      const PathPose pose{static_cast<float>(rng() % 1000), static_cast<float>(k), 0};
+      paths[k] = history.Append(paths[k], step, pose, 0);
+    }
+  }
+  std::vector<double> weights(kPaths);
+  double total = 0;
+  for (double& w : weights) total += (w = static_cast<double>(rng() % 100 + 1));
+  for (double& w : weights) w /= total;
+
+  std::vector<double> fast(kSteps + 1, 0), fast_w(kSteps + 1, 0);
+  std::vector<int> visits(kSteps + 1, 0);
+  const std::vector<const PoseHistory::Node*> heads(paths.begin(), paths.end());
+  PoseHistory::Smooth(heads, weights, kSteps, [&](uint32_t k, double w, const PathPose& p) {
+    fast[k] += w * p.dx_m;
+    fast_w[k] += w;
+    ++visits[k];
+  });
+  for (uint32_t k = 0; k <= kSteps; ++k) {
+    double brute = 0;
+    std::map<const PoseHistory::Node*, int> distinct;
+    for (int i = 0; i < kPaths; ++i) {
+      const PoseHistory::Node* n = paths[i];
+      while (n->step > k) n = n->parent;  // the newest entry at or before step k
+      brute += weights[i] * n->value.dx_m;
+      ++distinct[n];
+    }
+    EXPECT_NEAR(fast[k], brute, 1e-9 * std::abs(brute)) << "step " << k;
+    EXPECT_NEAR(fast_w[k], 1.0, 1e-12) << "step " << k;
+    EXPECT_EQ(visits[k], static_cast<int>(distinct.size())) << "step " << k;
+  }
+  EXPECT_LT(visits[0], kPaths);  // resampling left fewer distinct roots than paths
+  for (PoseHistory::Node* n : paths) history.Release(n, 0);
+  EXPECT_EQ(history.stats().live_nodes, 0);
+}
+
+// The order of the visits and of the sums follows the paths' order and the tree's shape only:
+// the same tree built at other addresses gives the same bits.
+TEST(AncestryTest, SmoothDoesNotDependOnAddresses) {
+  auto run = [](int padding) {
+    PoseHistory history(1);
+    std::vector<PoseHistory::Node*> pad;
+    for (int k = 0; k < padding; ++k) pad.push_back(history.Append(nullptr, 0, {}, 0));
+    std::mt19937_64 rng(9);
+    std::vector<PoseHistory::Node*> paths(64, nullptr);
+    for (uint32_t step = 0; step <= 20; ++step) {
+      std::vector<PoseHistory::Node*> next(paths.size());
+      for (auto& n : next) n = PoseHistory::Share(paths[rng() % paths.size()]);
+      for (PoseHistory::Node* n : paths) history.Release(n, 0);
+      paths.swap(next);
+      for (auto& n : paths) {
+        n = history.Append(n, step, {static_cast<float>(rng() % 97) * 0.37f, 0, 0}, 0);
+      }
+    }
+    std::vector<double> weights(paths.size());
+    for (size_t i = 0; i < weights.size(); ++i) weights[i] = 1.0 / (3.0 + static_cast<double>(i));
+    std::vector<double> sums(21, 0);
+    const std::vector<const PoseHistory::Node*> heads(paths.begin(), paths.end());
+    PoseHistory::Smooth(heads, weights, 20,
+                        [&](uint32_t k, double w, const PathPose& p) { sums[k] += w * p.dx_m; });
+    for (PoseHistory::Node* n : paths) history.Release(n, 0);
+    for (PoseHistory::Node* n : pad) history.Release(n, 0);
+    return sums;
+  };
+  const std::vector<double> a = run(0), b = run(37);
+  for (size_t k = 0; k < a.size(); ++k) EXPECT_EQ(a[k], b[k]) << "step " << k;
+}
+
 }  // namespace
 }  // namespace grove::footslam

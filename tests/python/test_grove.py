@@ -188,6 +188,11 @@ class FootSlamRunTest(unittest.TestCase):
         np.testing.assert_allclose(f.heaviest_pose(), heaviest[-1, 1:], rtol=1e-6, atol=1e-6)
         # Three loops of a closed square end near the start.
         self.assertLess(math.hypot(pose.x, pose.y), 3.0)
+        # The smoothed path: the same times, ending at the mean pose (single-precision history).
+        smoothed = f.smoothed_trajectory()
+        self.assertEqual(smoothed.shape, mean.shape)
+        np.testing.assert_array_equal(smoothed[:, 0], mean[:, 0])
+        np.testing.assert_allclose(smoothed[-1, 1:3], mean[-1, 1:3], rtol=0, atol=1e-4)
 
     def test_maps(self):
         f = self.run_walk()

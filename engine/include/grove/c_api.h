@@ -258,6 +258,11 @@ GROVE_EXPORT grove_status grove_footslam_mean_trajectory(grove_footslam* slam, g
  * computed by the call and kept between a size query and the fill. */
 GROVE_EXPORT grove_status grove_footslam_heaviest_trajectory(grove_footslam* slam, grove_pose* out,
                                                              size_t capacity, size_t* count);
+/* The smoothed path (grove::FootSlam::SmoothedTrajectory: the weighted mean, under the final
+ * weights, of the surviving particles' ancestral poses at every step): the start, then one pose
+ * per step. Size-query rule; computed by the call and kept between a size query and the fill. */
+GROVE_EXPORT grove_status grove_footslam_smoothed_trajectory(grove_footslam* slam, grove_pose* out,
+                                                             size_t capacity, size_t* count);
 /* The cumulative map (sum over particles of weight times the particle's counters) and the
  * heaviest particle's own map, hexagons in key order. Size-query rule; computed by the call
  * and kept between a size query and the fill. */

@@ -190,6 +190,13 @@ class GROVE_EXPORT FootSlam {
   StatusOr<std::vector<StampedPose>> HeaviestTrajectory() const;
   // The weighted mean pose after each step (the start first).
   const std::vector<StampedPose>& MeanTrajectory() const;
+  // The smoothed path, for offline mapping: the pose at every step (the start first) as the
+  // weighted mean, under the weights after the last step, of the surviving particles' ancestral
+  // poses there: fixed-interval smoothing by the ancestry, which the filtered mean (the mean of
+  // each step's own particles, most of which later die) is not. At the last step it is the mean
+  // pose (to the history's single precision). Visits each distinct path entry once; the same
+  // bits at any thread count.
+  StatusOr<std::vector<StampedPose>> SmoothedTrajectory() const;
   // Eq. 5-6 of the paper: sum over particles of w_i * C_i, hexagons in key order. Visits each
   // distinct map node once.
   StatusOr<std::vector<HexCounts>> CumulativeMap() const;
