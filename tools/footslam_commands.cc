@@ -90,6 +90,7 @@ int RenderCommand(const std::string& dir, double hex_radius_m, const std::string
   image.hex_radius_m = radius;
   image.hexes = std::move(*hexes);
   image.path = std::move(*path);
+  if (path_file.ends_with("smoothed_trajectory.csv")) image.path_label = "smoothed path";
   if (!odometry_path.empty()) {
     auto steps = ReadAllSteps(odometry_path);
     if (!steps.ok()) return Fail(kExitInput, steps.status().message());

@@ -111,6 +111,7 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
         fmt::format("FootSLAM, {} particles, {} steps: cumulative map, smoothed path, "
                     "raw odometry",
                     config_.particles, engine_->steps()));
+    image.path_label = "smoothed path";
     GROVE_RETURN_IF_ERROR(AddMapImages(out, image));
     if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
     const FootSlamSummary s = engine_->Summary();

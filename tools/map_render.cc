@@ -290,7 +290,7 @@ void DrawHeader(cairo_t* cr, const MapImage& image, const MapLayout& layout,
   const std::vector<RenderPoint> landmarks_mark(image.landmarks.empty() ? 0 : 1);
   const LineStyle landmark_style{kLandmarkColour, path_style.width_px, false};
   const LineStyle landmark_truth_style{kTruthColour, truth_style.width_px, true};
-  const Entry entries[] = {{&image.path, "path (heaviest particle)", &path_style},
+  const Entry entries[] = {{&image.path, image.path_label.c_str(), &path_style},
                            {&image.odometry, "odometry", &odometry_style},
                            {&image.truth, image.truth_label.c_str(), &truth_style},
                            {&landmarks_mark, "landmarks, 2-sigma ellipses", &landmark_style},

@@ -37,11 +37,12 @@ struct MapImage {
   // Pointy-top hexagons with circumradius R; the centre of (q, r) is
   // x = R * sqrt(3) * (q + r / 2), y = 1.5 * R * r.
   double hex_radius_m = 1.0;
-  std::vector<RenderHex> hexes;              // hexes with use 0 are not drawn
-  std::vector<RenderPoint> path;             // heaviest particle's path: solid dark red
-  std::vector<RenderPoint> odometry;         // raw odometry: thin dashed blue
-  std::vector<RenderPoint> truth;            // optional ground truth: green
-  std::string truth_label = "ground truth";  // its legend entry
+  std::vector<RenderHex> hexes;                         // hexes with use 0 are not drawn
+  std::vector<RenderPoint> path;                        // the estimated path: solid dark red
+  std::string path_label = "path (heaviest particle)";  // its legend entry
+  std::vector<RenderPoint> odometry;                    // raw odometry: thin dashed blue
+  std::vector<RenderPoint> truth;                       // optional ground truth: green
+  std::string truth_label = "ground truth";             // its legend entry
   std::vector<RenderLandmark> landmarks;     // estimated landmarks: orange, 2-sigma ellipses
   std::vector<RenderPoint> landmarks_truth;  // true landmarks: green crosses
   std::string title;
