@@ -494,6 +494,71 @@ grove::Status Adopt(grove::StatusOr<std::unique_ptr<Engine>> made, Handle** out)
   return grove::Status::Ok();
 }
 
+// The configuration tables, by configuration type.
+const auto& FieldsOf(const grove::FootSlamConfig&) { return grove::FootSlamConfigFields(); }
+const auto& FieldsOf(const grove::FastSlamConfig&) { return grove::FastSlamConfigFields(); }
+
+// What both models' config_from_json, create, create_json, resume and mean_trajectory do;
+// Engine is grove::FootSlam or grove::FastSlam, CConfig and Handle its C types.
+template <typename CConfig>
+grove_status ConfigFromJsonC(const char* json, CConfig* config, char* error, size_t error_size) {
+  return grove::GuardCreate(error, error_size, [&]() -> grove::Status {
+    if (config == nullptr) return grove::InvalidArgumentError("config is NULL");
+    auto c = grove::ToCpp(*config);
+    GROVE_RETURN_IF_ERROR(grove::ConfigFromJson(FieldsOf(c), json, &c));
+    *config = grove::ToC(c);
+    return grove::Status::Ok();
+  });
+}
+
+template <typename Engine, typename CConfig, typename Handle>
+grove_status CreateC(const CConfig* config, Handle** out, char* error, size_t error_size) {
+  return grove::GuardCreate(error, error_size, [&]() -> grove::Status {
+    if (out == nullptr) return grove::InvalidArgumentError("out is NULL");
+    *out = nullptr;
+    if (config == nullptr) return grove::InvalidArgumentError("config is NULL");
+    return Adopt(Engine::Create(grove::ToCpp(*config)), out);
+  });
+}
+
+template <typename Engine, typename Handle>
+grove_status CreateJsonC(const char* json, Handle** out, char* error, size_t error_size) {
+  return grove::GuardCreate(error, error_size, [&]() -> grove::Status {
+    if (out == nullptr) return grove::InvalidArgumentError("out is NULL");
+    *out = nullptr;
+    std::decay_t<decltype(std::declval<const Engine&>().config())> c;
+    GROVE_RETURN_IF_ERROR(grove::ConfigFromJson(FieldsOf(c), json, &c));
+    return Adopt(Engine::Create(c), out);
+  });
+}
+
+template <typename Engine, typename CConfig, typename Handle>
+grove_status ResumeC(const CConfig* config, const void* data, size_t size, Handle** out,
+                     char* error, size_t error_size) {
+  return grove::GuardCreate(error, error_size, [&]() -> grove::Status {
+    if (out == nullptr) return grove::InvalidArgumentError("out is NULL");
+    *out = nullptr;
+    if (config == nullptr) return grove::InvalidArgumentError("config is NULL");
+    if (data == nullptr && size != 0) {
+      return grove::InvalidArgumentError("data is NULL with size " + std::to_string(size));
+    }
+    const std::string_view bytes(data == nullptr ? "" : static_cast<const char*>(data), size);
+    return Adopt(Engine::Resume(grove::ToCpp(*config), bytes, "checkpoint", nullptr), out);
+  });
+}
+
+template <typename Handle>
+grove_status MeanTrajectoryC(Handle* slam, const char* call, grove_pose* out, size_t capacity,
+                             size_t* count) {
+  if (slam == nullptr) return kNullHandle;
+  return grove::Guard(slam, [&] {
+    grove_status result = GROVE_OK;
+    if (!grove::CheckArrayArgs(slam, call, out, capacity, count, &result)) return result;
+    bool filled = false;
+    return grove::CopyOut(slam, call, slam->slam->MeanTrajectory(), out, capacity, count, &filled);
+  });
+}
+
 }  // namespace
 
 // ---- Status and version ----
@@ -527,34 +592,17 @@ void grove_footslam_config_default(grove_footslam_config* config) {
 
 grove_status grove_footslam_config_from_json(const char* json, grove_footslam_config* config,
                                              char* error, size_t error_size) {
-  return grove::GuardCreate(error, error_size, [&]() -> grove::Status {
-    if (config == nullptr) return grove::InvalidArgumentError("config is NULL");
-    grove::FootSlamConfig c = grove::ToCpp(*config);
-    GROVE_RETURN_IF_ERROR(grove::ConfigFromJson(grove::FootSlamConfigFields(), json, &c));
-    *config = grove::ToC(c);
-    return grove::Status::Ok();
-  });
+  return ConfigFromJsonC(json, config, error, error_size);
 }
 
 grove_status grove_footslam_create(const grove_footslam_config* config, grove_footslam** out,
                                    char* error, size_t error_size) {
-  return grove::GuardCreate(error, error_size, [&]() -> grove::Status {
-    if (out == nullptr) return grove::InvalidArgumentError("out is NULL");
-    *out = nullptr;
-    if (config == nullptr) return grove::InvalidArgumentError("config is NULL");
-    return Adopt(grove::FootSlam::Create(grove::ToCpp(*config)), out);
-  });
+  return CreateC<grove::FootSlam>(config, out, error, error_size);
 }
 
 grove_status grove_footslam_create_json(const char* json, grove_footslam** out, char* error,
                                         size_t error_size) {
-  return grove::GuardCreate(error, error_size, [&]() -> grove::Status {
-    if (out == nullptr) return grove::InvalidArgumentError("out is NULL");
-    *out = nullptr;
-    grove::FootSlamConfig c;
-    GROVE_RETURN_IF_ERROR(grove::ConfigFromJson(grove::FootSlamConfigFields(), json, &c));
-    return Adopt(grove::FootSlam::Create(c), out);
-  });
+  return CreateJsonC<grove::FootSlam>(json, out, error, error_size);
 }
 
 void grove_footslam_destroy(grove_footslam* slam) {
@@ -642,14 +690,7 @@ grove_status grove_footslam_heaviest_pose(grove_footslam* slam, grove_pose* pose
 
 grove_status grove_footslam_mean_trajectory(grove_footslam* slam, grove_pose* out, size_t capacity,
                                             size_t* count) {
-  if (slam == nullptr) return kNullHandle;
-  return grove::Guard(slam, [&] {
-    static constexpr const char* kCall = "grove_footslam_mean_trajectory";
-    grove_status result = GROVE_OK;
-    if (!grove::CheckArrayArgs(slam, kCall, out, capacity, count, &result)) return result;
-    bool filled = false;
-    return grove::CopyOut(slam, kCall, slam->slam->MeanTrajectory(), out, capacity, count, &filled);
-  });
+  return MeanTrajectoryC(slam, "grove_footslam_mean_trajectory", out, capacity, count);
 }
 
 grove_status grove_footslam_heaviest_trajectory(grove_footslam* slam, grove_pose* out,
@@ -721,16 +762,7 @@ grove_status grove_footslam_checkpoint(grove_footslam* slam, void* buffer, size_
 grove_status grove_footslam_resume(const grove_footslam_config* config, const void* data,
                                    size_t size, grove_footslam** out, char* error,
                                    size_t error_size) {
-  return grove::GuardCreate(error, error_size, [&]() -> grove::Status {
-    if (out == nullptr) return grove::InvalidArgumentError("out is NULL");
-    *out = nullptr;
-    if (config == nullptr) return grove::InvalidArgumentError("config is NULL");
-    if (data == nullptr && size != 0) {
-      return grove::InvalidArgumentError("data is NULL with size " + std::to_string(size));
-    }
-    const std::string_view bytes(data == nullptr ? "" : static_cast<const char*>(data), size);
-    return Adopt(grove::FootSlam::Resume(grove::ToCpp(*config), bytes, "checkpoint", nullptr), out);
-  });
+  return ResumeC<grove::FootSlam>(config, data, size, out, error, error_size);
 }
 
 // ---- Landmark FastSLAM ----
@@ -741,34 +773,17 @@ void grove_fastslam_config_default(grove_fastslam_config* config) {
 
 grove_status grove_fastslam_config_from_json(const char* json, grove_fastslam_config* config,
                                              char* error, size_t error_size) {
-  return grove::GuardCreate(error, error_size, [&]() -> grove::Status {
-    if (config == nullptr) return grove::InvalidArgumentError("config is NULL");
-    grove::FastSlamConfig c = grove::ToCpp(*config);
-    GROVE_RETURN_IF_ERROR(grove::ConfigFromJson(grove::FastSlamConfigFields(), json, &c));
-    *config = grove::ToC(c);
-    return grove::Status::Ok();
-  });
+  return ConfigFromJsonC(json, config, error, error_size);
 }
 
 grove_status grove_fastslam_create(const grove_fastslam_config* config, grove_fastslam** out,
                                    char* error, size_t error_size) {
-  return grove::GuardCreate(error, error_size, [&]() -> grove::Status {
-    if (out == nullptr) return grove::InvalidArgumentError("out is NULL");
-    *out = nullptr;
-    if (config == nullptr) return grove::InvalidArgumentError("config is NULL");
-    return Adopt(grove::FastSlam::Create(grove::ToCpp(*config)), out);
-  });
+  return CreateC<grove::FastSlam>(config, out, error, error_size);
 }
 
 grove_status grove_fastslam_create_json(const char* json, grove_fastslam** out, char* error,
                                         size_t error_size) {
-  return grove::GuardCreate(error, error_size, [&]() -> grove::Status {
-    if (out == nullptr) return grove::InvalidArgumentError("out is NULL");
-    *out = nullptr;
-    grove::FastSlamConfig c;
-    GROVE_RETURN_IF_ERROR(grove::ConfigFromJson(grove::FastSlamConfigFields(), json, &c));
-    return Adopt(grove::FastSlam::Create(c), out);
-  });
+  return CreateJsonC<grove::FastSlam>(json, out, error, error_size);
 }
 
 void grove_fastslam_destroy(grove_fastslam* slam) {
@@ -860,14 +875,7 @@ grove_status grove_fastslam_pose_covariance(grove_fastslam* slam,
 
 grove_status grove_fastslam_mean_trajectory(grove_fastslam* slam, grove_pose* out, size_t capacity,
                                             size_t* count) {
-  if (slam == nullptr) return kNullHandle;
-  return grove::Guard(slam, [&] {
-    static constexpr const char* kCall = "grove_fastslam_mean_trajectory";
-    grove_status result = GROVE_OK;
-    if (!grove::CheckArrayArgs(slam, kCall, out, capacity, count, &result)) return result;
-    bool filled = false;
-    return grove::CopyOut(slam, kCall, slam->slam->MeanTrajectory(), out, capacity, count, &filled);
-  });
+  return MeanTrajectoryC(slam, "grove_fastslam_mean_trajectory", out, capacity, count);
 }
 
 grove_status grove_fastslam_heaviest_trajectory(grove_fastslam* slam, grove_pose* out,
@@ -931,14 +939,5 @@ grove_status grove_fastslam_checkpoint(grove_fastslam* slam, void* buffer, size_
 grove_status grove_fastslam_resume(const grove_fastslam_config* config, const void* data,
                                    size_t size, grove_fastslam** out, char* error,
                                    size_t error_size) {
-  return grove::GuardCreate(error, error_size, [&]() -> grove::Status {
-    if (out == nullptr) return grove::InvalidArgumentError("out is NULL");
-    *out = nullptr;
-    if (config == nullptr) return grove::InvalidArgumentError("config is NULL");
-    if (data == nullptr && size != 0) {
-      return grove::InvalidArgumentError("data is NULL with size " + std::to_string(size));
-    }
-    const std::string_view bytes(data == nullptr ? "" : static_cast<const char*>(data), size);
-    return Adopt(grove::FastSlam::Resume(grove::ToCpp(*config), bytes, "checkpoint", nullptr), out);
-  });
+  return ResumeC<grove::FastSlam>(config, data, size, out, error, error_size);
 }
