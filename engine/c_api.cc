@@ -240,6 +240,7 @@ FootSlamConfig ToCpp(const grove_footslam_config& c) {
   o.map = static_cast<FootSlamMapKind>(c.map);
   o.degree = c.degree;
   o.grid_size = c.grid_size;
+  o.grid = static_cast<FootSlamGrid>(c.grid);
   o.alphabet = c.alphabet;
   o.threads = c.threads;
   o.batch = c.batch;
@@ -268,6 +269,7 @@ grove_footslam_config ToC(const FootSlamConfig& c) {
   o.map = static_cast<int>(c.map);
   o.degree = c.degree;
   o.grid_size = c.grid_size;
+  o.grid = static_cast<int>(c.grid);
   o.alphabet = c.alphabet;
   o.threads = c.threads;
   o.batch = c.batch;
@@ -744,6 +746,7 @@ grove_status grove_footslam_get_summary(grove_footslam* slam, grove_footslam_sum
     out.mean_heading_error_rad = s.mean_heading_error_rad;
     out.map_memory = grove::ToC(s.map_memory);
     out.trajectory_memory = grove::ToC(s.trajectory_memory);
+    out.grid_size = s.grid_size;
     *summary = out;
     return slam->Ok();
   });

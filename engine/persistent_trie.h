@@ -10,10 +10,13 @@
 // Node layout: every node records its level, counted from the bottom (0: a bottom node holding
 // leaves; k > 0: an inner node of kDegree children at level k - 1). Key digit k (base kDegree,
 // digit 0 the least significant) picks the child of a level-k node. A version is at least
-// min_height() levels high (a fixed-height map: FootSLAM's grid, whose keys all fit) and grows
-// by new roots on top when a key does not fit (a landmark map with no preset size): every old
-// key has digit 0 at the new levels, so the old root becomes child 0. Versions of different
-// heights share their common subtrees.
+// min_height() levels high and grows by new roots on top when a key does not fit. The levels a
+// version lacks stand for the digits of a fill key at those levels: a version h levels high holds
+// the keys whose digits at levels h and above are the fill key's, and growing puts the old root
+// at the fill key's digit of the new level. A fill key of 0 suits keys that grow from 0 (a
+// landmark map with no preset size); FootSLAM's growing grid nests its first grid inside ever
+// larger ones, so its fill key holds the position of each grid in the next. Versions of
+// different heights share their common subtrees.
 //
 // Invariants:
 //   1. A node's reference count equals the number of parent links plus version roots pointing
@@ -68,23 +71,34 @@ class PersistentTrie {
   using Root = Node*;
 
   // REQUIRES: 1 <= min_height <= kMaxHeight, slots >= 1 (the worker slots that will use it).
-  PersistentTrie(int min_height, int slots)
+  // The digits of `fill` below min_height are ignored. Load() refuses versions higher than
+  // max_height (REQUIRES: min_height <= max_height <= kMaxHeight); Update() grows them as keys
+  // need, so a caller whose keys stay below kDegree^max_height keeps every version within it.
+  PersistentTrie(int min_height, int slots, uint64_t fill = 0, int max_height = kMaxHeight)
       : height_(min_height),
+        max_height_(max_height),
+        fill_(min_height * kLog2Degree >= 64
+                  ? 0
+                  : fill >> (min_height * kLog2Degree) << (min_height * kLog2Degree)),
         inner_pool_(sizeof(Inner), slots),
         bottom_pool_(sizeof(Bottom), slots),
         release_scratch_(slots) {
-    GROVE_CHECK(min_height >= 1 && min_height <= kMaxHeight);
+    GROVE_CHECK(min_height >= 1 && min_height <= max_height && max_height <= kMaxHeight);
   }
   PersistentTrie(const PersistentTrie&) = delete;
   PersistentTrie& operator=(const PersistentTrie&) = delete;
 
   // The height of every new version; a version grows above it only for a key that needs it.
   int min_height() const { return height_; }
+  // The fill key, its digits below min_height() cleared.
+  uint64_t fill() const { return fill_; }
   // Levels of a version: 0 for the empty one.
   static int Height(const Node* root) { return root == nullptr ? 0 : root->level + 1; }
-  // Levels a version needs to hold `key`: at least 1.
-  static int HeightFor(uint64_t key) {
-    return key == 0 ? 1 : (std::bit_width(key) + kLog2Degree - 1) / kLog2Degree;
+  // Levels a version needs to hold `key` under the fill key `fill`: at least 1 (the levels up to
+  // the highest digit where the two differ).
+  static int HeightFor(uint64_t key, uint64_t fill = 0) {
+    const uint64_t differ = key ^ fill;
+    return differ == 0 ? 1 : (std::bit_width(differ) + kLog2Degree - 1) / kLog2Degree;
   }
   // Keys a version of min_height() holds without growing, kDegree^min_height (0 when that does
   // not fit in 64 bits: every key).
@@ -94,7 +108,7 @@ class PersistentTrie {
 
   // Returns the leaf stored under `key`, or nullptr. The pointer is valid while the version is.
   const Leaf* Find(const Node* root, uint64_t key) const {
-    if (root == nullptr || HeightFor(key) > Height(root)) return nullptr;
+    if (root == nullptr || HeightFor(key, fill_) > Height(root)) return nullptr;
     const Node* cur = root;
     while (cur != nullptr && cur->level > 0) {
       cur = static_cast<const Inner*>(cur)->child[Digit(key, cur->level)];
@@ -141,14 +155,14 @@ class PersistentTrie {
   // then a valid version with the same contents.
   template <typename F>
   [[nodiscard]] bool Update(Node** root, uint64_t key, int slot, F&& f) {
-    const int need = std::max(height_, HeightFor(key));
+    const int need = std::max(height_, HeightFor(key, fill_));
     if (*root == nullptr) {
       // An empty version starts at the height the key needs.
     } else {
-      while (Height(*root) < need) {  // grow: the old root is child 0 of a new one
+      while (Height(*root) < need) {  // grow: the old root is the fill digit's child of a new one
         Inner* top = NewInner(slot, Height(*root));
         if (top == nullptr) return false;
-        top->child[0] = *root;
+        top->child[Digit(fill_, Height(*root))] = *root;
         *root = top;
       }
     }
@@ -323,7 +337,7 @@ class PersistentTrie {
       uint64_t prefix;
     };
     std::vector<Item> stack;
-    stack.push_back({root, 0});
+    stack.push_back({root, FillPrefix(Height(root))});
     while (!stack.empty()) {
       Item item = stack.back();
       stack.pop_back();
@@ -363,8 +377,9 @@ class PersistentTrie {
       const uint64_t span = shift >= 64 ? ~uint64_t{0} : (uint64_t{1} << shift) - 1;
       return may_contain(lo, lo + span);
     };
-    if (!admits(0, root->level + 1)) return;
-    stack[top++] = {root, 0};
+    const uint64_t root_prefix = FillPrefix(Height(root));
+    if (!admits(root_prefix, Height(root))) return;
+    stack[top++] = {root, root_prefix};
     while (top > 0) {
       const Item item = stack[--top];
       if (item.node->level > 0) {
@@ -429,7 +444,7 @@ class PersistentTrie {
         }
       }
       for (size_t i = 0; i < roots.size(); ++i) {
-        if (Height(roots[i]) == level + 1) add(roots[i], 0, weights[i]);
+        if (Height(roots[i]) == level + 1) add(roots[i], FillPrefix(level + 1), weights[i]);
       }
       distinct += level_nodes.size();
     }
@@ -565,11 +580,10 @@ class PersistentTrie {
               std::vector<Node*>* roots) {
     uint32_t top = 0;
     GROVE_RETURN_IF_ERROR(r->Get("trie height", &top));
-    if (top < static_cast<uint32_t>(height_) || top > static_cast<uint32_t>(kMaxHeight)) {
+    if (top < static_cast<uint32_t>(height_) || top > static_cast<uint32_t>(max_height_)) {
       return r->Error("trie height", std::to_string(top) + " is not in " + std::to_string(height_) +
-                                         ".." + std::to_string(kMaxHeight) +
-                                         " (this configuration's height " +
-                                         std::to_string(height_) + ")");
+                                         ".." + std::to_string(max_height_) +
+                                         " (this configuration's heights)");
     }
     uint64_t count = 0;
     GROVE_RETURN_IF_ERROR(r->GetCount("trie node count", 1 + sizeof(uint64_t) * kWords, &count));
@@ -665,6 +679,10 @@ class PersistentTrie {
   static int Digit(uint64_t key, int level) {
     return static_cast<int>((key >> (kLog2Degree * level)) & (kDegree - 1));
   }
+  // The digits of the fill key above a version `height` levels high: the key prefix of its root.
+  uint64_t FillPrefix(int height) const {
+    return kLog2Degree * height >= 64 ? 0 : fill_ >> (kLog2Degree * height);
+  }
 
   // A new node, or nullptr when the pool has no memory.
   Inner* NewInner(int slot, int level) {
@@ -711,6 +729,8 @@ class PersistentTrie {
   }
 
   int height_;
+  int max_height_;
+  uint64_t fill_;
   NodePool inner_pool_;
   NodePool bottom_pool_;
   // ReleaseMany's queues, per worker slot (reused: no allocation per call once grown).

@@ -148,6 +148,7 @@ int PaperBenchCommand(const PaperBenchOptions& options) {
             config.map = pc.map;
             config.degree = pc.degree;
             config.grid_size = pc.grid;
+            config.grid = options.grid == "growing" ? FootSlamGrid::kGrowing : FootSlamGrid::kFixed;
             config.alphabet = pc.alphabet;
             auto slam = FootSlam::Create(config);
             if (!slam.ok()) return 10;

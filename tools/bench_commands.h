@@ -17,6 +17,7 @@ struct PaperBenchOptions {
   double naive_limit_s = 180;  // the naive run stops after this much run time
   std::string only;            // run only the configuration with this name (empty: all)
   int repeat = 1;              // runs per configuration; the median run is reported
+  std::string grid = "fixed";  // "fixed" (the paper's) or "growing": what growth costs
 };
 int PaperBenchCommand(const PaperBenchOptions& options);
 

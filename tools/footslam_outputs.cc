@@ -44,6 +44,7 @@ nlohmann::json FootSlamSummaryJson(const FootSlamSummary& s) {
   j["trajectory_memory"] = MemoryUseJson(s.trajectory_memory);
   j["mean_scale"] = s.mean_scale;
   j["mean_heading_error_rad"] = s.mean_heading_error_rad;
+  j["grid_size"] = s.grid_size;
   return j;
 }
 

@@ -6,12 +6,14 @@
 #ifndef GROVE_ENGINE_FOOTSLAM_ALPHABET_HTREE_MAP_H_
 #define GROVE_ENGINE_FOOTSLAM_ALPHABET_HTREE_MAP_H_
 
+#include <algorithm>
 #include <span>
 #include <vector>
 
 #include "concurrency/worker_pool.h"
 #include "engine/footslam/alphabet.h"
 #include "engine/footslam/htc.h"
+#include "engine/footslam/htree_layout.h"
 #include "engine/persistent_trie.h"
 #include "engine/version_set.h"
 
@@ -25,10 +27,10 @@ class AlphabetHTreeMap {
   // Marks a hexagon whose counters live in the full tree. Never a symbol: S <= 6^6 < 0xFFFF.
   static constexpr uint16_t kEscaped = 0xFFFF;
 
-  AlphabetHTreeMap(int height, int slots, size_t particles, const Alphabet* alphabet)
+  AlphabetHTreeMap(const HTreeLayout& layout, int slots, size_t particles, const Alphabet* alphabet)
       : alphabet_(alphabet),
-        symbols_(height, slots),
-        full_(height, slots),
+        symbols_(layout.height(), slots, layout.fill_key(), layout.max_height()),
+        full_(layout.height(), slots, layout.fill_key(), layout.max_height()),
         symbol_roots_(&symbols_, particles),
         full_roots_(&full_, particles) {}
 
@@ -76,6 +78,13 @@ class AlphabetHTreeMap {
     symbols_.PrefetchPath(symbol_roots_[i], key, depth);
   }
   int height() const { return symbols_.min_height(); }
+  // The levels of the highest particle's map: the grid the walk has grown to. (A hexagon's
+  // symbol stays in the symbol tree when its counters escape.)
+  int grown_height() const {
+    int h = symbols_.min_height();
+    for (const auto* root : symbol_roots_.roots()) h = std::max(h, SymbolTrie::Height(root));
+    return h;
+  }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     symbol_roots_.Gather(parents, workers);

@@ -44,8 +44,9 @@ constexpr double kWeightScale = 4503599627370496.0;  // 2^52
 
 constexpr char kCheckpointKind[] = "grove footslam";
 // FootSLAM's checkpoint body layout; bumped whenever it changes. 2: path positions relative to
-// the start, the filter's count of weighting steps.
-constexpr uint32_t kFootSlamFormatVersion = 2;
+// the start, the filter's count of weighting steps. 3: the grid field, maps grown past the
+// first grid.
+constexpr uint32_t kFootSlamFormatVersion = 3;
 
 }  // namespace
 
@@ -83,8 +84,7 @@ class Engine final : public FootSlam::Impl {
         grid_(config.hex_radius_m),
         layout_(std::move(layout)),
         alphabet_(std::move(alphabet)),
-        map_(layout_.height(), workers_.num_slots(), static_cast<size_t>(config.particles),
-             alphabet_.get()),
+        map_(layout_, workers_.num_slots(), static_cast<size_t>(config.particles), alphabet_.get()),
         model_(config, &grid_, &layout_, &map_, workers_.num_slots()),
         driver_(&model_, &workers_, FilterOptionsOf(config), config.threads,
                 Pose2{config.start_x_m, config.start_y_m, config.start_heading_rad},
@@ -213,6 +213,7 @@ class Engine final : public FootSlam::Impl {
     s.mean_scale = scale_sum / w_sum;
     s.mean_heading_error_rad = heading_sum / w_sum;
     s.map_memory = map_.memory();
+    s.grid_size = int64_t{1} << (layout_.log2_degree() / 2 * map_.grown_height());
     footslam::AddPoolStats(model_.history().stats(), &s.trajectory_memory);
     return s;
   }
@@ -346,7 +347,8 @@ StatusOr<std::unique_ptr<FootSlam>> FootSlam::Create(const FootSlamConfig& confi
     int threads = config.threads > 0
                       ? config.threads
                       : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-    StatusOr<HTreeLayout> layout = HTreeLayout::Create(config.grid_size, config.degree);
+    StatusOr<HTreeLayout> layout =
+        HTreeLayout::Create(config.grid_size, config.degree, config.grid);
     if (!layout.ok()) return layout.status();
     std::unique_ptr<Impl> impl;
     if (config.map == FootSlamMapKind::kNaive) {

@@ -53,6 +53,8 @@ const std::vector<ConfigField<FootSlamConfig>>& FootSlamConfigFields() {
                    "H-tree degree: 4, 16, 64 or 256"),
       IntegerField("grid_size", &C::grid_size, 1, 65536, kChangesResults,
                    "Hexagons per grid side, a power of sqrt(degree)"),
+      ChoiceField("grid", &C::grid, {"growing", "fixed"}, kChangesResults,
+                  "Grid: growing (gains levels when a particle leaves it) or fixed (the paper's)"),
       IntegerField("alphabet", &C::alphabet, 0, 5, kChangesResults,
                    "Alphabet bound T; 0 switches the alphabet off"),
       IntegerField("threads", &C::threads, 0, 256, kChangesSpeedOnly,
@@ -74,7 +76,7 @@ Status FootSlamConfig::Validate() const {
                       name, v, hex_radius_m, name, 1e9 * hex_radius_m));
     }
   }
-  StatusOr<footslam::HTreeLayout> layout = footslam::HTreeLayout::Create(grid_size, degree);
+  StatusOr<footslam::HTreeLayout> layout = footslam::HTreeLayout::Create(grid_size, degree, grid);
   if (!layout.ok()) return layout.status();
   return Status::Ok();
 }

@@ -63,6 +63,7 @@ class FootSlamModel {
         map_(map),
         history_(slots),
         n_(static_cast<size_t>(config.particles)),
+        max_step_crossings_(8 * int64_t{config.grid_size}),
         history_roots_(&history_, n_) {
     x_.assign(n_, config.start_x_m);
     y_.assign(n_, config.start_y_m);
@@ -173,17 +174,21 @@ class FootSlamModel {
             ny, heading));
       }
       double lw = 0;
-      bool outside = false, no_memory = false;
-      // A particle that leaves the grid ends the run: stop walking there, so a step of any
-      // length costs at most the grid's width.
-      bool first = true;
+      bool outside = false, too_long = false, no_memory = false;
+      // A particle that leaves the grid, or a step that crosses more hexagons than a straight
+      // line across the first grid can, ends the run: stop walking there, so a step of any
+      // length costs at most a few times the first grid's width.
+      int64_t crossings = 0;
       Hex end_hex = grid_->Traverse(hex_[i], x_[i], y_[i], nx, ny, [&](const Crossing& c) {
         uint64_t key = key_[i];  // the first crossing leaves the particle's hexagon
-        if (!first && !KeyOf(c.from, &key)) {
+        if (crossings != 0 && !KeyOf(c.from, &key)) {
           outside = true;
           return false;
         }
-        first = false;
+        if (++crossings > max_step_crossings_) {
+          too_long = true;
+          return false;
+        }
         EdgeCounts before;
         if (!map_->Cross(i, key, c.edge, slot, &before)) {
           no_memory = true;
@@ -193,12 +198,21 @@ class FootSlamModel {
         return true;
       });
       if (no_memory) return NoMemory(i, "map");
+      if (too_long) {
+        return OutOfRangeError(fmt::format(
+            "particle {}'s step from ({:.7g}, {:.7g}) to ({:.7g}, {:.7g}) m crosses more than {} "
+            "hexagons, 8 x grid_size: the odometry or the motion noise is wrong",
+            i, x_[i], y_[i], nx, ny, max_step_crossings_));
+      }
       uint64_t end_key;
       if (outside || !KeyOf(end_hex, &end_key)) {
+        const bool fixed = config_.grid == FootSlamGrid::kFixed;
         return OutOfRangeError(fmt::format(
-            "particle {} at ({:.7g}, {:.7g}) m left the {} x {} hexagon grid centred on the "
-            "start; raise grid_size",
-            i, nx, ny, layout_->grid_size(), layout_->grid_size()));
+            "particle {} at ({:.7g}, {:.7g}) m left the {} x {} hexagon grid {}; {}", i, nx, ny,
+            layout_->max_grid_size(), layout_->max_grid_size(),
+            fixed ? "centred on the start" : "around the start, the largest a grid grows to",
+            fixed ? "raise grid_size or let the grid grow (grid = growing)"
+                  : "the motion noise is too large or the odometry wrong"));
       }
       PoseHistory::Node* pose = history_.Append(history_roots_[i], static_cast<uint32_t>(step + 1),
                                                 PathPoseOf(nx, ny, heading), slot);
@@ -284,7 +298,7 @@ class FootSlamModel {
     }
     GROVE_RETURN_IF_ERROR(r->GetBytes("hexagon", hex_.data(), n_ * sizeof(Hex)));
     // Every hexagon of the grid lies within this distance of the start on each axis.
-    const double extent = (layout_->grid_size() + 2.0) * 2.0 * grid_->radius_m();
+    const double extent = (layout_->max_grid_size() + 2.0) * 2.0 * grid_->radius_m();
     for (size_t i = 0; i < n_; ++i) {
       if (std::abs(x_[i] - config_.start_x_m) > extent ||
           std::abs(y_[i] - config_.start_y_m) > extent) {
@@ -353,7 +367,8 @@ class FootSlamModel {
   static constexpr int kMaxPathLevels = 8;
   static constexpr uint32_t kLogTable = 256;
   static constexpr size_t kNoiseBlock = 256;
-  int motion_draws_ = 0;  // normal deviates per particle-step: one per noise term in use
+  int motion_draws_ = 0;        // normal deviates per particle-step: one per noise term in use
+  int64_t max_step_crossings_;  // 8 x grid_size: more than a straight line across the first grid
   double log_edge_bias_ = 0;
   double log_edge_[kLogTable];
   double log_total_[kLogTable];

@@ -4,12 +4,14 @@
 #ifndef GROVE_ENGINE_FOOTSLAM_HTREE_MAP_H_
 #define GROVE_ENGINE_FOOTSLAM_HTREE_MAP_H_
 
+#include <algorithm>
 #include <span>
 #include <vector>
 
 #include "concurrency/worker_pool.h"
 #include "engine/footslam/alphabet.h"
 #include "engine/footslam/htc.h"
+#include "engine/footslam/htree_layout.h"
 #include "engine/persistent_trie.h"
 #include "engine/version_set.h"
 
@@ -20,8 +22,9 @@ class HTreeMap {
  public:
   using Trie = PersistentTrie<Htc, kLog2Degree>;
 
-  HTreeMap(int height, int slots, size_t particles, const Alphabet* /*unused*/)
-      : trie_(height, slots), roots_(&trie_, particles) {}
+  HTreeMap(const HTreeLayout& layout, int slots, size_t particles, const Alphabet* /*unused*/)
+      : trie_(layout.height(), slots, layout.fill_key(), layout.max_height()),
+        roots_(&trie_, particles) {}
 
   // Returns false when out of memory (the map is unchanged).
   bool Cross(size_t i, uint64_t key, int edge, int slot, EdgeCounts* before) {
@@ -38,6 +41,12 @@ class HTreeMap {
     trie_.PrefetchPath(roots_[i], key, depth);
   }
   int height() const { return trie_.min_height(); }
+  // The levels of the highest particle's map: the grid the walk has grown to.
+  int grown_height() const {
+    int h = trie_.min_height();
+    for (const auto* root : roots_.roots()) h = std::max(h, Trie::Height(root));
+    return h;
+  }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     roots_.Gather(parents, workers);

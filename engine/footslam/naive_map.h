@@ -15,6 +15,7 @@
 #include "engine/checkpoint_io.h"
 #include "engine/footslam/alphabet.h"
 #include "engine/footslam/htc.h"
+#include "engine/footslam/htree_layout.h"
 
 namespace grove::footslam {
 
@@ -73,8 +74,8 @@ class HexTable {
 
 class NaiveMap {
  public:
-  NaiveMap(int /*height*/, int /*slots*/, size_t particles, const Alphabet* /*unused*/)
-      : tables_(particles) {}
+  NaiveMap(const HTreeLayout& layout, int /*slots*/, size_t particles, const Alphabet* /*unused*/)
+      : layout_(&layout), tables_(particles) {}
 
   // Never fails for want of a node; a table that cannot grow throws std::bad_alloc, which the
   // engine turns into ResourceExhausted.
@@ -88,6 +89,14 @@ class NaiveMap {
   void Prefetch(size_t) const {}
   void PrefetchPath(size_t, uint64_t, int) const {}
   int height() const { return 0; }
+  // The levels of the grid that holds every particle's hexagons.
+  int grown_height() const {
+    int h = layout_->height();
+    for (const HexTable& t : tables_) {
+      t.ForEach([&](uint64_t key, const Htc&) { h = std::max(h, layout_->HeightOf(key)); });
+    }
+    return h;
+  }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     std::vector<HexTable> next(parents.size());
@@ -176,6 +185,7 @@ class NaiveMap {
   }
 
  private:
+  const HTreeLayout* layout_;
   std::vector<HexTable> tables_;
   std::vector<HexTable> dead_;
 };

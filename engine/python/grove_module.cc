@@ -671,6 +671,7 @@ py::dict FootSlamSummaryDict(const FootSlamSummary& s) {
   py::dict d = FilterSummaryDict(s);
   d["mean_scale"] = s.mean_scale;
   d["mean_heading_error_rad"] = s.mean_heading_error_rad;
+  d["grid_size"] = s.grid_size;
   d["map_memory"] = MemoryDict(s.map_memory);
   d["trajectory_memory"] = MemoryDict(s.trajectory_memory);
   d["report"] = s.BriefReport();
@@ -702,7 +703,8 @@ void BindFootSlam(py::module_& m) {
           "Processes one odometry step: time t (s, after the previous step's), displacement "
           "dx, dy in the odometry frame (m). Raises InvalidArgumentError (filter unchanged) for a "
           "non-finite value or a time not after the previous one; OutOfRangeError when a "
-          "particle leaves the grid and FailedPreconditionError when the filter degenerated "
+          "particle leaves a fixed grid or a step crosses more than 8 x grid_size hexagons, and "
+          "FailedPreconditionError when the filter degenerated "
           "(the filter must not be stepped again after these two).")
       .def(
           "run",

@@ -378,6 +378,7 @@ static void TestFootFatalError(void) {
   int k;
   grove_status s = GROVE_OK;
   c.grid_size = 16;
+  c.grid = GROVE_FOOTSLAM_GRID_FIXED;
   c.degree = 16;
   h = NewFoot(&c);
   for (k = 1; k <= 100 && s == GROVE_OK; ++k) s = grove_footslam_step(h, k, 1.0, 0);

@@ -194,6 +194,7 @@ TEST(FootSlamApiTest, BadStepIsRejectedAndLeavesTheEngineUnchanged) {
 TEST(FootSlamApiTest, LeavingTheGridIsAnErrorNamingStepAndPosition) {
   FootSlamConfig c = Small();
   c.grid_size = 16;  // 16 hexagons of 0.87 m: about 14 m across
+  c.grid = FootSlamGrid::kFixed;
   auto slam = FootSlam::Create(c);
   ASSERT_TRUE(slam.ok());
   Status s;
@@ -206,6 +207,56 @@ TEST(FootSlamApiTest, LeavingTheGridIsAnErrorNamingStepAndPosition) {
   EXPECT_NE(s.message().find("step " + std::to_string(k)), std::string::npos) << s.message();
   EXPECT_NE(s.message().find("left the 16 x 16 hexagon grid"), std::string::npos) << s.message();
   EXPECT_EQ((*slam)->Step(k + 1, 0.7, 0).code(), StatusCode::kFailedPrecondition);
+}
+
+// The growing grid (paper §VIII): a walk far beyond its first 16 x 16 grid runs, and gives
+// the particles, paths and maps of a fixed grid large enough for it, for every map kind.
+TEST(FootSlamGridTest, AGrowingGridGivesTheResultsOfAFixedGridLargeEnough) {
+  const auto steps = Walk(500, 3, 60);  // about 120 m across: 140 hexagons
+  FootSlamConfig growing = Small();
+  growing.grid_size = 16;
+  FootSlamConfig fixed = Small();
+  fixed.grid_size = 1024;
+  fixed.grid = FootSlamGrid::kFixed;
+  for (int variant = 0; variant < 4; ++variant) {
+    SCOPED_TRACE(variant);
+    FootSlamConfig g = growing, f = fixed;
+    if (variant == 1) g.alphabet = f.alphabet = 0;
+    if (variant == 2) g.map = f.map = FootSlamMapKind::kNaive;
+    if (variant == 3) {
+      g.degree = f.degree = 4;
+      f.grid_size = 512;
+    }
+    ExpectSame(RunWith(g, steps), RunWith(f, steps));
+  }
+}
+
+TEST(FootSlamGridTest, TheSummaryReportsTheGridTheMapsGrewTo) {
+  FootSlamConfig c = Small();
+  c.particles = 100;
+  c.grid_size = 16;
+  auto slam = FootSlam::Create(c);
+  ASSERT_TRUE(slam.ok());
+  EXPECT_EQ((*slam)->Summary().grid_size, 16);
+  for (const Step& s : Walk(500, 3, 60)) ASSERT_TRUE((*slam)->Step(s.t, s.dx, s.dy).ok());
+  // 16 hexagons nest in 64, then 256: the walk reaches 70 hexagons from the start.
+  EXPECT_EQ((*slam)->Summary().grid_size, 256);
+}
+
+// A growing grid bounds the work of one step instead: a step may not cross more hexagons than
+// eight times the first grid's side.
+TEST(FootSlamGridTest, AStepLongerThanTheFirstGridIsAnError) {
+  FootSlamConfig c = Small();
+  c.particles = 10;
+  c.grid_size = 16;
+  auto slam = FootSlam::Create(c);
+  ASSERT_TRUE(slam.ok());
+  Status ok = (*slam)->Step(1, 40, 0);  // 46 hexagons
+  ASSERT_TRUE(ok.ok()) << ok.ToString();
+  Status s = (*slam)->Step(2, 1e9, -1e9);
+  EXPECT_EQ(s.code(), StatusCode::kOutOfRange);
+  EXPECT_NE(s.message().find("crosses more than 128 hexagons, 8 x grid_size"), std::string::npos)
+      << s.message();
 }
 
 TEST(FootSlamApiTest, TrajectoryHasTheStartAndOnePosePerStep) {

@@ -108,6 +108,12 @@ std::vector<Variant> Variants() {
   c.scale_drift_sigma = 0.002;
   c.resample_threshold = 1.0;
   v.push_back({"prior ratio, free scale, resample every step", c});
+  // The walk leaves a 16 x 16 grid: maps of several heights, shared across heights.
+  c = Small();
+  c.grid_size = 16;
+  v.push_back({"growing grid from 16", c});
+  c.map = FootSlamMapKind::kNaive;
+  v.push_back({"naive, growing grid from 16", c});
   return v;
 }
 
@@ -223,13 +229,13 @@ TEST_F(CorruptCheckpointTest, OtherFilesAndVersionsAreRefused) {
   EXPECT_NE(s.message().find("not a grove checkpoint"), std::string::npos) << s.ToString();
   // Another format version (the header's u32 at offset 8, outside the body's checksum), newer
   // or older, is refused once the kind shows it is FootSLAM's.
-  for (uint8_t version : {1, 3}) {
+  for (uint8_t version : {2, 4}) {
     std::string other = good_;
     other[8] = static_cast<char>(version);
     s = ResumeStatus(other, config_);
     EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
     EXPECT_NE(s.message().find("FootSLAM checkpoint format version " + std::to_string(version) +
-                               " cannot be read by this grove, which reads version 2"),
+                               " cannot be read by this grove, which reads version 3"),
               std::string::npos)
         << s.ToString();
   }
@@ -265,6 +271,7 @@ TEST(FootSlamStepTest, AHugeStepLeavesTheGridAndReturns) {
   for (double d : {1e9, 1e200, 1e307}) {
     FootSlamConfig config = Small();
     config.particles = 10;
+    config.grid = FootSlamGrid::kFixed;
     auto slam = Make(config);
     Status s = slam->Step(1, d, -d);
     EXPECT_EQ(s.code(), StatusCode::kOutOfRange) << s.ToString();
@@ -277,6 +284,7 @@ TEST(FootSlamCheckpointTest, AStoppedEngineHasNoCheckpoint) {
   FootSlamConfig config = Small();
   config.particles = 10;
   config.grid_size = 16;
+  config.grid = FootSlamGrid::kFixed;
   auto slam = Make(config);
   Status s;
   for (int k = 1; k < 100 && s.ok(); ++k) s = slam->Step(k, 0.7, 0);  // walks off the grid

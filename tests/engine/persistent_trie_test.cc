@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <map>
 #include <random>
@@ -398,11 +399,14 @@ namespace grove {
 namespace {
 
 // A trie without a preset size: versions grow in height as keys need, share subtrees across
-// heights, and match std::map over full 64-bit keys.
-TEST(PersistentTrieGrowthTest, VersionsGrowPastAnyPresetHeightAndStayShared) {
+// heights, and match std::map over full 64-bit keys. Keys are drawn as the fill key with its low
+// bits changed, so versions of every height meet; the distinct visit sums what every version's
+// own walk sums, and save and load keep every version and its sharing.
+void RunGrowthCheck(int min_height, uint64_t fill, uint64_t seed) {
+  SCOPED_TRACE(testing::Message() << "min height " << min_height << " fill " << fill);
   using Trie = PersistentTrie<Value, 4>;
-  Trie trie(1, 1);
-  std::mt19937_64 rng(21);
+  Trie trie(min_height, 1, fill);
+  std::mt19937_64 rng(seed);
   constexpr int kVersions = 6;
   std::vector<Trie::Root> roots(kVersions, nullptr);
   std::vector<std::map<uint64_t, uint64_t>> models(kVersions);
@@ -416,24 +420,33 @@ TEST(PersistentTrieGrowthTest, VersionsGrowPastAnyPresetHeightAndStayShared) {
       models[v] = models[from];
       continue;
     }
-    // Keys of every size: small ones keep low versions low, large ones grow them.
-    const uint64_t key = rng() >> (rng() % 64);
+    // Keys of every size: small changes keep low versions low, large ones grow them.
+    const uint64_t key = fill ^ (rng() >> (rng() % 64));
     ASSERT_TRUE(trie.Update(&roots[v], key, 0, [&](Value& x, bool) { x.v = key ^ op; }));
     models[v][key] = key ^ op;
-    ASSERT_GE(Trie::Height(roots[v]), Trie::HeightFor(key));
+    ASSERT_GE(Trie::Height(roots[v]), std::max(min_height, Trie::HeightFor(key, trie.fill())));
     ASSERT_EQ(trie.Find(roots[v], key)->v, key ^ op);
   }
+  std::vector<uint64_t> weights(kVersions);
+  std::map<uint64_t, uint64_t> brute;
   for (int v = 0; v < kVersions; ++v) {
+    weights[v] = rng() % 1000;
     std::map<uint64_t, uint64_t> seen;
-    trie.ForEach(roots[v], [&](uint64_t k, const Value& x) { seen[k] = x.v; });
+    trie.ForEach(roots[v], [&](uint64_t k, const Value& x) {
+      seen[k] = x.v;
+      brute[k] += x.v * weights[v];
+    });
     EXPECT_EQ(seen, models[v]) << "version " << v;
   }
+  std::map<uint64_t, uint64_t> distinct;
+  trie.VisitDistinct<uint64_t>(
+      roots, weights, [&](uint64_t k, const Value& x, uint64_t w) { distinct[k] += x.v * w; });
+  EXPECT_EQ(distinct, brute);
   EXPECT_TRUE(trie.CheckCounts(roots).ok()) << trie.CheckCounts(roots).ToString();
-  // Save and load keep every version and its sharing.
   ByteWriter w;
   trie.Save(roots, &w);
   const std::string bytes = w.Take();
-  Trie copy(1, 1);
+  Trie copy(min_height, 1, fill);
   std::vector<Trie::Root> loaded;
   ByteReader r(bytes, "t");
   ASSERT_TRUE(copy.Load(
@@ -450,6 +463,37 @@ TEST(PersistentTrieGrowthTest, VersionsGrowPastAnyPresetHeightAndStayShared) {
   for (auto* root : roots) trie.Release(root, 0);
   EXPECT_EQ(trie.live_nodes(), 0);
   EXPECT_EQ(copy.live_nodes(), 0);
+}
+
+TEST(PersistentTrieGrowthTest, VersionsGrowPastAnyPresetHeightAndStayShared) {
+  RunGrowthCheck(1, 0, 21);
+}
+
+// A fill key other than 0 (FootSLAM's growing grid): the missing levels stand for its digits.
+TEST(PersistentTrieGrowthTest, VersionsGrowAroundANonZeroFillKey) {
+  RunGrowthCheck(1, 0x0123456789abcdefULL, 22);
+  RunGrowthCheck(3, 0xfedcba9876543210ULL, 23);
+}
+
+TEST(PersistentTrieGrowthTest, TheFillKeysDigitsNameTheOldRootsPlace) {
+  using Trie = PersistentTrie<Value, 4>;
+  Trie trie(2, 1, 0x5a7u);  // digit 2 is 5; the low two digits are ignored
+  EXPECT_EQ(trie.fill(), 0x500u);
+  Trie::Root root = nullptr;
+  ASSERT_TRUE(trie.Update(&root, 0x5c3, 0, [](Value& x, bool) { x.v = 1; }));
+  EXPECT_EQ(Trie::Height(root), 2);  // digit 2 equals the fill's: the low version holds it
+  Trie::Root low = Trie::Share(root);
+  ASSERT_TRUE(trie.Update(&root, 0x3c3, 0, [](Value& x, bool) { x.v = 2; }));
+  EXPECT_EQ(Trie::Height(root), 3);
+  EXPECT_EQ(trie.Find(root, 0x5c3)->v, 1u);
+  EXPECT_EQ(trie.Find(root, 0x3c3)->v, 2u);
+  EXPECT_EQ(trie.Find(low, 0x3c3), nullptr);
+  EXPECT_EQ(trie.Find(low, 0x0c3), nullptr);  // digit 2 is 0, not the fill's 5
+  // A new root above the shared old one, and the new key's inner and bottom node.
+  EXPECT_EQ(trie.CountNodes(root), trie.CountNodes(low) + 3);
+  trie.Release(root, 0);
+  trie.Release(low, 0);
+  EXPECT_EQ(trie.live_nodes(), 0);
 }
 
 TEST(PersistentTrieGrowthTest, SmallKeysOfATallVersionAreFoundAndLargeKeysOfALowOneAreNot) {

@@ -35,7 +35,7 @@ TEST(FootSlamModelTest, WeightsMatchHandComputedValues) {
     config.prior_count = 0.5;
     HexGrid grid(config.hex_radius_m);
     HTreeLayout layout = *HTreeLayout::Create(64, 16);
-    HTreeMap<4> map(layout.height(), 1, 1, nullptr);
+    HTreeMap<4> map(layout, 1, 1, nullptr);
     FootSlamModel<HTreeMap<4>> model(config, &grid, &layout, &map, 1);
     ASSERT_TRUE(model.Init());
     const double a = 0.5;

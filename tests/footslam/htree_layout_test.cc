@@ -178,6 +178,74 @@ TEST(HTreeLayoutTest, LargestGridsRoundTripTheirCorners) {
   }
 }
 
+// A growing layout nests the first grid in ever larger ones: a hexagon of the first grid keeps
+// its fixed key's digits below the first grid's height, every first-grid key has the fill key's
+// digits above it, each nested grid holds the last one, and far hexagons round-trip.
+TEST(HTreeLayoutTest, AGrowingLayoutNestsTheFirstGridAndKeepsItsKeys) {
+  for (int degree : {4, 16, 64, 256}) {
+    const int side = SideOf(degree);
+    const int n = side * side;
+    SCOPED_TRACE(testing::Message() << "degree " << degree);
+    const HTreeLayout fixed = Make(n, degree);
+    StatusOr<HTreeLayout> made = HTreeLayout::Create(n, degree, FootSlamGrid::kGrowing);
+    ASSERT_TRUE(made.ok());
+    const HTreeLayout& grow = *made;
+    EXPECT_EQ(grow.height(), fixed.height());
+    EXPECT_EQ(fixed.max_grid_size(), n);
+    EXPECT_LE(grow.max_grid_size(), HTreeLayout::kMaxGrowingSize);
+    EXPECT_GT(grow.max_grid_size() * side, HTreeLayout::kMaxGrowingSize);
+    const int low_bits = fixed.log2_degree() * fixed.height();
+    const uint64_t low_mask = (uint64_t{1} << low_bits) - 1;
+    for (int64_t col = 0; col < n; ++col) {
+      for (int64_t row = 0; row < n; ++row) {
+        const Hex h = HexOfCell(n, col, row);
+        uint64_t fixed_key, key;
+        ASSERT_TRUE(fixed.KeyOf(h, &fixed_key));
+        ASSERT_TRUE(grow.KeyOf(h, &key));
+        ASSERT_EQ(key & low_mask, fixed_key) << h;
+        ASSERT_EQ(key >> low_bits, grow.fill_key() >> low_bits) << h;
+        ASSERT_EQ(grow.HeightOf(key), grow.height()) << h;
+        ASSERT_EQ(grow.HexOfKey(key), h);
+      }
+    }
+    // Walking out along the axes the nested grid needed never shrinks (with s_x = 2 a grid
+    // reaches past the last on one side only, so a level can be skipped), and the start stays
+    // well inside the largest grid (between 1/4 and 3/4 of it on each axis).
+    for (const Hex dir : {Hex{1, 0}, Hex{-1, 0}, Hex{0, 1}, Hex{0, -1}}) {
+      int last = grow.height();
+      for (int32_t k = 0; k < 4 * n * side; ++k) {
+        const Hex h{dir.q * k, dir.r * k};
+        uint64_t key;
+        ASSERT_TRUE(grow.KeyOf(h, &key));
+        const int height = grow.HeightOf(key);
+        ASSERT_GE(height, last) << h;
+        ASSERT_LE(height, grow.max_height()) << h;
+        last = height;
+        ASSERT_EQ(grow.HexOfKey(key), h);
+      }
+      EXPECT_GT(last, grow.height());
+    }
+    uint32_t col, row;
+    ASSERT_TRUE(grow.CellOf(Hex{0, 0}, &col, &row));
+    EXPECT_GT(col, grow.max_grid_size() / 4);
+    EXPECT_LT(col, 3 * grow.max_grid_size() / 4);
+    // The corners of the largest grid round-trip; beyond it there is no key.
+    const int64_t m = grow.max_grid_size();
+    for (const auto& [c, r] :
+         {std::pair<int64_t, int64_t>{0, 0}, {m - 1, 0}, {0, m - 1}, {m - 1, m - 1}}) {
+      const int64_t rr = r - row;
+      const Hex h{static_cast<int32_t>(c - col - (rr >> 1)), static_cast<int32_t>(rr)};
+      uint64_t key;
+      ASSERT_TRUE(grow.KeyOf(h, &key)) << h;
+      EXPECT_LT(key, grow.key_count());
+      EXPECT_LE(grow.HeightOf(key), grow.max_height());
+      EXPECT_EQ(grow.HexOfKey(key), h);
+      uint64_t outside;
+      EXPECT_FALSE(grow.KeyOf(Hex{h.q + (c == 0 ? -1 : 1), h.r}, &outside));
+    }
+  }
+}
+
 void ExpectRejected(int grid_size, int degree, const std::string& message) {
   const StatusOr<HTreeLayout> l = HTreeLayout::Create(grid_size, degree);
   ASSERT_FALSE(l.ok()) << grid_size << ", " << degree;

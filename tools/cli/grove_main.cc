@@ -197,6 +197,11 @@ int Main(int argc, char** argv) {
   paper->add_option("--only", paper_options.only, "Run one configuration, e.g. 'htree s=16 T=5'");
   paper->add_option("--repeat", paper_options.repeat, "Runs per configuration (median reported)")
       ->check(CLI::Range(1, 1000));
+  paper
+      ->add_option("--grid", paper_options.grid,
+                   "fixed (the paper's grid) or growing (the same walk on a grid that grows)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"fixed", "growing"}));
   CLI::App* scaling =
       bench->add_subcommand("scaling", "Throughput against threads and particle counts");
   gt::ScalingBenchOptions scaling_options;

@@ -151,6 +151,7 @@ typedef struct grove_footslam grove_footslam;
 /* grove::FootSlamMapKind and grove::FootSlamWeighting. */
 enum { GROVE_FOOTSLAM_MAP_HTREE = 0, GROVE_FOOTSLAM_MAP_NAIVE = 1 };
 enum { GROVE_FOOTSLAM_WEIGHTING_PAPER = 0, GROVE_FOOTSLAM_WEIGHTING_PRIOR_RATIO = 1 };
+enum { GROVE_FOOTSLAM_GRID_GROWING = 0, GROVE_FOOTSLAM_GRID_FIXED = 1 };
 
 /* Every field of grove::FootSlamConfig (grove/footslam.h gives each one's meaning, unit, range
  * and default; the JSON keys are the field names). Enumerations are ints holding the constants
@@ -177,6 +178,7 @@ typedef struct grove_footslam_config {
   int map; /* GROVE_FOOTSLAM_MAP_* */
   int degree;
   int grid_size;
+  int grid; /* GROVE_FOOTSLAM_GRID_*; growing by default */
   int alphabet;
   /* Options that change only speed. */
   int threads; /* 0: one per hardware thread */
@@ -200,6 +202,9 @@ typedef struct grove_footslam_summary {
   double mean_heading_error_rad;
   grove_memory_use map_memory;
   grove_memory_use trajectory_memory;
+  /* Hexagons per side of the grid the particles' maps reach (grows past grid_size when the
+   * grid grows). */
+  int64_t grid_size;
 } grove_footslam_summary;
 
 /* Writes grove::FootSlamConfig's defaults into *config (nothing when config is NULL). */
@@ -228,8 +233,9 @@ GROVE_EXPORT const char* grove_footslam_last_error(const grove_footslam* slam);
 
 /* Processes one odometry step (dx, dy in the odometry frame, metres) at time t_s.
  * GROVE_INVALID_ARGUMENT (engine unchanged) for a non-finite value or a time not after the
- * previous one; GROVE_OUT_OF_RANGE when a particle leaves the grid; GROVE_FAILED_PRECONDITION
- * when the filter degenerated or an earlier error stopped the engine. */
+ * previous one; GROVE_OUT_OF_RANGE when a particle leaves a fixed grid or a step crosses more
+ * than 8 x grid_size hexagons; GROVE_FAILED_PRECONDITION when the filter degenerated or an
+ * earlier error stopped the engine. */
 GROVE_EXPORT grove_status grove_footslam_step(grove_footslam* slam, double t_s, double dx_m,
                                               double dy_m);
 /* Steps t_s[i], dx_m[i], dy_m[i] for i = 0 .. n-1 in order, as n calls of step; stops at the

@@ -54,6 +54,16 @@ enum class FootSlamWeighting {
   kPriorRatio,
 };
 
+// How far the hexagon grid reaches.
+enum class FootSlamGrid {
+  // The H-tree gains a level above its root when a particle leaves the area it covers, up to
+  // 2^26 hexagons per side: walks of any extent run, a step costing like log of the extent.
+  kGrowing,
+  // The paper's fixed grid of grid_size x grid_size hexagons; a walk that leaves it stops with
+  // an error. Within the grid both give the same results.
+  kFixed,
+};
+
 struct GROVE_EXPORT FootSlamConfig {
   // ---- Options that change results ----
 
@@ -103,9 +113,11 @@ struct GROVE_EXPORT FootSlamConfig {
   FootSlamMapKind map = FootSlamMapKind::kHTree;
   // H-tree degree s = s_x * s_y. One of 4, 16, 64, 256. Default: 16.
   int degree = 16;
-  // Hexagons per side of the square grid centred on the start; a power of sqrt(degree) and at
-  // least sqrt(degree). A walk that leaves the grid stops with an error. Default: 256.
+  // Hexagons per side of the square grid centred on the start (the first grid, when it grows);
+  // a power of sqrt(degree) and at least sqrt(degree). Default: 256.
   int grid_size = 256;
+  // Whether the grid grows when a particle leaves it. Default: kGrowing.
+  FootSlamGrid grid = FootSlamGrid::kGrowing;
   // Alphabet bound T (paper §V): leaves hold one 16-bit symbol while every counter is <= T.
   // Range: 0..5; 0 switches the alphabet off. Default: 5. H-tree maps only; results identical.
   int alphabet = 5;
@@ -147,6 +159,9 @@ struct GROVE_EXPORT FootSlamSummary : FilterSummary {
   double mean_heading_error_rad = 0;
   MemoryUse map_memory;
   MemoryUse trajectory_memory;
+  // Hexagons per side of the grid the particles' maps reach: grid_size until a particle leaves
+  // the first grid, then the nested grid that holds every particle's hexagons.
+  int64_t grid_size = 0;
   // One paragraph for a terminal.
   std::string BriefReport() const;
 };
@@ -170,9 +185,10 @@ class GROVE_EXPORT FootSlam {
 
   // Processes one odometry step (dx, dy in the odometry frame, metres) at time t_s.
   // Returns InvalidArgument (engine unchanged) for a non-finite value or a time not after the
-  // previous one; OutOfRange when a particle leaves the grid; FailedPrecondition when every
-  // weight became zero (the filter degenerated). After an OutOfRange or FailedPrecondition the
-  // engine must not be stepped again.
+  // previous one; OutOfRange when a particle leaves a fixed grid (or the largest a growing one
+  // reaches) or a particle's step crosses more than 8 x grid_size hexagons; FailedPrecondition
+  // when every weight became zero (the filter degenerated). After an OutOfRange or
+  // FailedPrecondition the engine must not be stepped again.
   Status Step(double t_s, double dx_m, double dy_m);
 
   // Sets the time stamp of the start pose; the first step must come after it. Without it the
