@@ -45,6 +45,7 @@ nlohmann::json FootSlamSummaryJson(const FootSlamSummary& s) {
   j["mean_scale"] = s.mean_scale;
   j["mean_heading_error_rad"] = s.mean_heading_error_rad;
   j["grid_size"] = s.grid_size;
+  j["prior_hexagons"] = s.prior_hexagons;
   return j;
 }
 

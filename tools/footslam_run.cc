@@ -13,6 +13,7 @@
 #include "engine/config_json.h"
 #include "tools/footslam_outputs.h"
 #include "tools/map_render.h"
+#include "tools/output_readers.h"
 #include "tools/step_reader.h"
 
 namespace grove::tools {
@@ -36,6 +37,12 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
             : StepReader::Open(options_.steps_path, reader_options);
     if (!reader.ok()) return reader.status();
     reader_ = std::make_unique<StepReader>(std::move(reader).value());
+    if (!options_.prior_map_path.empty()) {
+      StatusOr<std::vector<HexCounts>> prior =
+          ReadPriorMapCsv(options_.prior_map_path, config_.hex_radius_m);
+      if (!prior.ok()) return prior.status();
+      prior_ = std::move(prior).value();
+    }
     const int64_t lines = options_.steps_path.empty() ? CountLines(EmbeddedWalkSteps())
                                                       : CountRegularFileLines(options_.steps_path);
     // Lines after the header (comments and blank lines make it an estimate).
@@ -44,8 +51,18 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   }
 
   std::vector<std::string> InputPaths() const override {
-    if (options_.steps_path.empty()) return {};
-    return {options_.steps_path};
+    std::vector<std::string> paths;
+    if (!options_.steps_path.empty()) paths.push_back(options_.steps_path);
+    if (!options_.prior_map_path.empty()) paths.push_back(options_.prior_map_path);
+    return paths;
+  }
+
+  Status Create() override {
+    GROVE_RETURN_IF_ERROR(FacadeRunJob::Create());
+    if (options_.prior_map_path.empty()) return Status::Ok();
+    Status s = engine_->SetPriorMap(prior_);
+    if (!s.ok()) return Status(s.code(), options_.prior_map_path + ": " + s.message());
+    return Status::Ok();
   }
   std::vector<std::string> OutputNames() const override {
     return {"map.csv",
@@ -118,6 +135,12 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
     summary->update(FootSlamSummaryJson(s));
     (*summary)["inputs"] = {{"steps", steps_name_}, {"steps_read", engine_->steps()}};
     (*summary)["hexagons"] = {{"cumulative", cumulative->size()}, {"heaviest", best->size()}};
+    if (s.prior_hexagons + s.prior_hexagons_outside > 0 || !options_.prior_map_path.empty()) {
+      (*summary)["prior_map"] = {{"path", options_.prior_map_path},
+                                 {"hexagons", s.prior_hexagons},
+                                 {"hexagons_outside_grid", s.prior_hexagons_outside},
+                                 {"confidence", config_.prior_map_confidence}};
+    }
     return Status::Ok();
   }
 
@@ -126,6 +149,7 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   std::string steps_name_;
   std::unique_ptr<StepReader> reader_;
   int64_t records_ = 0;
+  std::vector<HexCounts> prior_;
   StepRecord step_;
   OdometryPath odometry_;
 };
@@ -137,6 +161,11 @@ int RunFootSlamCommand(const FootSlamConfig& config, const FootSlamRunOptions& o
   if (!(options.max_step_m > 0) || !std::isfinite(options.max_step_m)) {
     return Fail(kExitUsage,
                 fmt::format("--max-step = {}: must be > 0 and finite", options.max_step_m));
+  }
+  if (!options.prior_map_path.empty() && !options.run.resume_path.empty()) {
+    return Fail(kExitUsage,
+                "--prior-map with --resume: the checkpoint holds the prior map its run started "
+                "with; resume without --prior-map");
   }
   FootSlamJob job(config, options);
   if (Status s = job.Open(); !s.ok()) return Fail(kExitInput, s.message());

@@ -14,8 +14,9 @@ namespace grove::tools {
 // Options of `grove footslam run` beyond the configuration.
 struct FootSlamRunOptions {
   RunOptions run;
-  std::string steps_path;   // empty: the walk bundled in the binary
-  double max_step_m = 5.0;  // longer steps in the input are rejected
+  std::string steps_path;      // empty: the walk bundled in the binary
+  double max_step_m = 5.0;     // longer steps in the input are rejected
+  std::string prior_map_path;  // a map.csv of an earlier walk (FootSlam::SetPriorMap); empty: none
 };
 
 // Runs FootSLAM and writes every output; returns an exit code after printing any error to

@@ -128,14 +128,14 @@ struct PairHash {
 
 }  // namespace
 
-StatusOr<std::vector<RenderHex>> ReadMapCsv(const std::string& path) {
+StatusOr<std::vector<HexCounts>> ReadPriorMapCsv(const std::string& path, double hex_radius_m) {
   static const std::vector<std::string_view> kNames = {"q",  "r",  "x",  "y",  "c0",
                                                        "c1", "c2", "c3", "c4", "c5"};
   size_t columns = 0;
   StatusOr<CsvRows> opened = OpenWithHeader(path, kNames, &columns);
   if (!opened.ok()) return opened.status();
   CsvRows& rows = *opened;
-  std::vector<RenderHex> hexes;
+  std::vector<HexCounts> hexes;
   std::unordered_map<std::pair<int32_t, int32_t>, int64_t, PairHash> first_line;
   for (;;) {
     StatusOr<bool> more = rows.Next();
@@ -143,23 +143,39 @@ StatusOr<std::vector<RenderHex>> ReadMapCsv(const std::string& path) {
     if (!*more) break;
     GROVE_RETURN_IF_ERROR(rows.CheckFieldCount(columns));
     const std::vector<CsvField>& f = rows.fields();
-    RenderHex hex;
+    HexCounts hex;
     GROVE_RETURN_IF_ERROR(rows.Int32(0, kNames[0], &hex.q));
     GROVE_RETURN_IF_ERROR(rows.Int32(1, kNames[1], &hex.r));
-    double unused;
-    GROVE_RETURN_IF_ERROR(rows.Double(2, kNames[2], &unused));
-    GROVE_RETURN_IF_ERROR(rows.Double(3, kNames[3], &unused));
+    GROVE_RETURN_IF_ERROR(rows.Double(2, kNames[2], &hex.x_m));
+    GROVE_RETURN_IF_ERROR(rows.Double(3, kNames[3], &hex.y_m));
+    double use = 0;
     for (size_t i = 4; i < 10; ++i) {
-      double count;
+      double& count = hex.counts[i - 4];
       GROVE_RETURN_IF_ERROR(rows.Double(i, kNames[i], &count));
       if (count < 0.0) {
         return rows.Error(f[i].column, fmt::format("{}: {} is negative (counts are >= 0)",
                                                    kNames[i], QuotedField(f[i].text)));
       }
-      hex.use += count;
+      use += count;
     }
-    if (!std::isfinite(hex.use)) {
+    if (!std::isfinite(use)) {
       return rows.Error(f[4].column, "c0..c5: the sum of the counts is not finite");
+    }
+    if (hex_radius_m > 0) {
+      // The centre of (q, r) (engine/footslam/hex_grid.h), written with four decimals.
+      const double centre[2] = {hex_radius_m * std::sqrt(3.0) * (hex.q + 0.5 * hex.r),
+                                1.5 * hex_radius_m * hex.r};
+      const double given[2] = {hex.x_m, hex.y_m};
+      for (int axis = 0; axis < 2; ++axis) {
+        if (std::abs(given[axis] - centre[axis]) > 1e-3 + 1e-9 * std::abs(centre[axis])) {
+          return rows.Error(
+              f[2 + axis].column,
+              fmt::format("{}: {} is not the centre of hexagon (q={}, r={}) at hex_radius_m = {} "
+                          "(expected {:.4f}): the map was made with another hexagon radius",
+                          kNames[2 + axis], QuotedField(f[2 + axis].text), hex.q, hex.r,
+                          hex_radius_m, centre[axis]));
+        }
+      }
     }
     auto [it, inserted] = first_line.emplace(std::make_pair(hex.q, hex.r), rows.line_number());
     if (!inserted) {
@@ -170,6 +186,19 @@ StatusOr<std::vector<RenderHex>> ReadMapCsv(const std::string& path) {
     hexes.push_back(hex);
   }
   return hexes;
+}
+
+StatusOr<std::vector<RenderHex>> ReadMapCsv(const std::string& path) {
+  StatusOr<std::vector<HexCounts>> hexes = ReadPriorMapCsv(path, 0);
+  if (!hexes.ok()) return hexes.status();
+  std::vector<RenderHex> out;
+  out.reserve(hexes->size());
+  for (const HexCounts& h : *hexes) {
+    RenderHex r{h.q, h.r, 0.0};
+    for (double c : h.counts) r.use += c;
+    out.push_back(r);
+  }
+  return out;
 }
 
 StatusOr<std::vector<RenderPoint>> ReadPathCsv(const std::string& path) {

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "grove/footslam.h"
 #include "grove/status.h"
 #include "tools/map_render.h"
 
@@ -20,6 +21,11 @@ namespace grove::tools {
 // map.csv: header q,r,x,y,c0,c1,c2,c3,c4,c5; use = c0 + ... + c5. q and r are int32, the others
 // finite numbers, the counts >= 0; each (q, r) appears once.
 StatusOr<std::vector<RenderHex>> ReadMapCsv(const std::string& path);
+
+// map.csv as a FootSLAM prior map (FootSlam::SetPriorMap), with the rules above; when
+// hex_radius_m > 0, x and y must also be the centre of hexagon (q, r) at that radius (to the file's
+// four decimals), so a map made with another radius is refused.
+StatusOr<std::vector<HexCounts>> ReadPriorMapCsv(const std::string& path, double hex_radius_m);
 
 // trajectory.csv (t,x,y,heading) or any CSV whose header starts t,x,y: the (x, y) points in order.
 StatusOr<std::vector<RenderPoint>> ReadPathCsv(const std::string& path);

@@ -34,6 +34,8 @@ using footslam::Htc;
 using footslam::HTreeLayout;
 using footslam::HTreeMap;
 using footslam::NaiveMap;
+using footslam::PriorHex;
+using footslam::PriorMap;
 using footslam::StepInput;
 
 namespace {
@@ -56,6 +58,7 @@ class FootSlam::Impl {
   virtual Status Init() = 0;
   virtual Status Step(double t_s, double dx_m, double dy_m) = 0;
   virtual Status SetStartTime(double t_s) = 0;
+  virtual Status SetPriorMap(const std::vector<HexCounts>& map) = 0;
   virtual const FootSlamConfig& config() const = 0;
   virtual int64_t steps() const = 0;
   virtual Pose2 HeaviestPose() const = 0;
@@ -105,6 +108,47 @@ class Engine final : public FootSlam::Impl {
   }
 
   Status SetStartTime(double t_s) override { return driver_.SetStartTime(t_s); }
+
+  Status SetPriorMap(const std::vector<HexCounts>& map) override {
+    if (driver_.steps() != 0) {
+      return FailedPreconditionError("a prior map must be set before the first step");
+    }
+    PriorMap prior;
+    int64_t outside = 0;
+    for (size_t k = 0; k < map.size(); ++k) {
+      const HexCounts& h = map[k];
+      PriorHex p{};
+      for (int e = 0; e < 6; ++e) {
+        if (!std::isfinite(h.counts[e]) || h.counts[e] < 0) {
+          return InvalidArgumentError(
+              fmt::format("prior map row {} (q = {}, r = {}): c{} = {}: counts must be finite "
+                          "and >= 0",
+                          k, h.q, h.r, e, h.counts[e]));
+        }
+        p.edge[e] = config_.prior_map_confidence * h.counts[e];
+        p.total += p.edge[e];
+      }
+      if (!std::isfinite(p.total)) {
+        return InvalidArgumentError(fmt::format(
+            "prior map row {} (q = {}, r = {}): the counts times prior_map_confidence = {} "
+            "overflow",
+            k, h.q, h.r, config_.prior_map_confidence));
+      }
+      uint64_t key;
+      if (!model_.KeyOf(Hex{h.q, h.r}, &key)) {
+        ++outside;
+        continue;
+      }
+      if (!prior.Insert(key, p)) {
+        return InvalidArgumentError(
+            fmt::format("prior map row {}: hexagon (q = {}, r = {}) is given twice", k, h.q, h.r));
+      }
+    }
+    prior_ = std::move(prior);
+    prior_outside_ = outside;
+    model_.set_prior(prior_.size() == 0 ? nullptr : &prior_);
+    return Status::Ok();
+  }
   const FootSlamConfig& config() const override { return config_; }
   int64_t steps() const override { return driver_.steps(); }
 
@@ -214,6 +258,8 @@ class Engine final : public FootSlam::Impl {
     s.mean_heading_error_rad = heading_sum / w_sum;
     s.map_memory = map_.memory();
     s.grid_size = int64_t{1} << (layout_.log2_degree() / 2 * map_.grown_height());
+    s.prior_hexagons = static_cast<int64_t>(prior_.size());
+    s.prior_hexagons_outside = prior_outside_;
     footslam::AddPoolStats(model_.history().stats(), &s.trajectory_memory);
     return s;
   }
@@ -226,6 +272,7 @@ class Engine final : public FootSlam::Impl {
     driver_.Save(&w);
     model_.Save(&w);
     map_.Save(&w);
+    SavePrior(&w);
     w.Put<uint32_t>(kCheckpointEndMarker);
     return w.Take();
   }
@@ -234,6 +281,7 @@ class Engine final : public FootSlam::Impl {
     GROVE_RETURN_IF_ERROR(driver_.Load(r));
     GROVE_RETURN_IF_ERROR(model_.Load(r, static_cast<uint64_t>(driver_.steps())));
     GROVE_RETURN_IF_ERROR(map_.Load(r, layout_.key_count()));
+    GROVE_RETURN_IF_ERROR(LoadPrior(r));
     uint32_t end = 0;
     GROVE_RETURN_IF_ERROR(r->Get("end marker", &end));
     if (end != kCheckpointEndMarker || !r->at_end()) {
@@ -245,6 +293,49 @@ class Engine final : public FootSlam::Impl {
   Status CheckInvariants() const override { return model_.CheckCounts(); }
 
  private:
+  // The prior map in key order: u64 hexagon count, u64 hexagons outside the grid, then per
+  // hexagon its u64 key and six f64 counters (already times the confidence).
+  void SavePrior(ByteWriter* w) const {
+    std::vector<std::pair<uint64_t, const PriorHex*>> hexes;
+    prior_.ForEach([&](uint64_t key, const PriorHex& p) { hexes.push_back({key, &p}); });
+    std::sort(hexes.begin(), hexes.end());
+    w->Put<uint64_t>(hexes.size());
+    w->Put<uint64_t>(static_cast<uint64_t>(prior_outside_));
+    for (const auto& [key, p] : hexes) {
+      w->Put(key);
+      w->PutBytes(p->edge, sizeof(p->edge));
+    }
+  }
+  Status LoadPrior(ByteReader* r) {
+    uint64_t count = 0, outside = 0;
+    GROVE_RETURN_IF_ERROR(r->GetCount("prior hexagon count", 7 * sizeof(uint64_t), &count));
+    GROVE_RETURN_IF_ERROR(r->Get("prior hexagons outside", &outside));
+    if (outside > (uint64_t{1} << 62)) return r->Error("prior hexagons outside", "too large");
+    PriorMap prior;
+    uint64_t last = 0;
+    for (uint64_t k = 0; k < count; ++k) {
+      uint64_t key = 0;
+      PriorHex p{};
+      GROVE_RETURN_IF_ERROR(r->Get("prior hexagon key", &key));
+      if (key >= layout_.key_count() || (k > 0 && key <= last)) {
+        return r->Error("prior hexagon key", "outside the grid or not in increasing order");
+      }
+      last = key;
+      GROVE_RETURN_IF_ERROR(r->GetBytes("prior hexagon counters", p.edge, sizeof(p.edge)));
+      for (double c : p.edge) {
+        if (!std::isfinite(c) || c < 0)
+          return r->Error("prior hexagon counters", "impossible value");
+        p.total += c;
+      }
+      if (!std::isfinite(p.total)) return r->Error("prior hexagon counters", "impossible value");
+      prior.Insert(key, p);
+    }
+    prior_ = std::move(prior);
+    prior_outside_ = static_cast<int64_t>(outside);
+    model_.set_prior(prior_.size() == 0 ? nullptr : &prior_);
+    return Status::Ok();
+  }
+
   HexCounts HexOf(uint64_t key) const {
     Hex h = model_.HexOfKey(key);
     HexCounts hc;
@@ -260,6 +351,8 @@ class Engine final : public FootSlam::Impl {
   HTreeLayout layout_;
   std::unique_ptr<const Alphabet> alphabet_;  // null unless the map uses the alphabet
   Map map_;
+  PriorMap prior_;  // empty: no prior map
+  int64_t prior_outside_ = 0;
   FootSlamModel<Map> model_;
   FilterDriver<FootSlamModel<Map>> driver_;
 };
@@ -376,6 +469,9 @@ StatusOr<std::unique_ptr<FootSlam>> FootSlam::Create(const FootSlamConfig& confi
 
 Status FootSlam::Step(double t_s, double dx_m, double dy_m) { return impl_->Step(t_s, dx_m, dy_m); }
 Status FootSlam::SetStartTime(double t_s) { return impl_->SetStartTime(t_s); }
+Status FootSlam::SetPriorMap(const std::vector<HexCounts>& map) {
+  return NoThrow([&] { return impl_->SetPriorMap(map); });
+}
 const FootSlamConfig& FootSlam::config() const { return impl_->config(); }
 int64_t FootSlam::steps() const { return impl_->steps(); }
 Pose2 FootSlam::HeaviestPose() const { return impl_->HeaviestPose(); }

@@ -22,6 +22,8 @@ const std::vector<ConfigField<FootSlamConfig>>& FootSlamConfigFields() {
                 "Prior count added to every edge counter"),
       ChoiceField("weighting", &C::weighting, {"paper", "prior_ratio"}, kChangesResults,
                   "Weighting rule: paper or prior_ratio"),
+      RealField("prior_map_confidence", &C::prior_map_confidence, I::Closed(0, 1e6),
+                kChangesResults, "Weight of a prior map's counts, added to the prior count"),
       RealField("start_x_m", &C::start_x_m, I::Closed(-1e12, 1e12), kChangesResults,
                 "Start position x in the map frame, metres"),
       RealField("start_y_m", &C::start_y_m, I::Closed(-1e12, 1e12), kChangesResults,

@@ -26,6 +26,7 @@
 #include "engine/ancestry.h"
 #include "engine/checkpoint_io.h"
 #include "engine/footslam/hex_grid.h"
+#include "engine/footslam/hex_table.h"
 #include "engine/footslam/htc.h"
 #include "engine/footslam/htree_layout.h"
 #include "engine/generation.h"
@@ -50,6 +51,15 @@ using PoseHistory = Ancestry<PathPose>;
 inline bool FinitePathPose(const PathPose& p) {
   return std::isfinite(p.dx_m) && std::isfinite(p.dy_m) && std::isfinite(p.heading_rad);
 }
+
+// A hexagon of a prior map (a cumulative map of an earlier walk): its counters times the
+// configured confidence, added to the prior count a of the weighting. Read-only during steps,
+// one table shared by every particle.
+struct PriorHex {
+  double edge[6];
+  double total;  // edge[0] + ... + edge[5]
+};
+using PriorMap = HexTable<PriorHex>;
 
 template <typename Map>
 class FootSlamModel {
@@ -106,6 +116,10 @@ class FootSlamModel {
   }
 
   size_t size() const { return n_; }
+
+  // The prior map the weighting adds to every particle's counters, or nullptr; it must outlive
+  // the steps.
+  void set_prior(const PriorMap* prior) { prior_ = prior; }
 
   Status Advance(const StepInput& in, uint64_t step, size_t begin, size_t end, int slot,
                  double* log_w) {
@@ -194,7 +208,13 @@ class FootSlamModel {
           no_memory = true;
           return false;
         }
-        lw += LogEdge(before.edge) - LogTotal(before.total);
+        const PriorHex* prior = prior_ == nullptr ? nullptr : prior_->Find(key);
+        if (prior == nullptr) {
+          lw += LogEdge(before.edge) - LogTotal(before.total);
+        } else {
+          lw += std::log(before.edge + config_.prior_count + prior->edge[c.edge]) + log_edge_bias_ -
+                std::log(before.total + 6 * config_.prior_count + prior->total);
+        }
         return true;
       });
       if (no_memory) return NoMemory(i, "map");
@@ -360,6 +380,7 @@ class FootSlamModel {
   const HexGrid* grid_;
   const HTreeLayout* layout_;
   Map* map_;
+  const PriorMap* prior_ = nullptr;
   PoseHistory history_;
   size_t n_;
   static constexpr size_t kPrefetchAhead = 4;

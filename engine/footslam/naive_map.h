@@ -14,63 +14,11 @@
 #include "concurrency/worker_pool.h"
 #include "engine/checkpoint_io.h"
 #include "engine/footslam/alphabet.h"
+#include "engine/footslam/hex_table.h"
 #include "engine/footslam/htc.h"
 #include "engine/footslam/htree_layout.h"
 
 namespace grove::footslam {
-
-// Open addressing with linear probing; power-of-two capacity, at most half full.
-class HexTable {
- public:
-  Htc& FindOrInsert(uint64_t key) {
-    if ((size_ + 1) * 2 > slots_.size()) Grow();
-    size_t mask = slots_.size() - 1;
-    for (size_t i = Hash(key) & mask;; i = (i + 1) & mask) {
-      if (slots_[i].tag == 0) {
-        slots_[i].tag = key + 1;
-        slots_[i].h = Htc{};
-        ++size_;
-        return slots_[i].h;
-      }
-      if (slots_[i].tag == key + 1) return slots_[i].h;
-    }
-  }
-  // Adds a hexagon that is not there yet; false when `key` is present already.
-  bool Insert(uint64_t key, const Htc& h) {
-    size_t before = size_;
-    Htc& slot = FindOrInsert(key);
-    if (size_ == before) return false;
-    slot = h;
-    return true;
-  }
-  template <typename F>
-  void ForEach(F&& f) const {
-    for (const Slot& s : slots_) {
-      if (s.tag != 0) f(s.tag - 1, s.h);
-    }
-  }
-  size_t size() const { return size_; }
-  size_t bytes() const { return slots_.size() * sizeof(Slot); }
-
- private:
-  struct Slot {
-    uint64_t tag;  // key + 1; 0 marks an empty slot
-    Htc h;
-  };
-  static size_t Hash(uint64_t key) { return (key * 0x9E3779B97F4A7C15ull) >> 20; }
-  void Grow() {
-    std::vector<Slot> old;
-    old.swap(slots_);
-    slots_.assign(old.empty() ? 16 : old.size() * 2, Slot{0, Htc{}});
-    size_ = 0;
-    for (const Slot& s : old) {
-      if (s.tag != 0) FindOrInsert(s.tag - 1) = s.h;
-    }
-  }
-
-  std::vector<Slot> slots_;
-  size_t size_ = 0;
-};
 
 class NaiveMap {
  public:
@@ -92,14 +40,14 @@ class NaiveMap {
   // The levels of the grid that holds every particle's hexagons.
   int grown_height() const {
     int h = layout_->height();
-    for (const HexTable& t : tables_) {
+    for (const HexTable<Htc>& t : tables_) {
       t.ForEach([&](uint64_t key, const Htc&) { h = std::max(h, layout_->HeightOf(key)); });
     }
     return h;
   }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
-    std::vector<HexTable> next(parents.size());
+    std::vector<HexTable<Htc>> next(parents.size());
     // parents is nondecreasing: the first slot of each parent takes its table over.
     workers.ParallelFor(parents.size(), 256, [&](int, size_t b, size_t e) {
       for (size_t k = b; k < e; ++k) {
@@ -116,7 +64,7 @@ class NaiveMap {
 
   void ReleaseDead(WorkerPool& workers) {
     workers.ParallelFor(dead_.size(), 256, [&](int, size_t b, size_t e) {
-      for (size_t k = b; k < e; ++k) dead_[k] = HexTable();
+      for (size_t k = b; k < e; ++k) dead_[k] = HexTable<Htc>();
     });
     dead_.clear();
   }
@@ -140,7 +88,7 @@ class NaiveMap {
 
   // Each particle's table whole: u64 hexagon count, then (u64 key, counters) per hexagon.
   void Save(ByteWriter* w) const {
-    for (const HexTable& t : tables_) {
+    for (const HexTable<Htc>& t : tables_) {
       w->Put<uint64_t>(t.size());
       t.ForEach([&](uint64_t key, const Htc& h) {
         w->Put(key);
@@ -150,8 +98,8 @@ class NaiveMap {
   }
 
   Status Load(ByteReader* r, uint64_t key_limit) {
-    std::vector<HexTable> loaded(tables_.size());
-    for (HexTable& t : loaded) {
+    std::vector<HexTable<Htc>> loaded(tables_.size());
+    for (HexTable<Htc>& t : loaded) {
       uint64_t count = 0;
       GROVE_RETURN_IF_ERROR(r->GetCount("hexagon count", sizeof(uint64_t) + sizeof(Htc), &count));
       for (uint64_t k = 0; k < count; ++k) {
@@ -175,7 +123,7 @@ class NaiveMap {
 
   MemoryUse memory() const {
     MemoryUse m;
-    for (const HexTable& t : tables_) {
+    for (const HexTable<Htc>& t : tables_) {
       m.live_nodes += static_cast<int64_t>(t.size());
       m.live_bytes += static_cast<int64_t>(t.bytes());
     }
@@ -186,8 +134,8 @@ class NaiveMap {
 
  private:
   const HTreeLayout* layout_;
-  std::vector<HexTable> tables_;
-  std::vector<HexTable> dead_;
+  std::vector<HexTable<Htc>> tables_;
+  std::vector<HexTable<Htc>> dead_;
 };
 
 }  // namespace grove::footslam

@@ -259,6 +259,72 @@ TEST(FootSlamGridTest, AStepLongerThanTheFirstGridIsAnError) {
       << s.message();
 }
 
+// A prior map: its errors name the row and leave the engine as it was; confidence 0 gives the
+// results of no prior, bit for bit; hexagons outside a fixed grid are left out and counted.
+TEST(FootSlamPriorMapTest, BadRowsAreRefusedNamingTheRow) {
+  auto slam = FootSlam::Create(Small());
+  ASSERT_TRUE(slam.ok());
+  std::vector<HexCounts> map(3);
+  map[1].q = 4;
+  map[2].q = 5;
+  map[2].counts[2] = -1;
+  Status s = (*slam)->SetPriorMap(map);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(s.message(), "prior map row 2 (q = 5, r = 0): c2 = -1: counts must be finite and >= 0");
+  map[2].counts[2] = std::nan("");
+  EXPECT_EQ((*slam)->SetPriorMap(map).code(), StatusCode::kInvalidArgument);
+  map[2].counts[2] = 1;
+  map[2].q = 4;
+  s = (*slam)->SetPriorMap(map);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(s.message(), "prior map row 2: hexagon (q = 4, r = 0) is given twice");
+  EXPECT_EQ((*slam)->Summary().prior_hexagons, 0);
+  map[2].q = 5;
+  ASSERT_TRUE((*slam)->SetPriorMap(map).ok());
+  EXPECT_EQ((*slam)->Summary().prior_hexagons, 3);
+  ASSERT_TRUE((*slam)->Step(1, 0.7, 0).ok());
+  EXPECT_EQ((*slam)->SetPriorMap(map).code(), StatusCode::kFailedPrecondition);
+}
+
+TEST(FootSlamPriorMapTest, ConfidenceZeroGivesTheResultsOfNoPrior) {
+  const auto steps = Walk(300, 5);
+  FootSlamConfig c = Small();
+  c.prior_map_confidence = 0;
+  // A prior with counts on the walk's hexagons: the map of a first run.
+  const std::vector<HexCounts> prior = RunWith(Small(), Walk(300, 6)).cumulative;
+  ASSERT_GT(prior.size(), 50u);
+  auto with = FootSlam::Create(c);
+  ASSERT_TRUE(with.ok());
+  ASSERT_TRUE((*with)->SetPriorMap(prior).ok());
+  for (const Step& s : steps) ASSERT_TRUE((*with)->Step(s.t, s.dx, s.dy).ok());
+  const Result without = RunWith(c, steps);
+  ExpectSame(Result{ValueOf((*with)->HeaviestTrajectory()), (*with)->MeanTrajectory(),
+                    ValueOf((*with)->SmoothedTrajectory()), ValueOf((*with)->CumulativeMap()),
+                    ValueOf((*with)->HeaviestMap()), (*with)->Summary().resamplings},
+             without);
+  // With confidence 1 the same prior changes the weights.
+  c.prior_map_confidence = 1;
+  auto strong = FootSlam::Create(c);
+  ASSERT_TRUE((*strong)->SetPriorMap(prior).ok());
+  for (const Step& s : steps) ASSERT_TRUE((*strong)->Step(s.t, s.dx, s.dy).ok());
+  EXPECT_NE((*strong)->MeanTrajectory().back().pose.x_m, without.mean.back().pose.x_m);
+}
+
+TEST(FootSlamPriorMapTest, HexagonsOutsideAFixedGridAreLeftOut) {
+  FootSlamConfig c = Small();
+  c.grid_size = 16;
+  c.grid = FootSlamGrid::kFixed;
+  auto slam = FootSlam::Create(c);
+  ASSERT_TRUE(slam.ok());
+  std::vector<HexCounts> map(3);
+  map[0].counts[0] = 2;
+  map[1].q = 100;
+  map[2].r = -9;
+  ASSERT_TRUE((*slam)->SetPriorMap(map).ok());
+  EXPECT_EQ((*slam)->Summary().prior_hexagons, 1);
+  EXPECT_EQ((*slam)->Summary().prior_hexagons_outside, 2);
+}
+
 TEST(FootSlamApiTest, TrajectoryHasTheStartAndOnePosePerStep) {
   auto steps = Walk(50, 7);
   FootSlamConfig c = Small();

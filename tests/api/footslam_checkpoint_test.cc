@@ -145,6 +145,30 @@ TEST(FootSlamCheckpointTest, ResumedRunIsBitIdenticalAtAnyThreadCount) {
   }
 }
 
+// The prior map is in the checkpoint: a resumed run needs no prior map and continues
+// bit-identically.
+TEST(FootSlamCheckpointTest, APriorMapIsCarriedThroughACheckpoint) {
+  const std::vector<Step> steps = Walk(160, 7);
+  auto first = Make(Small());
+  RunSteps(first.get(), Walk(160, 8), 0, 160);
+  const std::vector<HexCounts> prior = ValueOf(first->CumulativeMap());
+  auto reference = Make(Small());
+  ASSERT_TRUE(reference->SetPriorMap(prior).ok());
+  RunSteps(reference.get(), steps, 0, steps.size());
+  auto cut = Make(Small());
+  ASSERT_TRUE(cut->SetPriorMap(prior).ok());
+  RunSteps(cut.get(), steps, 0, 70);
+  auto bytes = cut->Checkpoint();
+  ASSERT_TRUE(bytes.ok());
+  cut.reset();
+  std::string user;
+  auto resumed = ResumeOrDie(Small(), *bytes, &user);
+  ASSERT_NE(resumed, nullptr);
+  EXPECT_EQ(resumed->Summary().prior_hexagons, static_cast<int64_t>(prior.size()));
+  RunSteps(resumed.get(), steps, 70, steps.size());
+  ExpectSameResults(*reference, *resumed);
+}
+
 TEST(FootSlamCheckpointTest, CheckpointOfAResumedEngineHasTheSameBytes) {
   // One thread: the sharing between particles is then deterministic too.
   FootSlamConfig config = Small();

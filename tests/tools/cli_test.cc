@@ -238,6 +238,38 @@ TEST_F(CliTest, ResumingFromAPeriodicCheckpointGivesIdenticalOutputs) {
   ExpectSameOutputs(full, resumed);
 }
 
+// --prior-map: a run's map.csv feeds a second run (summary.json says how many hexagons it
+// used); a bad row stops before the first step with FILE:LINE:COLUMN, and a resumed run refuses
+// a prior map (its checkpoint carries the one it started with).
+TEST_F(CliTest, APriorMapFromAnEarlierRunFeedsASecondRun) {
+  fs::path first = dir_ / "first", second = dir_ / "second", bad_out = dir_ / "bad";
+  const std::string run = "footslam run --no-progress --particles 200 ";
+  ASSERT_EQ(Grove(run + "--out " + first.string()).exit_code, 0);
+  const std::string prior = (first / "map.csv").string();
+  Outcome o = Grove(run + "--prior-map " + prior + " --out " + second.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  const std::string summary = Slurp(second / "summary.json");
+  EXPECT_NE(summary.find("\"prior_map\""), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"hexagons_outside_grid\": 0"), std::string::npos) << summary;
+  EXPECT_NE(Slurp(second / "map.csv"), Slurp(first / "map.csv"));
+  const std::string bad = Write("prior.csv",
+                                "q,r,x,y,c0,c1,c2,c3,c4,c5\n0,0,0,0,1,1,1,1,1,1\n"
+                                "1,0,0.8660,0,1,1,x,1,1,1\n");
+  o = Grove(run + "--prior-map " + bad + " --out " + bad_out.string());
+  EXPECT_EQ(o.exit_code, 3) << o.err;
+  EXPECT_NE(o.err.find(bad + ":3:18: c2: \"x\" is not a number"), std::string::npos) << o.err;
+  EXPECT_FALSE(fs::exists(bad_out));
+  o = Grove(run + "--hex-radius-m 0.6 --prior-map " + prior + " --out " + bad_out.string());
+  EXPECT_EQ(o.exit_code, 3) << o.err;
+  EXPECT_NE(o.err.find("the map was made with another hexagon radius"), std::string::npos) << o.err;
+  o = Grove(run + "--checkpoint-every 100 --prior-map " + prior + " --out " + bad_out.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  o = Grove(run + "--resume " + (bad_out / "checkpoint.grove").string() + " --prior-map " + prior +
+            " --out " + (dir_ / "resumed").string());
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_NE(o.err.find("resume without --prior-map"), std::string::npos) << o.err;
+}
+
 TEST_F(CliTest, BadCheckpointsAreRefused) {
   fs::path out = dir_ / "out";
   std::string steps = Write("steps.csv", "t,dx,dy\n1,0.7,0\n2,0.7,0\n3,0,0.7\n4,-0.7,0\n");

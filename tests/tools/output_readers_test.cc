@@ -82,6 +82,31 @@ TEST_F(OutputReadersTest, MapAcceptsCrlfBlankLinesSpacesPlusSignsAndExtraColumns
   EXPECT_DOUBLE_EQ((*hexes)[1].use, 2.0);
 }
 
+// A prior map keeps the counts and the centres, and a centre that is not (q, r)'s at the run's
+// hexagon radius (a map made with another radius) is an error at its column.
+TEST_F(OutputReadersTest, PriorMapKeepsCountsAndChecksTheCentresAgainstTheRadius) {
+  const std::string path = Write("map.csv", std::string(kMapHeader) +
+                                                "0,0,0.0000,0.0000,1,2,3,4,5,6\n"
+                                                "1,2,1.7321,1.5000,0.5,0,0,0,0,0.25\n");
+  StatusOr<std::vector<HexCounts>> hexes = ReadPriorMapCsv(path, 0.5);
+  ASSERT_TRUE(hexes.ok()) << hexes.status().ToString();
+  ASSERT_EQ(hexes->size(), 2u);
+  EXPECT_EQ((*hexes)[1].q, 1);
+  EXPECT_EQ((*hexes)[1].r, 2);
+  EXPECT_EQ((*hexes)[1].counts[0], 0.5);
+  EXPECT_EQ((*hexes)[1].counts[5], 0.25);
+  EXPECT_EQ((*hexes)[0].counts[3], 4.0);
+  StatusOr<std::vector<HexCounts>> other = ReadPriorMapCsv(path, 0.6);
+  EXPECT_EQ(other.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(other.status().message(),
+            path +
+                ":3:5: x: \"1.7321\" is not the centre of hexagon (q=1, r=2) at hex_radius_m = "
+                "0.6 (expected 2.0785): the map was made with another hexagon radius");
+  const std::string bad = Write("bad.csv", std::string(kMapHeader) + "0,0,0,0,1,2,-3,4,5,6\n");
+  EXPECT_EQ(ReadPriorMapCsv(bad, 0.5).status().message(),
+            bad + ":2:13: c2: \"-3\" is negative (counts are >= 0)");
+}
+
 TEST_F(OutputReadersTest, MapWithOnlyAHeaderIsEmpty) {
   StatusOr<std::vector<RenderHex>> hexes = ReadMapCsv(Write("map.csv", kMapHeader));
   ASSERT_TRUE(hexes.ok());

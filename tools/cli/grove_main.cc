@@ -44,6 +44,10 @@ int Main(int argc, char** argv) {
   gt::RunFlags<FootSlamConfig> run_flags(run, grove::FootSlamConfigFields());
   run->add_option("--max-step", run_options.max_step_m,
                   "Reject input steps longer than this many metres (default 5)");
+  CLI::Option* prior_option = run->add_option(
+      "--prior-map", run_options.prior_map_path,
+      "map.csv of an earlier walk through the same area, in this run's map frame: prior counts "
+      "(weighted by prior_map_confidence)");
 
   // ---- simulate ----
   CLI::App* simulate = footslam->add_subcommand("simulate", "Simulate a pedestrian walk");
@@ -260,7 +264,8 @@ int Main(int argc, char** argv) {
 
   if (*run) {
     FootSlamConfig config;
-    const int code = run_flags.Prepare(&config, &run_options.run, {{steps_option, "--steps"}});
+    const int code = run_flags.Prepare(&config, &run_options.run,
+                                       {{steps_option, "--steps"}, {prior_option, "--prior-map"}});
     if (code >= 0) return code;
     return gt::RunFootSlamCommand(config, run_options);
   }

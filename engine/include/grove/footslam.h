@@ -77,6 +77,10 @@ struct GROVE_EXPORT FootSlamConfig {
   double prior_count = 0.8;
   // Weighting rule, see FootSlamWeighting. Default: kPaper.
   FootSlamWeighting weighting = FootSlamWeighting::kPaper;
+  // Confidence in a prior map (SetPriorMap): each of its counters, times this, is added to the
+  // prior count a of its edge. 1 counts the earlier walk's weighted crossings as if this walk had
+  // made them; 0 ignores the prior map. Range: [0, 1e6]. Default: 1.
+  double prior_map_confidence = 1;
 
   // Start pose in the map frame. Range: |start_x_m|, |start_y_m| <= 1e9 hexagon radii (the
   // grid's integer coordinates); |start_heading_rad| <= 1000. Default: origin, heading 0.
@@ -162,6 +166,9 @@ struct GROVE_EXPORT FootSlamSummary : FilterSummary {
   // Hexagons per side of the grid the particles' maps reach: grid_size until a particle leaves
   // the first grid, then the nested grid that holds every particle's hexagons.
   int64_t grid_size = 0;
+  // Hexagons of the prior map in use, and those left out (outside the grid).
+  int64_t prior_hexagons = 0;
+  int64_t prior_hexagons_outside = 0;
   // One paragraph for a terminal.
   std::string BriefReport() const;
 };
@@ -190,6 +197,16 @@ class GROVE_EXPORT FootSlam {
   // when every weight became zero (the filter degenerated). After an OutOfRange or
   // FailedPrecondition the engine must not be stepped again.
   Status Step(double t_s, double dx_m, double dy_m);
+
+  // Sets a prior map: the cumulative map of an earlier walk through the same area, in this
+  // configuration's map frame and hexagon radius (q, r and the counts are read; x_m and y_m are
+  // not). Each crossing is then weighted by (C_h^e + a + k P_h^e) / (C_h + 6a + k P_h), P the
+  // prior's counters and k = prior_map_confidence: read-only, stored once for every particle, and
+  // in checkpoints. Hexagons outside a fixed grid (or the largest a growing one reaches) can never
+  // be crossed and are left out. A second call replaces the prior; an empty map removes it.
+  // InvalidArgument naming the row for a count that is negative or not finite, or a hexagon
+  // given twice (nothing changed then); FailedPrecondition after the first Step().
+  Status SetPriorMap(const std::vector<HexCounts>& map);
 
   // Sets the time stamp of the start pose; the first step must come after it. Without it the
   // start pose takes the first step's time. InvalidArgument for a non-finite time,
