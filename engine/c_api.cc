@@ -241,6 +241,7 @@ FootSlamConfig ToCpp(const grove_footslam_config& c) {
   o.degree = c.degree;
   o.grid_size = c.grid_size;
   o.grid = static_cast<FootSlamGrid>(c.grid);
+  o.prior_map_confidence = c.prior_map_confidence;
   o.alphabet = c.alphabet;
   o.threads = c.threads;
   o.batch = c.batch;
@@ -270,6 +271,7 @@ grove_footslam_config ToC(const FootSlamConfig& c) {
   o.degree = c.degree;
   o.grid_size = c.grid_size;
   o.grid = static_cast<int>(c.grid);
+  o.prior_map_confidence = c.prior_map_confidence;
   o.alphabet = c.alphabet;
   o.threads = c.threads;
   o.batch = c.batch;
@@ -649,6 +651,25 @@ grove_status grove_footslam_steps(grove_footslam* slam, const double* t_s, const
   });
 }
 
+grove_status grove_footslam_set_prior_map(grove_footslam* slam, const grove_hex_counts* hexes,
+                                          size_t n) {
+  if (slam == nullptr) return kNullHandle;
+  if (hexes == nullptr && n != 0) return NullOut(slam, "grove_footslam_set_prior_map", "hexes");
+  return grove::Guard(slam, [&] {
+    std::vector<grove::HexCounts> map(n);
+    for (size_t k = 0; k < n; ++k) {
+      map[k].q = hexes[k].q;
+      map[k].r = hexes[k].r;
+      map[k].x_m = hexes[k].x_m;
+      map[k].y_m = hexes[k].y_m;
+      for (int e = 0; e < 6; ++e) map[k].counts[e] = hexes[k].counts[e];
+    }
+    ++slam->version;
+    grove::Status s = slam->slam->SetPriorMap(map);
+    return s.ok() ? slam->Ok() : slam->Fail(s);
+  });
+}
+
 grove_status grove_footslam_set_start_time(grove_footslam* slam, double t_s) {
   if (slam == nullptr) return kNullHandle;
   return grove::Guard(slam, [&] {
@@ -747,6 +768,8 @@ grove_status grove_footslam_get_summary(grove_footslam* slam, grove_footslam_sum
     out.map_memory = grove::ToC(s.map_memory);
     out.trajectory_memory = grove::ToC(s.trajectory_memory);
     out.grid_size = s.grid_size;
+    out.prior_hexagons = s.prior_hexagons;
+    out.prior_hexagons_outside = s.prior_hexagons_outside;
     *summary = out;
     return slam->Ok();
   });

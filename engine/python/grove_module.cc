@@ -672,6 +672,8 @@ py::dict FootSlamSummaryDict(const FootSlamSummary& s) {
   d["mean_scale"] = s.mean_scale;
   d["mean_heading_error_rad"] = s.mean_heading_error_rad;
   d["grid_size"] = s.grid_size;
+  d["prior_hexagons"] = s.prior_hexagons;
+  d["prior_hexagons_outside"] = s.prior_hexagons_outside;
   d["map_memory"] = MemoryDict(s.map_memory);
   d["trajectory_memory"] = MemoryDict(s.trajectory_memory);
   d["report"] = s.BriefReport();
@@ -751,6 +753,28 @@ void BindFootSlam(py::module_& m) {
           py::arg("t"),
           "Sets the time of the start pose (the first step must come after it); without it the "
           "start takes the first step's time. FailedPreconditionError after the first step.")
+      .def(
+          "set_prior_map",
+          [](const PyFootSlam& f, const py::object& map) {
+            py::array a = py::module_::import("numpy").attr("ascontiguousarray")(
+                map, py::reinterpret_borrow<py::dtype>(g_hex_dtype));
+            if (a.ndim() != 1) {
+              throw py::value_error(
+                  "map: must be one-dimensional, a structured array of grove.HEX_DTYPE (as "
+                  "cumulative_map() returns)");
+            }
+            std::vector<HexCounts> hexes(static_cast<size_t>(a.shape(0)));
+            if (!hexes.empty())
+              std::memcpy(hexes.data(), a.data(), hexes.size() * sizeof(HexCounts));
+            ThrowIfError(f.Locked([&](FootSlam& e) { return e.SetPriorMap(hexes); }));
+          },
+          py::arg("map"),
+          "Sets a prior map: the cumulative_map() of an earlier walk through the same area, in "
+          "this "
+          "filter's map frame (a structured array of grove.HEX_DTYPE; q, r and counts are read). "
+          "Each crossing's counts gain prior_map_confidence times the prior's. Before the first "
+          "step (FailedPreconditionError after it); InvalidArgumentError naming the row for a "
+          "negative or non-finite count or a hexagon given twice.")
       .def(
           "smoothed_trajectory",
           [](const PyFootSlam& f) {

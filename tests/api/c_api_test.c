@@ -170,6 +170,7 @@ static void TestFootNullHandle(void) {
   CHECK_STATUS(grove_footslam_steps(NULL, &t, &d, &d, 1, &done), GROVE_INVALID_ARGUMENT);
   CHECK(done == 0);
   CHECK_STATUS(grove_footslam_set_start_time(NULL, 0), GROVE_INVALID_ARGUMENT);
+  CHECK_STATUS(grove_footslam_set_prior_map(NULL, &hex, 1), GROVE_INVALID_ARGUMENT);
   CHECK_STATUS(grove_footslam_step_count(NULL, &steps), GROVE_INVALID_ARGUMENT);
   CHECK_STATUS(grove_footslam_get_config(NULL, &config), GROVE_INVALID_ARGUMENT);
   CHECK_STATUS(grove_footslam_mean_pose(NULL, &pose), GROVE_INVALID_ARGUMENT);
@@ -1026,6 +1027,49 @@ static void TestFastRuns(void) {
   free(lm_e);
 }
 
+/* A prior map: bad rows and a NULL array are refused naming the problem; a good one is counted in
+ * the summary and changes the run; after the first step it can no longer be set. */
+static void TestFootPriorMap(void) {
+  grove_footslam_config c = FootConfig();
+  grove_footslam *first, *with, *without;
+  grove_footslam_summary summary;
+  grove_hex_counts* map;
+  grove_pose a, b;
+  size_t n = 0;
+  int k;
+  first = NewFoot(&c);
+  for (k = 1; k <= 60; ++k) CHECK_FOOT(first, grove_footslam_step(first, k, 0.7, 0), GROVE_OK);
+  map = FootMap(first, 0, &n);
+  CHECK(n > 10);
+  with = NewFoot(&c);
+  without = NewFoot(&c);
+  CHECK_FOOT(with, grove_footslam_set_prior_map(with, NULL, 3), GROVE_INVALID_ARGUMENT);
+  CHECK(Contains(grove_footslam_last_error(with), "hexes"));
+  map[1].counts[4] = -2;
+  CHECK_FOOT(with, grove_footslam_set_prior_map(with, map, n), GROVE_INVALID_ARGUMENT);
+  CHECK(Contains(grove_footslam_last_error(with), "prior map row 1 "));
+  map[1].counts[4] = 0;
+  CHECK_FOOT(with, grove_footslam_set_prior_map(with, map, n), GROVE_OK);
+  CHECK_FOOT(with, grove_footslam_get_summary(with, &summary), GROVE_OK);
+  CHECK(summary.prior_hexagons == (int64_t)n);
+  CHECK(summary.prior_hexagons_outside == 0);
+  for (k = 1; k <= 60; ++k) {
+    double turn = 0.3 * k;
+    CHECK_FOOT(with, grove_footslam_step(with, k, 0.7 * cos(turn), 0.7 * sin(turn)), GROVE_OK);
+    CHECK_FOOT(without, grove_footslam_step(without, k, 0.7 * cos(turn), 0.7 * sin(turn)),
+               GROVE_OK);
+  }
+  CHECK_FOOT(with, grove_footslam_mean_pose(with, &a), GROVE_OK);
+  CHECK_FOOT(without, grove_footslam_mean_pose(without, &b), GROVE_OK);
+  CHECK(a.x_m != b.x_m || a.y_m != b.y_m);
+  CHECK_FOOT(with, grove_footslam_set_prior_map(with, map, n), GROVE_FAILED_PRECONDITION);
+  free(map);
+  grove_footslam_destroy(first);
+  grove_footslam_destroy(with);
+  grove_footslam_destroy(without);
+  printf("ok: footslam prior map\n");
+}
+
 int main(void) {
   setvbuf(stdout, NULL, _IONBF, 0); /* keep the lines in order with a failure on stderr */
   TestVersionAndStatus();
@@ -1034,6 +1078,7 @@ int main(void) {
   TestFootStepErrors();
   TestFootFatalError();
   TestFootRuns();
+  TestFootPriorMap();
   TestFastNullHandle();
   TestFastErrors();
   TestFastRuns();

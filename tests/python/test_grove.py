@@ -280,6 +280,27 @@ class FootSlamRunTest(unittest.TestCase):
         self.assertIsInstance(s["report"], str)
         self.assertIn("200 particles", s["report"])
 
+    def test_prior_map_from_an_earlier_walk(self):
+        prior = self.run_walk(square_walk(seed=4)).cumulative_map()
+        f = grove.FootSlam(SMALL)
+        bad = prior.copy()
+        bad["counts"][2, 1] = -1.0
+        with self.assertRaisesRegex(grove.InvalidArgumentError, "prior map row 2 "):
+            f.set_prior_map(bad)
+        with self.assertRaises(ValueError):
+            f.set_prior_map(np.zeros((2, 2)))
+        f.set_prior_map(prior)
+        self.assertEqual(f.summary()["prior_hexagons"], len(prior))
+        f.run(self.walk)
+        self.assertNotEqual(f.mean_pose(), self.run_walk().mean_pose())
+        with self.assertRaises(grove.FailedPreconditionError):
+            f.set_prior_map(prior)
+        # Confidence 0: the results of no prior, bit for bit.
+        g = grove.FootSlam(SMALL, prior_map_confidence=0)
+        g.set_prior_map(prior)
+        g.run(self.walk)
+        self.assertSameFilter(g, self.run_walk())
+
     def test_non_finite_step_raises_and_changes_nothing(self):
         f = grove.FootSlam(SMALL)
         f.run(self.walk[:5])

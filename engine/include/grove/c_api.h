@@ -178,7 +178,8 @@ typedef struct grove_footslam_config {
   int map; /* GROVE_FOOTSLAM_MAP_* */
   int degree;
   int grid_size;
-  int grid; /* GROVE_FOOTSLAM_GRID_*; growing by default */
+  int grid;                    /* GROVE_FOOTSLAM_GRID_*; growing by default */
+  double prior_map_confidence; /* weight of a prior map's counts; default 1 */
   int alphabet;
   /* Options that change only speed. */
   int threads; /* 0: one per hardware thread */
@@ -205,6 +206,9 @@ typedef struct grove_footslam_summary {
   /* Hexagons per side of the grid the particles' maps reach (grows past grid_size when the
    * grid grows). */
   int64_t grid_size;
+  /* Hexagons of the prior map in use, and those outside the grid, left out. */
+  int64_t prior_hexagons;
+  int64_t prior_hexagons_outside;
 } grove_footslam_summary;
 
 /* Writes grove::FootSlamConfig's defaults into *config (nothing when config is NULL). */
@@ -244,6 +248,14 @@ GROVE_EXPORT grove_status grove_footslam_step(grove_footslam* slam, double t_s, 
 GROVE_EXPORT grove_status grove_footslam_steps(grove_footslam* slam, const double* t_s,
                                                const double* dx_m, const double* dy_m, size_t n,
                                                size_t* done);
+/* Sets a prior map (grove::FootSlam::SetPriorMap): n hexagons of an earlier walk's cumulative
+ * map in this engine's map frame; q, r and the counts are read, x_m and y_m are not. Each
+ * crossing's counts gain prior_map_confidence times the prior's. Before the first step; n = 0
+ * removes the prior (hexes may then be NULL). GROVE_INVALID_ARGUMENT naming the row for a
+ * negative or non-finite count or a hexagon given twice (nothing changed then),
+ * GROVE_FAILED_PRECONDITION after the first step. */
+GROVE_EXPORT grove_status grove_footslam_set_prior_map(grove_footslam* slam,
+                                                       const grove_hex_counts* hexes, size_t n);
 /* The time of the start pose; the first step must come after it. GROVE_INVALID_ARGUMENT for a
  * non-finite time, GROVE_FAILED_PRECONDITION after the first step. */
 GROVE_EXPORT grove_status grove_footslam_set_start_time(grove_footslam* slam, double t_s);
