@@ -212,8 +212,10 @@ class FootSlamModel {
         if (prior == nullptr) {
           lw += LogEdge(before.edge) - LogTotal(before.total);
         } else {
-          lw += std::log(before.edge + config_.prior_count + prior->edge[c.edge]) + log_edge_bias_ -
-                std::log(before.total + 6 * config_.prior_count + prior->total);
+          // The counts first, then a, as LogEdge() and LogTotal() add them: with a prior that
+          // holds whole counts this is bit for bit the weight of a map holding their sum.
+          lw += std::log(before.edge + prior->edge[c.edge] + config_.prior_count) + log_edge_bias_ -
+                std::log(before.total + prior->total + 6 * config_.prior_count);
         }
         return true;
       });

@@ -63,6 +63,78 @@ TEST(FootSlamModelTest, WeightsMatchHandComputedValues) {
   }
 }
 
+// A prior that holds whole counts weighs a crossing bit for bit as a map holding the sum: a
+// particle that walks W1 then W2 gets the same weight on every step of W2 as one that starts
+// where W1 ended, with W1's map as its prior (the exactness that storing and restoring an area
+// relies on).
+TEST(FootSlamModelTest, AWholeCountPriorWeighsAsTheMapItCameFrom) {
+  for (FootSlamWeighting weighting : {FootSlamWeighting::kPaper, FootSlamWeighting::kPriorRatio}) {
+    SCOPED_TRACE(FootSlamWeightingName(weighting));
+    FootSlamConfig config = ZeroNoise();
+    config.weighting = weighting;
+    HexGrid grid(config.hex_radius_m);
+    HTreeLayout layout = *HTreeLayout::Create(256, 16);
+    HTreeMap<4> map(layout, 1, 1, nullptr);
+    FootSlamModel<HTreeMap<4>> whole(config, &grid, &layout, &map, 1);
+    ASSERT_TRUE(whole.Init());
+    std::mt19937_64 rng(5);
+    std::normal_distribution<double> turn(0, 0.5);
+    std::vector<StepInput> w2;
+    double heading = 0, x = 0, y = 0;
+    for (int k = 0; k < 600; ++k) {  // W1 (the first 300 steps), then W2, over the same area
+      heading += turn(rng);
+      // Within 8 m of the start: turn back when heading away beyond it.
+      if (std::hypot(x, y) > 8 && std::cos(heading - std::atan2(-y, -x)) < 0) heading += M_PI;
+      const StepInput in{0.7 * std::cos(heading), 0.7 * std::sin(heading)};
+      x += in.dx_m;
+      y += in.dy_m;
+      if (k >= 300) w2.push_back(in);
+      if (k < 300) {
+        double lw = 0;
+        Status s = whole.Advance(in, k, 0, 1, 0, &lw);
+        ASSERT_TRUE(s.ok()) << s.ToString();
+      }
+    }
+    // W1's map as a prior of whole counts, for a particle that starts where W1 ended.
+    FootSlamConfig after = config;
+    after.start_x_m = whole.x(0);
+    after.start_y_m = whole.y(0);
+    HTreeLayout after_layout = *HTreeLayout::Create(256, 16);
+    HTreeMap<4> after_map(after_layout, 1, 1, nullptr);
+    FootSlamModel<HTreeMap<4>> resumed(after, &grid, &after_layout, &after_map, 1);
+    ASSERT_TRUE(resumed.Init());
+    PriorMap prior;
+    int hexes = 0;
+    whole.map().ForEachHex(0, [&](uint64_t key, const Htc& h) {
+      const Hex hex = whole.HexOfKey(key);
+      uint64_t after_key;
+      ASSERT_TRUE(resumed.KeyOf(hex, &after_key));
+      PriorHex p{};
+      for (int e = 0; e < 6; ++e) {
+        p.edge[e] = h.c[e];
+        p.total += h.c[e];
+      }
+      prior.Insert(after_key, p);
+      ++hexes;
+    });
+    ASSERT_GT(hexes, 30);
+    resumed.set_prior(&prior);
+    int crossed_known = 0;
+    for (size_t k = 0; k < w2.size(); ++k) {
+      double lw_whole = 0, lw_resumed = 0;
+      ASSERT_TRUE(whole.Advance(w2[k], 300 + k, 0, 1, 0, &lw_whole).ok());
+      ASSERT_TRUE(resumed.Advance(w2[k], k, 0, 1, 0, &lw_resumed).ok());
+      ASSERT_EQ(whole.x(0), resumed.x(0)) << "step " << k;
+      ASSERT_EQ(lw_whole, lw_resumed) << "step " << k;
+      crossed_known +=
+          lw_whole != 0 &&
+          lw_whole != std::log(1.0 / 6) +
+                          (weighting == FootSlamWeighting::kPriorRatio ? std::log(6.0) : 0.0);
+    }
+    EXPECT_GT(crossed_known, 100);  // most of W2's crossings meet W1's counts
+  }
+}
+
 // One particle without noise follows the odometry, so its map must hold exactly the edge
 // crossings of the odometry polyline, computed here with the grid alone.
 TEST(FootSlamModelTest, ZeroNoiseMapEqualsOdometryTransitions) {
