@@ -409,52 +409,60 @@ class PersistentTrie {
   size_t VisitDistinct(std::span<Node* const> roots, std::span<const W> weights,
                        F&& on_leaf) const {
     GROVE_CHECK(roots.size() == weights.size());
-    // Level by level from the highest root down; a root joins at its own level.
-    int top = 0;
-    for (const Node* r : roots) top = std::max(top, Height(r));
-    std::vector<const Node*> level_nodes;
-    std::vector<uint64_t> level_prefix;
-    std::vector<W> level_weight;
-    std::unordered_map<const Node*, size_t> index;
-    auto add = [&](const Node* n, uint64_t prefix, W w) {
-      auto [it, inserted] = index.try_emplace(n, level_nodes.size());
-      if (inserted) {
-        level_nodes.push_back(n);
-        level_prefix.push_back(prefix);
-        level_weight.push_back(w);
+    std::vector<uint64_t> prefixes(roots.size());
+    for (size_t i = 0; i < roots.size(); ++i) prefixes[i] = FillPrefix(Height(roots[i]));
+    return VisitDistinctFrom<W>(roots, prefixes, weights, on_leaf);
+  }
+
+  // VisitDistinct() of one subtree of every version: the node at `level` whose keys have the
+  // digits `prefix` above it (key >> (log2(degree) * (level + 1)) == prefix). Versions without
+  // it count for nothing. REQUIRES: level < min_height() - 1 (the subtree is below every root).
+  template <typename W, typename F>
+  size_t VisitSubtreeDistinct(std::span<Node* const> roots, std::span<const W> weights, int level,
+                              uint64_t prefix, F&& on_leaf) const {
+    GROVE_CHECK(roots.size() == weights.size() && level < height_ - 1);
+    std::vector<Node*> blocks;
+    std::vector<uint64_t> prefixes;
+    std::vector<W> block_weights;
+    for (size_t i = 0; i < roots.size(); ++i) {
+      Node* block = SubtreeOf(roots[i], level, prefix);
+      if (block == nullptr) continue;
+      blocks.push_back(block);
+      prefixes.push_back(prefix);
+      block_weights.push_back(weights[i]);
+    }
+    return VisitDistinctFrom<W>(blocks, prefixes, block_weights, on_leaf);
+  }
+
+  // Removes the subtree at `level` with key digits `prefix` above it (as VisitSubtreeDistinct)
+  // from every version in `roots`, replacing each root. Each distinct node on the paths to it is
+  // copied once however many versions share it, so the versions keep their sharing; nodes the
+  // removal empties are dropped (a version left empty becomes nullptr); the subtree's nodes are
+  // freed when no other reference remains. Cost: the distinct nodes on the paths, not versions x
+  // height. Returns false when a node could not be allocated: every version is then unchanged.
+  // REQUIRES: level < min_height() - 1; no other thread uses these versions.
+  [[nodiscard]] bool DropSubtree(std::span<Node*> roots, int level, uint64_t prefix, int slot) {
+    GROVE_CHECK(level < height_ - 1);
+    std::unordered_map<const Node*, Node*> replaced;  // old node: its copy (itself if unchanged)
+    std::vector<Node*> next(roots.size(), nullptr);
+    bool ok = true;
+    for (size_t i = 0; i < roots.size() && ok; ++i) {
+      Node* root = roots[i];
+      if (root == nullptr || !HoldsSubtree(root, level, prefix)) {
+        next[i] = Share(root);
       } else {
-        level_weight[it->second] += w;
-      }
-    };
-    size_t distinct = 0;
-    for (int level = top - 1; level >= 0; --level) {
-      std::vector<const Node*> parents;
-      std::vector<uint64_t> parent_prefix;
-      std::vector<W> parent_weight;
-      parents.swap(level_nodes);
-      parent_prefix.swap(level_prefix);
-      parent_weight.swap(level_weight);
-      index.clear();
-      for (size_t k = 0; k < parents.size(); ++k) {
-        const Inner* n = static_cast<const Inner*>(parents[k]);
-        for (int i = 0; i < kDegree; ++i) {
-          if (n->child[i] != nullptr) {
-            add(n->child[i], (parent_prefix[k] << kLog2Degree) | i, parent_weight[k]);
-          }
-        }
-      }
-      for (size_t i = 0; i < roots.size(); ++i) {
-        if (Height(roots[i]) == level + 1) add(roots[i], FillPrefix(level + 1), weights[i]);
-      }
-      distinct += level_nodes.size();
-    }
-    for (size_t k = 0; k < level_nodes.size(); ++k) {
-      const Bottom* b = static_cast<const Bottom*>(level_nodes[k]);
-      for (int i = 0; i < kDegree; ++i) {
-        if (b->Has(i)) on_leaf((level_prefix[k] << kLog2Degree) | i, b->leaf[i], level_weight[k]);
+        next[i] = Without(root, level, prefix, slot, &replaced, &ok);
       }
     }
-    return distinct;
+    if (!ok) {
+      for (Node* n : next) Release(n, slot);
+      return false;
+    }
+    for (size_t i = 0; i < roots.size(); ++i) {
+      Release(roots[i], slot);
+      roots[i] = next[i];
+    }
+    return true;
   }
 
   // Number of nodes of one version (shared ones included). For tests and statistics.
@@ -726,6 +734,120 @@ class PersistentTrie {
       }
       FreeNode(n, slot);
     }
+  }
+
+  // VisitDistinct() from `roots` whose key prefixes (the digits above each root) are given.
+  template <typename W, typename F>
+  size_t VisitDistinctFrom(std::span<Node* const> roots, std::span<const uint64_t> prefixes,
+                           std::span<const W> weights, F& on_leaf) const {
+    // Level by level from the highest root down; a root joins at its own level.
+    int top = 0;
+    for (const Node* r : roots) top = std::max(top, Height(r));
+    std::vector<const Node*> level_nodes;
+    std::vector<uint64_t> level_prefix;
+    std::vector<W> level_weight;
+    std::unordered_map<const Node*, size_t> index;
+    auto add = [&](const Node* n, uint64_t prefix, W w) {
+      auto [it, inserted] = index.try_emplace(n, level_nodes.size());
+      if (inserted) {
+        level_nodes.push_back(n);
+        level_prefix.push_back(prefix);
+        level_weight.push_back(w);
+      } else {
+        level_weight[it->second] += w;
+      }
+    };
+    size_t distinct = 0;
+    for (int level = top - 1; level >= 0; --level) {
+      std::vector<const Node*> parents;
+      std::vector<uint64_t> parent_prefix;
+      std::vector<W> parent_weight;
+      parents.swap(level_nodes);
+      parent_prefix.swap(level_prefix);
+      parent_weight.swap(level_weight);
+      index.clear();
+      for (size_t k = 0; k < parents.size(); ++k) {
+        const Inner* n = static_cast<const Inner*>(parents[k]);
+        for (int i = 0; i < kDegree; ++i) {
+          if (n->child[i] != nullptr) {
+            add(n->child[i], (parent_prefix[k] << kLog2Degree) | i, parent_weight[k]);
+          }
+        }
+      }
+      for (size_t i = 0; i < roots.size(); ++i) {
+        if (Height(roots[i]) == level + 1) add(roots[i], prefixes[i], weights[i]);
+      }
+      distinct += level_nodes.size();
+    }
+    for (size_t k = 0; k < level_nodes.size(); ++k) {
+      const Bottom* b = static_cast<const Bottom*>(level_nodes[k]);
+      for (int i = 0; i < kDegree; ++i) {
+        if (b->Has(i)) on_leaf((level_prefix[k] << kLog2Degree) | i, b->leaf[i], level_weight[k]);
+      }
+    }
+    return distinct;
+  }
+
+  // Whether version `root` (higher than level + 1) can hold the subtree at (level, prefix): the
+  // prefix's digits above the version are the fill key's.
+  bool HoldsSubtree(const Node* root, int level, uint64_t prefix) const {
+    const int shift = kLog2Degree * (level + 1);
+    if (shift >= 64) return false;
+    const uint64_t low = prefix << shift;
+    return (low >> shift) == prefix && HeightFor(low, fill_) <= Height(root);
+  }
+  // The node at (level, prefix) of a version, or nullptr.
+  Node* SubtreeOf(Node* root, int level, uint64_t prefix) const {
+    if (root == nullptr || !HoldsSubtree(root, level, prefix)) return nullptr;
+    Node* cur = root;
+    for (int l = root->level; cur != nullptr && l > level; --l) {
+      cur = static_cast<Inner*>(cur)->child[Digit(prefix, l - level - 1)];
+    }
+    return cur;
+  }
+  // The replacement of `n` (an inner node above `level` on the path to the subtree) without the
+  // subtree, as a new reference: `n` itself when the subtree is not under it, nullptr when
+  // nothing else is. Memoised in *replaced, so a node is copied once. Sets *ok = false (and
+  // returns nullptr, holding nothing) when out of memory.
+  Node* Without(Node* n, int level, uint64_t prefix, int slot,
+                std::unordered_map<const Node*, Node*>* replaced, bool* ok) {
+    if (auto it = replaced->find(n); it != replaced->end()) {
+      if (it->second != nullptr) it->second->rc.Acquire();
+      return it->second;
+    }
+    Inner* old = static_cast<Inner*>(n);
+    const int d = Digit(prefix, old->level - level - 1);
+    Node* child = old->child[d];
+    Node* kept = nullptr;  // the replacement of the path child: a reference we own, or nullptr
+    if (child != nullptr && old->level - 1 > level) {
+      kept = Without(child, level, prefix, slot, replaced, ok);
+      if (!*ok) return nullptr;
+    }
+    if (child == nullptr || kept == child) {          // the subtree is not under n: n is unchanged
+      if (kept != nullptr) (void)kept->rc.Release();  // n holds it too: never the last one
+      n->rc.Acquire();
+      replaced->emplace(n, n);
+      return n;
+    }
+    bool empty = kept == nullptr;
+    for (int i = 0; i < kDegree && empty; ++i) empty = i == d || old->child[i] == nullptr;
+    if (empty) {
+      replaced->emplace(n, nullptr);
+      return nullptr;
+    }
+    Inner* copy = NewInner(slot, old->level);
+    if (copy == nullptr) {
+      Release(kept, slot);
+      *ok = false;
+      return nullptr;
+    }
+    for (int i = 0; i < kDegree; ++i) {
+      Node* c = i == d ? kept : old->child[i];
+      if (i != d && c != nullptr) c->rc.Acquire();
+      copy->child[i] = c;
+    }
+    replaced->emplace(n, copy);
+    return copy;
   }
 
   int height_;

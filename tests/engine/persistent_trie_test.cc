@@ -512,6 +512,143 @@ TEST(PersistentTrieGrowthTest, SmallKeysOfATallVersionAreFoundAndLargeKeysOfALow
   EXPECT_EQ(trie.live_nodes(), 0);
 }
 
+// Versions sharing nodes in every way, some grown above the minimum height around a fill key;
+// drops one subtree from all of them and checks every version against its model, the counts,
+// that no node leaked, and that each distinct node on the paths was copied once at most.
+void RunDropCheck(uint64_t fill, uint64_t seed) {
+  SCOPED_TRACE(testing::Message() << "fill " << fill << " seed " << seed);
+  using Trie = PersistentTrie<Value, 2>;
+  constexpr int kMin = 4;  // keys below 4^4 fit every version
+  Trie trie(kMin, 1, fill);
+  std::mt19937_64 rng(seed);
+  constexpr int kVersions = 12;
+  std::vector<Trie::Root> roots(kVersions, nullptr);
+  std::vector<std::map<uint64_t, uint64_t>> models(kVersions);
+  for (int op = 0; op < 3000; ++op) {
+    const int v = static_cast<int>(rng() % kVersions);
+    if (rng() % 6 == 0) {
+      const int from = static_cast<int>(rng() % kVersions);
+      Trie::Root copy = Trie::Share(roots[from]);
+      trie.Release(roots[v], 0);
+      roots[v] = copy;
+      models[v] = models[from];
+      continue;
+    }
+    // Mostly keys of the minimum height, a few that grow a version.
+    const uint64_t key = trie.fill() ^ (rng() % 50 == 0 ? rng() % 4096 : rng() % 256);
+    ASSERT_TRUE(trie.Update(&roots[v], key, 0, [&](Value& x, bool) { x.v = key + op; }));
+    models[v][key] = key + op;
+  }
+  for (int level : {0, 1, 2}) {
+    SCOPED_TRACE(testing::Message() << "level " << level);
+    const int shift = 2 * (level + 1);
+    // A block some version holds: the one of a key of version 0.
+    ASSERT_FALSE(models[0].empty());
+    const uint64_t prefix = models[0].begin()->first >> shift;
+    // The subtree visit sums what each version's own walk of the block's keys sums.
+    std::vector<uint64_t> weights(kVersions);
+    std::map<uint64_t, uint64_t> brute, distinct;
+    for (int v = 0; v < kVersions; ++v) {
+      weights[v] = rng() % 100;
+      for (const auto& [k, x] : models[v]) {
+        if ((k >> shift) == prefix) brute[k] += x * weights[v];
+      }
+    }
+    trie.VisitSubtreeDistinct<uint64_t>(
+        roots, weights, level, prefix,
+        [&](uint64_t k, const Value& x, uint64_t w) { distinct[k] += x.v * w; });
+    ASSERT_FALSE(brute.empty());
+    EXPECT_EQ(distinct, brute);
+    const int64_t before = trie.live_nodes();
+    ASSERT_TRUE(trie.DropSubtree(roots, level, prefix, 0));
+    for (int v = 0; v < kVersions; ++v) {
+      std::erase_if(models[v], [&](const auto& kv) { return (kv.first >> shift) == prefix; });
+      std::map<uint64_t, uint64_t> seen;
+      trie.ForEach(roots[v], [&](uint64_t k, const Value& x) { seen[k] = x.v; });
+      ASSERT_EQ(seen, models[v]) << "version " << v;
+    }
+    ASSERT_TRUE(trie.CheckCounts(roots).ok()) << trie.CheckCounts(roots).ToString();
+    // Copies of path nodes replace the originals, which die once no version holds them: the
+    // live nodes grow by fewer than the versions' path nodes (versions x height).
+    EXPECT_LT(trie.live_nodes(), before + kVersions * 6);
+  }
+  for (auto* root : roots) trie.Release(root, 0);
+  EXPECT_EQ(trie.live_nodes(), 0);
+}
+
+TEST(PersistentTrieDropTest, ASubtreeLeavesEveryVersionAndTheirSharingStays) {
+  RunDropCheck(0, 1);
+  RunDropCheck(0, 2);
+  RunDropCheck(0x9c5u << 8, 3);  // a fill key: versions grown around it
+}
+
+// Dropping a subtree shared by many identical versions copies each path node once.
+TEST(PersistentTrieDropTest, SharedPathsAreCopiedOnce) {
+  using Trie = PersistentTrie<Value, 4>;
+  Trie trie(3, 1);
+  Trie::Root base = nullptr;
+  for (uint64_t k = 0; k < 4096; k += 7) {
+    base = TrieUpdated(trie, base, k, 0, [&](Value& x, bool) { x.v = k; });
+  }
+  std::vector<Trie::Root> roots(1000);
+  for (auto& r : roots) r = Trie::Share(base);
+  trie.Release(base, 0);
+  const int64_t before = trie.live_nodes();
+  ASSERT_TRUE(trie.DropSubtree(roots, 0, 0x12, 0));  // the bottom node of keys 0x120..0x12f
+  // One new root and one new level-1 node, the old two and the bottom node freed.
+  EXPECT_EQ(trie.live_nodes(), before - 1);
+  for (Trie::Root r : roots) ASSERT_EQ(r, roots[0]);
+  EXPECT_EQ(trie.Find(roots[0], 0x126), nullptr);
+  EXPECT_NE(trie.Find(roots[0], 0x118), nullptr);  // 280 = 7 x 40, next to the block
+  for (auto* root : roots) trie.Release(root, 0);
+  EXPECT_EQ(trie.live_nodes(), 0);
+}
+
+// Every allocation of a drop fails in turn: the drop reports it and nothing changes or leaks.
+TEST(PersistentTrieFaultTest, AFailedDropLeavesEveryVersionIntact) {
+  using Trie = PersistentTrie<Value, 2>;
+  int failures = 0;
+  for (int64_t fail_after = 0; fail_after < 12; ++fail_after) {
+    SCOPED_TRACE(testing::Message() << "fail after " << fail_after);
+    Trie trie(4, 1);
+    std::vector<Trie::Root> roots(6, nullptr);
+    std::mt19937_64 rng(7);
+    for (int op = 0; op < 600; ++op) {
+      const int v = static_cast<int>(rng() % 6);
+      if (op % 5 == 0) {
+        Trie::Root copy = Trie::Share(roots[rng() % 6]);
+        trie.Release(roots[v], 0);
+        roots[v] = copy;
+      } else {
+        roots[v] = TrieUpdated(trie, roots[v], rng() % 256, 0, [&](Value& x, bool) { x.v = op; });
+      }
+    }
+    std::vector<std::map<uint64_t, uint64_t>> before(6);
+    for (int v = 0; v < 6; ++v) {
+      trie.ForEach(roots[v], [&](uint64_t k, const Value& x) { before[v][k] = x.v; });
+    }
+    const int64_t nodes = trie.live_nodes();
+    const std::vector<Trie::Root> old = roots;
+    FailAllocationsAfter(fail_after);
+    const bool dropped = trie.DropSubtree(roots, 1, 3, 0);  // keys 48..63
+    FailAllocationsAfter(-1);
+    failures += !dropped;
+    if (!dropped) {
+      EXPECT_EQ(roots, old);
+      EXPECT_EQ(trie.live_nodes(), nodes);
+      for (int v = 0; v < 6; ++v) {
+        std::map<uint64_t, uint64_t> seen;
+        trie.ForEach(roots[v], [&](uint64_t k, const Value& x) { seen[k] = x.v; });
+        EXPECT_EQ(seen, before[v]);
+      }
+    }
+    EXPECT_TRUE(trie.CheckCounts(roots).ok()) << trie.CheckCounts(roots).ToString();
+    for (auto* root : roots) trie.Release(root, 0);
+    EXPECT_EQ(trie.live_nodes(), 0);
+  }
+  EXPECT_GT(failures, 0);  // the first allocations of the drop did fail
+}
+
 // Every allocation of a run of updates fails in turn: the update reports it, the version keeps
 // its contents, no count is wrong and nothing leaks.
 TEST(PersistentTrieFaultTest, AFailedAllocationLeavesEveryVersionIntactAndLeaksNothing) {
