@@ -95,7 +95,9 @@ double EarlyError(const SimulatedWalk& walk, const std::vector<HexCounts>* prior
   config.threads = 2;
   auto slam = FootSlam::Create(config);
   EXPECT_TRUE(slam.ok());
-  if (prior != nullptr) EXPECT_TRUE((*slam)->SetPriorMap(*prior).ok());
+  if (prior != nullptr) {
+    EXPECT_TRUE((*slam)->SetPriorMap(*prior).ok());
+  }
   EXPECT_TRUE((*slam)->SetStartTime(0).ok());
   for (const StepRecord& s : walk.steps) EXPECT_TRUE((*slam)->Step(s.t_s, s.dx_m, s.dy_m).ok());
   std::vector<TimedPoint> truth, estimate;
