@@ -451,10 +451,13 @@ TEST_F(CliTest, ARunSurvivesAClosedPipeAndAHangup) {
   ASSERT_EQ(std::system(cmd.c_str()), 0);
   EXPECT_EQ(Slurp(dir_ / "rc"), "0\n");
   EXPECT_TRUE(fs::exists(out / "summary.json"));
+  // The hangup comes once the run has made its output directory, which it does after its
+  // handlers are in place (a fixed delay raced with a slow start under the sanitizers).
   fs::path hup = dir_ / "hup";
   cmd = "sh -c '" + std::string(GROVE_BINARY) + " footslam run --particles 2000 --out " +
-        hup.string() + " 2>/dev/null & pid=$!; sleep 0.3; kill -HUP $pid; wait $pid; echo $?' > " +
-        (dir_ / "hup.rc").string();
+        hup.string() + " 2>/dev/null & pid=$!; n=0; while [ ! -d " + hup.string() +
+        " ] && [ $n -lt 1200 ]; do sleep 0.05; n=$((n+1)); done; kill -HUP $pid; wait $pid; " +
+        "echo $?' > " + (dir_ / "hup.rc").string();
   ASSERT_EQ(std::system(cmd.c_str()), 0);
   EXPECT_EQ(Slurp(dir_ / "hup.rc"), "0\n");
   EXPECT_TRUE(fs::exists(hup / "summary.json"));
