@@ -35,6 +35,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
 #include <cstdint>
 #include <cstring>
@@ -119,28 +120,34 @@ class PersistentTrie {
     return b->Has(d) ? &b->leaf[d] : nullptr;
   }
 
-  // Starts loading the node at `depth` (0 = the root, at most height - 1) on the path to `key`:
-  // its count and the link or leaf Update() will read. The nodes above it should already be
-  // cached (an earlier call with a smaller depth), so a caller staggers the depths of several
-  // versions to overlap their misses. A hint only: reads links of the caller's own version.
-  // Always inlined: GCC deduces that a call to it has no side effects (a prefetch does not
-  // count) and would delete the call.
+  // Starts loading the node at `depth` (0 = the root) on the path to `key`: its count and the
+  // link or leaf Update() will read. The nodes above it should already be cached (an earlier
+  // call with a smaller depth), so a caller staggers the depths of several versions to overlap
+  // their misses; a depth below the version's bottom loads the bottom node again. A hint only:
+  // reads links of the caller's own version. Always inlined: GCC deduces that a call to it has
+  // no side effects (a prefetch does not count) and would delete the call.
   [[gnu::always_inline]] void PrefetchPath(const Node* root, uint64_t key, int depth) const {
-    // The levels come from min_height(), not from the nodes: reading the header of a node that
-    // is only now being fetched would stall on the very miss this hint is meant to hide. (For a
-    // version grown above min_height() the hint misses; it is only a hint.)
+    if (root == nullptr) return;
+    // Depth 0 must not read the root's header, the very miss this hint is meant to hide: it
+    // guesses the level (top_height(); a wrong guess only loads another line of the root).
+    // Deeper calls read it, cached by then, and the levels below follow from it.
+    int level = depth == 0 ? top_height() - 1 : root->level;
     const Node* cur = root;
-    for (int level = 0; cur != nullptr && level < depth; ++level) {
-      cur = static_cast<const Inner*>(cur)->child[Digit(key, height_ - 1 - level)];
+    for (int k = 0; k < depth && level > 0; ++k, --level) {
+      cur = static_cast<const Inner*>(cur)->child[Digit(key, level)];
+      if (cur == nullptr) return;
     }
-    if (cur == nullptr) return;
     __builtin_prefetch(cur);
-    if (depth < height_ - 1) {
-      __builtin_prefetch(&static_cast<const Inner*>(cur)->child[Digit(key, height_ - 1 - depth)]);
+    if (level > 0) {
+      __builtin_prefetch(&static_cast<const Inner*>(cur)->child[Digit(key, level)]);
     } else {
       __builtin_prefetch(&static_cast<const Bottom*>(cur)->leaf[Digit(key, 0)]);
     }
   }
+
+  // The height of the highest version any Update() or Load() has made (at least min_height()):
+  // how deep a path is, for PrefetchPath's callers. Relaxed: a hint.
+  int top_height() const { return top_height_.load(std::memory_order_relaxed); }
 
   // A second reference to the same version: O(1).
   static Node* Share(Node* root) {
@@ -165,7 +172,9 @@ class PersistentTrie {
         top->child[Digit(fill_, Height(*root))] = *root;
         *root = top;
       }
+      RaiseTopHeight(Height(*root));
     }
+    if (*root == nullptr && need > height_) RaiseTopHeight(need);
     Node* cur = *root;
     Node** link = root;
     for (int level = cur == nullptr ? need - 1 : cur->level; level > 0; --level) {
@@ -661,7 +670,9 @@ class PersistentTrie {
     s = LinkRoots(
         r, "trie root", root_count, nodes, &refs,
         [&](size_t k) { return nodes[k]->level + 1 >= height_; }, roots);
-    return s.ok() ? s : fail(s);
+    if (!s.ok()) return fail(s);
+    for (const Node* root : *roots) RaiseTopHeight(Height(root));
+    return s;
   }
 
   PoolStats inner_stats() const { return inner_pool_.Stats(); }
@@ -788,6 +799,11 @@ class PersistentTrie {
     return distinct;
   }
 
+  void RaiseTopHeight(int h) {
+    int top = top_height_.load(std::memory_order_relaxed);
+    while (h > top && !top_height_.compare_exchange_weak(top, h, std::memory_order_relaxed)) {
+    }
+  }
   // Whether version `root` (higher than level + 1) can hold the subtree at (level, prefix): the
   // prefix's digits above the version are the fill key's.
   bool HoldsSubtree(const Node* root, int level, uint64_t prefix) const {
@@ -853,6 +869,7 @@ class PersistentTrie {
   int height_;
   int max_height_;
   uint64_t fill_;
+  std::atomic<int> top_height_{height_};
   NodePool inner_pool_;
   NodePool bottom_pool_;
   // ReleaseMany's queues, per worker slot (reused: no allocation per call once grown).

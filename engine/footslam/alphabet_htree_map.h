@@ -77,7 +77,8 @@ class AlphabetHTreeMap {
   [[gnu::always_inline]] void PrefetchPath(size_t i, uint64_t key, int depth) const {
     symbols_.PrefetchPath(symbol_roots_[i], key, depth);
   }
-  int height() const { return symbols_.min_height(); }
+  // Levels of a particle's path: the highest map's (a hint for prefetching).
+  int height() const { return symbols_.top_height(); }
   // The levels of the highest particle's map: the grid the walk has grown to. (A hexagon's
   // symbol stays in the symbol tree when its counters escape.)
   int grown_height() const {

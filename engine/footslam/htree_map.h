@@ -40,7 +40,8 @@ class HTreeMap {
   [[gnu::always_inline]] void PrefetchPath(size_t i, uint64_t key, int depth) const {
     trie_.PrefetchPath(roots_[i], key, depth);
   }
-  int height() const { return trie_.min_height(); }
+  // Levels of a particle's path: the highest map's (a hint for prefetching).
+  int height() const { return trie_.top_height(); }
   // The levels of the highest particle's map: the grid the walk has grown to.
   int grown_height() const {
     int h = trie_.min_height();
