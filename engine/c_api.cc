@@ -190,6 +190,16 @@ grove_hex_counts ToC(const HexCounts& h) {
   return out;
 }
 
+HexCounts ToCpp(const grove_hex_counts& h) {
+  HexCounts out;
+  out.q = h.q;
+  out.r = h.r;
+  out.x_m = h.x_m;
+  out.y_m = h.y_m;
+  for (int i = 0; i < 6; ++i) out.counts[i] = h.counts[i];
+  return out;
+}
+
 grove_landmark_estimate ToC(const LandmarkEstimate& e) {
   return grove_landmark_estimate{e.id, e.x_m, e.y_m, e.sxx, e.sxy, e.syy, e.source_id};
 }
@@ -657,13 +667,7 @@ grove_status grove_footslam_set_prior_map(grove_footslam* slam, const grove_hex_
   if (hexes == nullptr && n != 0) return NullOut(slam, "grove_footslam_set_prior_map", "hexes");
   return grove::Guard(slam, [&] {
     std::vector<grove::HexCounts> map(n);
-    for (size_t k = 0; k < n; ++k) {
-      map[k].q = hexes[k].q;
-      map[k].r = hexes[k].r;
-      map[k].x_m = hexes[k].x_m;
-      map[k].y_m = hexes[k].y_m;
-      for (int e = 0; e < 6; ++e) map[k].counts[e] = hexes[k].counts[e];
-    }
+    for (size_t k = 0; k < n; ++k) map[k] = grove::ToCpp(hexes[k]);
     ++slam->version;
     grove::Status s = slam->slam->SetPriorMap(map);
     return s.ok() ? slam->Ok() : slam->Fail(s);

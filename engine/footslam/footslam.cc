@@ -144,9 +144,7 @@ class Engine final : public FootSlam::Impl {
             fmt::format("prior map row {}: hexagon (q = {}, r = {}) is given twice", k, h.q, h.r));
       }
     }
-    prior_ = std::move(prior);
-    prior_outside_ = outside;
-    model_.set_prior(prior_.size() == 0 ? nullptr : &prior_);
+    UsePrior(std::move(prior), outside);
     return Status::Ok();
   }
   const FootSlamConfig& config() const override { return config_; }
@@ -330,10 +328,13 @@ class Engine final : public FootSlam::Impl {
       if (!std::isfinite(p.total)) return r->Error("prior hexagon counters", "impossible value");
       prior.Insert(key, p);
     }
-    prior_ = std::move(prior);
-    prior_outside_ = static_cast<int64_t>(outside);
-    model_.set_prior(prior_.size() == 0 ? nullptr : &prior_);
+    UsePrior(std::move(prior), static_cast<int64_t>(outside));
     return Status::Ok();
+  }
+  void UsePrior(PriorMap prior, int64_t outside) {
+    prior_ = std::move(prior);
+    prior_outside_ = outside;
+    model_.set_prior(prior_.size() == 0 ? nullptr : &prior_);
   }
 
   HexCounts HexOf(uint64_t key) const {
