@@ -253,6 +253,7 @@ FootSlamConfig ToCpp(const grove_footslam_config& c) {
   o.grid = static_cast<FootSlamGrid>(c.grid);
   o.prior_map_confidence = c.prior_map_confidence;
   o.alphabet = c.alphabet;
+  o.store_distance_m = c.store_distance_m;
   o.threads = c.threads;
   o.batch = c.batch;
   return o;
@@ -283,6 +284,7 @@ grove_footslam_config ToC(const FootSlamConfig& c) {
   o.grid = static_cast<int>(c.grid);
   o.prior_map_confidence = c.prior_map_confidence;
   o.alphabet = c.alphabet;
+  o.store_distance_m = c.store_distance_m;
   o.threads = c.threads;
   o.batch = c.batch;
   return o;
@@ -478,6 +480,7 @@ struct grove_footslam : grove::HandleBase {
   grove::Kept<std::vector<grove::StampedPose>> smoothed_trajectory;
   grove::Kept<std::vector<grove::HexCounts>> cumulative_map;
   grove::Kept<std::vector<grove::HexCounts>> heaviest_map;
+  grove::Kept<std::vector<grove::HexCounts>> stored_map;
   grove::Kept<std::string> checkpoint;
 };
 
@@ -760,6 +763,16 @@ grove_status grove_footslam_heaviest_map(grove_footslam* slam, grove_hex_counts*
   });
 }
 
+grove_status grove_footslam_stored_map(grove_footslam* slam, grove_hex_counts* out, size_t capacity,
+                                       size_t* count) {
+  if (slam == nullptr) return kNullHandle;
+  return grove::Guard(slam, [&] {
+    return grove::ComputedArray(
+        slam, "grove_footslam_stored_map", &slam->stored_map,
+        [&] { return slam->slam->StoredMap(); }, out, capacity, count);
+  });
+}
+
 grove_status grove_footslam_get_summary(grove_footslam* slam, grove_footslam_summary* summary) {
   if (slam == nullptr) return kNullHandle;
   if (summary == nullptr) return NullOut(slam, "grove_footslam_get_summary", "summary");
@@ -774,6 +787,10 @@ grove_status grove_footslam_get_summary(grove_footslam* slam, grove_footslam_sum
     out.grid_size = s.grid_size;
     out.prior_hexagons = s.prior_hexagons;
     out.prior_hexagons_outside = s.prior_hexagons_outside;
+    out.stored_blocks = s.stored_blocks;
+    out.stored_blocks_exact = s.stored_blocks_exact;
+    out.stored_hexagons = s.stored_hexagons;
+    out.store_s = s.store_s;
     *summary = out;
     return slam->Ok();
   });

@@ -128,6 +128,15 @@ class FilterDriver {
     }
   }
 
+  // Runs f() -> Status between steps (a model's housekeeping on the state a step left); an error
+  // or an exception stops the engine as a failed step does.
+  template <typename F>
+  Status AfterStep(F&& f) noexcept {
+    Status status = Guarded(f);
+    if (!status.ok()) failed_ = true;
+    return status;
+  }
+
   bool failed() const { return failed_; }
   // FailedPrecondition after an error stopped the engine.
   Status CheckNotFailed(const char* what) const {

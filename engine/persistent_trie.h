@@ -44,6 +44,7 @@
 #include <string>
 #include <type_traits>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "alloc/cache_line.h"
@@ -441,6 +442,42 @@ class PersistentTrie {
       block_weights.push_back(weights[i]);
     }
     return VisitDistinctFrom<W>(blocks, prefixes, block_weights, on_leaf);
+  }
+
+  // The prefixes (as VisitSubtreeDistinct) of the subtrees at `level` that any version in
+  // `roots` holds, in increasing order, each once. Cost: the distinct nodes above `level`.
+  // REQUIRES: level < min_height() - 1.
+  std::vector<uint64_t> SubtreePrefixes(std::span<Node* const> roots, int level) const {
+    GROVE_CHECK(level < height_ - 1);
+    struct Item {
+      const Inner* node;
+      uint64_t prefix;
+    };
+    std::vector<Item> stack;
+    std::unordered_set<const Node*> seen;
+    for (const Node* root : roots) {
+      if (root != nullptr && seen.insert(root).second) {
+        stack.push_back({static_cast<const Inner*>(root), FillPrefix(Height(root))});
+      }
+    }
+    std::vector<uint64_t> out;
+    while (!stack.empty()) {
+      const Item item = stack.back();
+      stack.pop_back();
+      for (int i = 0; i < kDegree; ++i) {
+        const Node* child = item.node->child[i];
+        if (child == nullptr) continue;
+        const uint64_t prefix = (item.prefix << kLog2Degree) | static_cast<uint64_t>(i);
+        if (child->level == level) {
+          out.push_back(prefix);
+        } else if (seen.insert(child).second) {
+          stack.push_back({static_cast<const Inner*>(child), prefix});
+        }
+      }
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
   }
 
   // Removes the subtree at `level` with key digits `prefix` above it (as VisitSubtreeDistinct)

@@ -45,6 +45,12 @@ class VersionSet {
   Root& operator[](size_t i) { return roots_[i]; }
   Root operator[](size_t i) const { return roots_[i]; }
   std::span<Root const> roots() const { return roots_; }
+  // Every version, to be replaced in place by a store's update of many versions at once (each
+  // entry's reference moves to its new root). REQUIRES: no dead generation (after ReleaseDead).
+  std::span<Root> mutable_roots() {
+    GROVE_DCHECK(dead_.empty());
+    return roots_;
+  }
 
   // Every particle's version becomes a reference to `root`, whose reference the set takes over;
   // REQUIRES: every version is empty (a new set).

@@ -29,8 +29,10 @@ int SimulateCommand(const SimulateOptions& o) {
     options.scenario = Scenario::kBuilding;
   } else if (o.scenario == "open") {
     options.scenario = Scenario::kOpen;
+  } else if (o.scenario == "campus") {
+    options.scenario = Scenario::kCampus;
   } else {
-    return Fail(kExitUsage, fmt::format("--scenario = {}: must be building or open",
+    return Fail(kExitUsage, fmt::format("--scenario = {}: must be building, open or campus",
                                         QuoteForMessage(o.scenario)));
   }
   StatusOr<SimulatedWalk> walk = SimulateWalk(options);

@@ -46,6 +46,12 @@ nlohmann::json FootSlamSummaryJson(const FootSlamSummary& s) {
   j["mean_heading_error_rad"] = s.mean_heading_error_rad;
   j["grid_size"] = s.grid_size;
   j["prior_hexagons"] = s.prior_hexagons;
+  if (s.stored_blocks > 0 || s.stored_hexagons > 0) {
+    j["storage_of_diversity"] = {{"stored_blocks", s.stored_blocks},
+                                 {"stored_blocks_exact", s.stored_blocks_exact},
+                                 {"stored_hexagons", s.stored_hexagons},
+                                 {"seconds", s.store_s}};
+  }
   return j;
 }
 

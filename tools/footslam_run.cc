@@ -65,13 +65,16 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
     return Status::Ok();
   }
   std::vector<std::string> OutputNames() const override {
-    return {"map.csv",
-            "map_best.csv",
-            "trajectory.csv",
-            "mean_trajectory.csv",
-            "smoothed_trajectory.csv",
-            "map.png",
-            "map.svg"};
+    std::vector<std::string> names = {"map.csv",
+                                      "map_best.csv",
+                                      "trajectory.csv",
+                                      "mean_trajectory.csv",
+                                      "smoothed_trajectory.csv",
+                                      "map.png",
+                                      "map.svg"};
+    // Storage of diversity: the stored map alone (map.csv and map_best.csv include it).
+    if (config_.store_distance_m > 0) names.push_back("stored_map.csv");
+    return names;
   }
   std::string InputName() const override { return steps_name_; }
   const char* RecordsName() const override { return "steps"; }
@@ -113,6 +116,11 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
     StatusOr<std::vector<HexCounts>> best = engine_->HeaviestMap();
     if (!best.ok()) return best.status();
     GROVE_RETURN_IF_ERROR(out->Add("map_best.csv", MapCsv(*best, true)));
+    if (config_.store_distance_m > 0) {
+      StatusOr<std::vector<HexCounts>> stored = engine_->StoredMap();
+      if (!stored.ok()) return stored.status();
+      GROVE_RETURN_IF_ERROR(out->Add("stored_map.csv", MapCsv(*stored, false)));
+    }
     StatusOr<std::vector<StampedPose>> trajectory = engine_->HeaviestTrajectory();
     if (!trajectory.ok()) return trajectory.status();
     GROVE_RETURN_IF_ERROR(out->Add("trajectory.csv", TrajectoryCsv(*trajectory)));

@@ -69,24 +69,30 @@ void Connect(WaypointGraph* graph, int a, int b) {
   graph->nodes[b].next.push_back(a);
 }
 
-// Corridors 2 m wide on centre lines y = 0 and y = 17 (x in [0, 36]), x = 0, 18 and 36.
-// Rooms: 5 south of y = 0, 5 north of y = 17, 8 inside the loop off the side and middle corridors.
-// Walls bound x in [-1, 37], y in [-5, 22].
-WaypointGraph BuildingGraph() {
+// The corridor junctions of a building where others connect to it.
+struct BuildingNodes {
+  int bottom0, bottom1;  // (0, 0) and (6, 0)
+  int left1, right1;     // (0, 6) and (36, 6)
+};
+
+// One building with its corner at (ox, oy): corridors 2 m wide on centre lines y = 0 and
+// y = 17 (x in [0, 36]), x = 0, 18 and 36. Rooms: 5 south of y = 0, 5 north of y = 17, 8 inside
+// the loop off the side and middle corridors. Walls bound x in [-1, 37], y in [-5, 22].
+BuildingNodes AddBuilding(WaypointGraph* graph, double ox, double oy) {
   constexpr double kCorridorJitter = 0.4;
   constexpr double kDoorJitter = 0.1;
   constexpr double kRoomJitter = 0.5;
-  WaypointGraph g;
+  WaypointGraph& g = *graph;
   int bottom[7];
   int top[7];
-  for (int i = 0; i < 7; ++i) bottom[i] = AddNode(&g, 6.0 * i, 0, kCorridorJitter);
-  for (int i = 0; i < 7; ++i) top[i] = AddNode(&g, 6.0 * i, 17, kCorridorJitter);
-  const int left1 = AddNode(&g, 0, 6, kCorridorJitter);
-  const int left2 = AddNode(&g, 0, 11, kCorridorJitter);
-  const int right1 = AddNode(&g, 36, 6, kCorridorJitter);
-  const int right2 = AddNode(&g, 36, 11, kCorridorJitter);
-  const int middle1 = AddNode(&g, 18, 6, kCorridorJitter);
-  const int middle2 = AddNode(&g, 18, 11, kCorridorJitter);
+  for (int i = 0; i < 7; ++i) bottom[i] = AddNode(&g, ox + 6.0 * i, oy, kCorridorJitter);
+  for (int i = 0; i < 7; ++i) top[i] = AddNode(&g, ox + 6.0 * i, oy + 17, kCorridorJitter);
+  const int left1 = AddNode(&g, ox, oy + 6, kCorridorJitter);
+  const int left2 = AddNode(&g, ox, oy + 11, kCorridorJitter);
+  const int right1 = AddNode(&g, ox + 36, oy + 6, kCorridorJitter);
+  const int right2 = AddNode(&g, ox + 36, oy + 11, kCorridorJitter);
+  const int middle1 = AddNode(&g, ox + 18, oy + 6, kCorridorJitter);
+  const int middle2 = AddNode(&g, ox + 18, oy + 11, kCorridorJitter);
   for (int i = 0; i + 1 < 7; ++i) {
     Connect(&g, bottom[i], bottom[i + 1]);
     Connect(&g, top[i], top[i + 1]);
@@ -102,13 +108,13 @@ WaypointGraph BuildingGraph() {
   Connect(&g, middle2, top[3]);
 
   // A room: a door in the corridor wall and three interior points, all connected to each other.
-  const auto add_room = [&g](int corridor, double door_x, double door_y,
-                             std::initializer_list<std::pair<double, double>> points) {
-    const int door = AddNode(&g, door_x, door_y, kDoorJitter);
+  const auto add_room = [&g, ox, oy](int corridor, double door_x, double door_y,
+                                     std::initializer_list<std::pair<double, double>> points) {
+    const int door = AddNode(&g, ox + door_x, oy + door_y, kDoorJitter);
     Connect(&g, corridor, door);
     std::vector<int> inside = {door};
     for (const auto& [x, y] : points) {
-      const int node = AddNode(&g, x, y, kRoomJitter);
+      const int node = AddNode(&g, ox + x, oy + y, kRoomJitter);
       g.nodes[node].door = door;
       for (int other : inside) Connect(&g, node, other);
       inside.push_back(node);
@@ -129,8 +135,43 @@ WaypointGraph BuildingGraph() {
   for (const auto& [corridor, y] : {std::pair{right1, 6.0}, std::pair{right2, 11.0}}) {
     add_room(corridor, 35, y, {{32.5, y - 1}, {32.5, y + 1.5}, {30, y}});
   }
-  g.start = bottom[0];
-  g.first_target = bottom[1];
+  return BuildingNodes{bottom[0], bottom[1], left1, right1};
+}
+
+WaypointGraph BuildingGraph() {
+  WaypointGraph g;
+  const BuildingNodes b = AddBuilding(&g, 0, 0);
+  g.start = b.bottom0;
+  g.first_target = b.bottom1;
+  return g;
+}
+
+// kCampusBuildings buildings kCampusSpacing apart along x, each one's east corridor joined to
+// the next one's west corridor by an outdoor path at y = 6 (64 m, waypoints every 16 m).
+constexpr int kCampusBuildings = 3;
+constexpr double kCampusSpacing = 100;
+
+WaypointGraph CampusGraph() {
+  constexpr double kPathJitter = 1.0;
+  WaypointGraph g;
+  int previous_exit = -1;
+  for (int k = 0; k < kCampusBuildings; ++k) {
+    const double ox = kCampusSpacing * k;
+    const BuildingNodes b = AddBuilding(&g, ox, 0);
+    if (k == 0) {
+      g.start = b.bottom0;
+      g.first_target = b.bottom1;
+    } else {
+      int from = previous_exit;
+      for (double x = ox - kCampusSpacing + 52; x < ox; x += 16) {
+        const int node = AddNode(&g, x, 6, kPathJitter);
+        Connect(&g, from, node);
+        from = node;
+      }
+      Connect(&g, from, b.left1);
+    }
+    previous_exit = b.right1;
+  }
   return g;
 }
 
@@ -186,9 +227,10 @@ Status CheckRange(const char* name, double value, double low, bool low_open, dou
 }
 
 Status Validate(const SimulatorOptions& o) {
-  if (o.scenario != Scenario::kBuilding && o.scenario != Scenario::kOpen) {
-    return InvalidArgumentError(
-        fmt::format("scenario = {}: must be kBuilding or kOpen", static_cast<int>(o.scenario)));
+  if (o.scenario != Scenario::kBuilding && o.scenario != Scenario::kOpen &&
+      o.scenario != Scenario::kCampus) {
+    return InvalidArgumentError(fmt::format("scenario = {}: must be kBuilding, kOpen or kCampus",
+                                            static_cast<int>(o.scenario)));
   }
   GROVE_RETURN_IF_ERROR(CheckRange("minutes", o.minutes, 0, true, 1440, false));
   GROVE_RETURN_IF_ERROR(CheckRange("step_length_m", o.step_length_m, 0.1, false, 2, false));
@@ -211,12 +253,17 @@ Status Validate(const SimulatorOptions& o) {
 Area ScenarioArea(Scenario scenario) {
   // The waypoints' extent plus the largest aim jitter and the sway of a step.
   if (scenario == Scenario::kOpen) return Area{-53, -53, 53, 53};
+  if (scenario == Scenario::kCampus) {
+    return Area{-1, -5, kCampusSpacing * (kCampusBuildings - 1) + 37, 22};
+  }
   return Area{-1, -5, 37, 22};
 }
 
 StatusOr<SimulatedWalk> SimulateWalk(const SimulatorOptions& options) {
   GROVE_RETURN_IF_ERROR(Validate(options));
-  const WaypointGraph graph = options.scenario == Scenario::kOpen ? OpenGraph() : BuildingGraph();
+  const WaypointGraph graph = options.scenario == Scenario::kOpen     ? OpenGraph()
+                              : options.scenario == Scenario::kCampus ? CampusGraph()
+                                                                      : BuildingGraph();
   // Separate streams: the true walk must not change when only the odometry errors do.
   Random walk_random(MixSeed(options.seed));
   Random error_random(MixSeed(options.seed ^ 0x6F646F6D65747279ull));

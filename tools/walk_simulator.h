@@ -25,6 +25,10 @@ enum class Scenario {
   // About 100 m x 100 m of outdoor paths (a distorted grid with a few diagonals) centred on the
   // start. The walker prefers paths it has not walked yet: mostly exploration, some revisits.
   kOpen,
+  // Three such buildings 100 m apart in a row (corners at x = 0, 100, 200), each one's east
+  // corridor joined to the next one's west corridor by a 64 m outdoor path: a walk of an hour
+  // moves between buildings and returns to them, for storage of diversity.
+  kCampus,
 };
 
 // An axis-aligned box in the truth frame.

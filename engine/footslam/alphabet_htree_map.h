@@ -127,6 +127,30 @@ class AlphabetHTreeMap {
     full_.template VisitDistinct<uint64_t>(full_roots_.roots(), weights, f);
   }
 
+  // Storage of diversity, as HTreeMap's. A hexagon whose counters escaped keeps its symbol in
+  // the symbol tree, so the symbol tree's blocks are every block.
+  std::vector<uint64_t> Blocks(int level) const {
+    return symbols_.SubtreePrefixes(symbol_roots_.roots(), level);
+  }
+  template <typename F>
+  void FoldBlock(int level, uint64_t prefix, std::span<const uint64_t> weights, F&& f) const {
+    symbols_.template VisitSubtreeDistinct<uint64_t>(
+        symbol_roots_.roots(), weights, level, prefix,
+        [&](uint64_t key, const uint16_t& s, uint64_t w) {
+          if (s == kEscaped) return;
+          Htc h;
+          alphabet_->Decode(s, h.c);
+          f(key, h, w);
+        });
+    full_.template VisitSubtreeDistinct<uint64_t>(full_roots_.roots(), weights, level, prefix, f);
+  }
+  // False when out of memory; the engine is then stopped, and the full tree may still hold the
+  // block (never read again).
+  bool DropBlock(int level, uint64_t prefix, int slot) {
+    return symbols_.DropSubtree(symbol_roots_.mutable_roots(), level, prefix, slot) &&
+           full_.DropSubtree(full_roots_.mutable_roots(), level, prefix, slot);
+  }
+
   void Save(ByteWriter* w) const {
     symbols_.Save(symbol_roots_.roots(), w);
     full_.Save(full_roots_.roots(), w);

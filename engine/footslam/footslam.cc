@@ -5,9 +5,12 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <thread>
 #include <unordered_map>
 
@@ -46,9 +49,20 @@ constexpr double kWeightScale = 4503599627370496.0;  // 2^52
 
 constexpr char kCheckpointKind[] = "grove footslam";
 // FootSLAM's checkpoint body layout; bumped whenever it changes. 2: path positions relative to
-// the start, the filter's count of weighting steps. 3: the grid field, maps grown past the
-// first grid.
-constexpr uint32_t kFootSlamFormatVersion = 3;
+// the start, the filter's count of weighting steps. 3: the grid field, maps grown past
+// the first grid. 4: the stored map of storage of diversity.
+constexpr uint32_t kFootSlamFormatVersion = 4;
+
+// Storage of diversity looks for blocks to store after every kStoreEverySteps-th step: often
+// enough that an area is stored soon after the walk leaves it (50 steps, about 35 m), rarely
+// enough that listing the blocks (every distinct node above them) costs little per step.
+constexpr int64_t kStoreEverySteps = 50;
+
+// The counts a fold gives one edge: sum / total, whole when every particle held the same count.
+double MeanOf(unsigned __int128 sum, unsigned __int128 total) {
+  return static_cast<double>(sum / total) +
+         static_cast<double>(sum % total) / static_cast<double>(total);
+}
 
 }  // namespace
 
@@ -68,6 +82,7 @@ class FootSlam::Impl {
   virtual const std::vector<StampedPose>& MeanTrajectory() const = 0;
   virtual std::vector<HexCounts> CumulativeMap() const = 0;
   virtual std::vector<HexCounts> HeaviestMap() const = 0;
+  virtual std::vector<HexCounts> StoredMap() const = 0;
   virtual FootSlamSummary Summary() const = 0;
   virtual StatusOr<std::string> Save(std::string_view user_data) const = 0;
   // Replaces the state of a freshly created engine with the rest of a checkpoint body.
@@ -91,7 +106,16 @@ class Engine final : public FootSlam::Impl {
         model_(config, &grid_, &layout_, &map_, workers_.num_slots()),
         driver_(&model_, &workers_, FilterOptionsOf(config), config.threads,
                 Pose2{config.start_x_m, config.start_y_m, config.start_heading_rad},
-                TimeOrder::kIncreasing) {}
+                TimeOrder::kIncreasing) {
+    // Blocks: the largest subtrees no wider than the store distance, below the first grid's
+    // root (Validate() asks for a first grid of at least two levels).
+    const double hex_width = std::sqrt(3.0) * config.hex_radius_m;
+    const int side_bits = layout_.log2_degree() / 2;
+    while (store_level_ + 1 <= layout_.height() - 2 &&
+           std::ldexp(hex_width, side_bits * (store_level_ + 2)) <= config.store_distance_m) {
+      ++store_level_;
+    }
+  }
 
   Status Init() override {
     if (!model_.Init()) return ResourceExhaustedError("out of memory for the start pose");
@@ -104,7 +128,13 @@ class Engine final : public FootSlam::Impl {
           fmt::format("step {}: t = {}, dx = {}, dy = {}: every value must be finite",
                       driver_.steps() + 1, t_s, dx_m, dy_m));
     }
-    return driver_.Update(t_s, StepInput{dx_m, dy_m});
+    GROVE_RETURN_IF_ERROR(driver_.Update(t_s, StepInput{dx_m, dy_m}));
+    if constexpr (kCanStore) {
+      if (config_.store_distance_m > 0 && driver_.steps() % kStoreEverySteps == 0) {
+        return driver_.AfterStep([&] { return StoreFarBlocks(); });
+      }
+    }
+    return Status::Ok();
   }
 
   Status SetStartTime(double t_s) override { return driver_.SetStartTime(t_s); }
@@ -207,39 +237,35 @@ class Engine final : public FootSlam::Impl {
   }
 
   std::vector<HexCounts> CumulativeMap() const override {
-    std::vector<uint64_t> fixed(model_.size());
-    auto lw = driver_.filter().log_weights();
-    for (size_t i = 0; i < fixed.size(); ++i) {
-      fixed[i] = static_cast<uint64_t>(std::llround(std::exp(lw[i]) * kWeightScale));
-    }
+    const std::vector<uint64_t> fixed = FixedWeights();
     std::unordered_map<uint64_t, std::array<unsigned __int128, 6>> sums;
     map_.Cumulative(fixed, [&](uint64_t key, const Htc& h, uint64_t w) {
       auto& s = sums[key];
       for (int e = 0; e < 6; ++e) s[e] += static_cast<unsigned __int128>(h.c[e]) * w;
     });
-    std::vector<uint64_t> keys;
-    keys.reserve(sums.size());
-    for (const auto& kv : sums) keys.push_back(kv.first);
-    std::sort(keys.begin(), keys.end());
-    std::vector<HexCounts> out;
-    out.reserve(keys.size());
-    for (uint64_t key : keys) {
-      HexCounts hc = HexOf(key);
-      for (int e = 0; e < 6; ++e) hc.counts[e] = static_cast<double>(sums[key][e]) / kWeightScale;
-      out.push_back(hc);
+    std::vector<std::pair<uint64_t, HexCounts>> hexes;
+    hexes.reserve(sums.size());
+    for (const auto& [key, sum] : sums) {
+      HexCounts hc;
+      for (int e = 0; e < 6; ++e) hc.counts[e] = static_cast<double>(sum[e]) / kWeightScale;
+      hexes.push_back({key, hc});
     }
-    return out;
+    std::sort(hexes.begin(), hexes.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    return WithStored(std::move(hexes));
   }
 
   std::vector<HexCounts> HeaviestMap() const override {
-    std::vector<HexCounts> out;
+    std::vector<std::pair<uint64_t, HexCounts>> hexes;
     map_.ForEachHex(driver_.filter().heaviest(), [&](uint64_t key, const Htc& h) {
-      HexCounts hc = HexOf(key);
+      HexCounts hc;
       for (int e = 0; e < 6; ++e) hc.counts[e] = h.c[e];
-      out.push_back(hc);
+      hexes.push_back({key, hc});
     });
-    return out;
+    return WithStored(std::move(hexes));
   }
+
+  std::vector<HexCounts> StoredMap() const override { return WithStored({}); }
 
   FootSlamSummary Summary() const override {
     FootSlamSummary s;
@@ -256,8 +282,12 @@ class Engine final : public FootSlam::Impl {
     s.mean_heading_error_rad = heading_sum / w_sum;
     s.map_memory = map_.memory();
     s.grid_size = int64_t{1} << (layout_.log2_degree() / 2 * map_.grown_height());
-    s.prior_hexagons = static_cast<int64_t>(prior_.size());
+    s.prior_hexagons = static_cast<int64_t>(user_prior_.size());
     s.prior_hexagons_outside = prior_outside_;
+    s.stored_blocks = stored_blocks_;
+    s.stored_blocks_exact = stored_blocks_exact_;
+    s.stored_hexagons = static_cast<int64_t>(stored_.size());
+    s.store_s = store_s_;
     footslam::AddPoolStats(model_.history().stats(), &s.trajectory_memory);
     return s;
   }
@@ -271,6 +301,7 @@ class Engine final : public FootSlam::Impl {
     model_.Save(&w);
     map_.Save(&w);
     SavePrior(&w);
+    SaveStored(&w);
     w.Put<uint32_t>(kCheckpointEndMarker);
     return w.Take();
   }
@@ -280,6 +311,7 @@ class Engine final : public FootSlam::Impl {
     GROVE_RETURN_IF_ERROR(model_.Load(r, static_cast<uint64_t>(driver_.steps())));
     GROVE_RETURN_IF_ERROR(map_.Load(r, layout_.key_count()));
     GROVE_RETURN_IF_ERROR(LoadPrior(r));
+    GROVE_RETURN_IF_ERROR(LoadStored(r));
     uint32_t end = 0;
     GROVE_RETURN_IF_ERROR(r->Get("end marker", &end));
     if (end != kCheckpointEndMarker || !r->at_end()) {
@@ -291,50 +323,249 @@ class Engine final : public FootSlam::Impl {
   Status CheckInvariants() const override { return model_.CheckCounts(); }
 
  private:
-  // The prior map in key order: u64 hexagon count, u64 hexagons outside the grid, then per
-  // hexagon its u64 key and six f64 counters (already times the confidence).
-  void SavePrior(ByteWriter* w) const {
+  // Storage of diversity (config.store_distance_m): folds every block of the particles' maps
+  // farther than the store distance from every particle into the stored map and the prior, and
+  // drops it from the particles' maps.
+  Status StoreFarBlocks() {
+    const auto t0 = std::chrono::steady_clock::now();
+    // The particles' bounding box: a block this far from it is this far from every particle.
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    double lo_x = kInf, lo_y = kInf, hi_x = -kInf, hi_y = -kInf;
+    for (size_t i = 0; i < model_.size(); ++i) {
+      lo_x = std::min(lo_x, model_.x(i));
+      hi_x = std::max(hi_x, model_.x(i));
+      lo_y = std::min(lo_y, model_.y(i));
+      hi_y = std::max(hi_y, model_.y(i));
+    }
+    std::vector<uint64_t> far;
+    for (uint64_t prefix : map_.Blocks(store_level_)) {
+      // The block's box: its corner hexagons' centres, widened by a hexagon's width (the odd
+      // rows are offset by half of one) and its circumradius.
+      const int shift = layout_.log2_degree() * (store_level_ + 1);
+      const uint64_t first = prefix << shift;
+      const uint64_t last = first | ((uint64_t{1} << shift) - 1);
+      double x0, y0, x1, y1;
+      grid_.Center(model_.HexOfKey(first), &x0, &y0);
+      grid_.Center(model_.HexOfKey(last), &x1, &y1);
+      const double margin = (std::sqrt(3.0) + 1) * config_.hex_radius_m;
+      const double gap_x =
+          std::max({0.0, std::min(x0, x1) - margin - hi_x, lo_x - std::max(x0, x1) - margin});
+      const double gap_y =
+          std::max({0.0, std::min(y0, y1) - margin - hi_y, lo_y - std::max(y0, y1) - margin});
+      if (std::hypot(gap_x, gap_y) > config_.store_distance_m) far.push_back(prefix);
+    }
+    if (!far.empty()) {
+      std::vector<uint64_t> weights = FixedWeights();
+      unsigned __int128 total = 0;
+      bool all_weighted = true;  // a weightless particle's counts would leave no trace
+      for (uint64_t w : weights) {
+        total += w;
+        all_weighted = all_weighted && w > 0;
+      }
+      for (uint64_t prefix : far)
+        GROVE_RETURN_IF_ERROR(StoreBlock(prefix, weights, total, all_weighted));
+      SelectPrior();
+    }
+    store_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return Status::Ok();
+  }
+
+  // Folds one block: each hexagon's counters become their weighted mean over the particles,
+  // exact when every particle held the same counters there (counted in stored_blocks_exact_).
+  Status StoreBlock(uint64_t prefix, std::span<const uint64_t> weights, unsigned __int128 total,
+                    bool all_weighted) {
+    struct Fold {
+      std::array<unsigned __int128, 6> sum{};
+      unsigned __int128 weight = 0;
+      Htc first;
+      bool differs = false;
+    };
+    std::map<uint64_t, Fold> folds;
+    map_.FoldBlock(store_level_, prefix, weights, [&](uint64_t key, const Htc& h, uint64_t w) {
+      auto [it, inserted] = folds.try_emplace(key);
+      Fold& f = it->second;
+      if (inserted) {
+        f.first = h;
+      } else if (!std::equal(h.c, h.c + 6, f.first.c)) {
+        f.differs = true;
+      }
+      for (int e = 0; e < 6; ++e) f.sum[e] += static_cast<unsigned __int128>(h.c[e]) * w;
+      f.weight += w;
+    });
+    bool exact = all_weighted;
+    if (user_prior_.size() > 0 && combined_.size() == 0) combined_ = user_prior_;
+    for (const auto& [key, f] : folds) {
+      exact = exact && !f.differs && f.weight == total;
+      PriorHex& stored = stored_.FindOrInsert(key);
+      PriorHex* combined = combined_.size() > 0 ? &combined_.FindOrInsert(key) : nullptr;
+      for (int e = 0; e < 6; ++e) {
+        const double mean = MeanOf(f.sum[e], total);
+        stored.edge[e] += mean;
+        if (combined != nullptr) combined->edge[e] += mean;
+      }
+      stored.total = EdgeSum(stored);
+      if (combined != nullptr) combined->total = EdgeSum(*combined);
+    }
+    if (!map_.DropBlock(store_level_, prefix, 0)) {
+      return ResourceExhaustedError("out of memory while dropping a stored map block");
+    }
+    ++stored_blocks_;
+    stored_blocks_exact_ += exact ? 1 : 0;
+    return Status::Ok();
+  }
+
+  // The particles' weights in fixed point (kWeightScale).
+  std::vector<uint64_t> FixedWeights() const {
+    std::vector<uint64_t> fixed(model_.size());
+    auto lw = driver_.filter().log_weights();
+    for (size_t i = 0; i < fixed.size(); ++i) {
+      fixed[i] = static_cast<uint64_t>(std::llround(std::exp(lw[i]) * kWeightScale));
+    }
+    return fixed;
+  }
+
+  // The sum of a prior hexagon's edges in edge order, as every reader of one computes it.
+  static double EdgeSum(const PriorHex& p) {
+    double total = 0;
+    for (double c : p.edge) total += c;
+    return total;
+  }
+
+  // `hexes` (in key order) plus the stored map, in key order with their hexagons filled in.
+  std::vector<HexCounts> WithStored(std::vector<std::pair<uint64_t, HexCounts>> hexes) const {
+    if (stored_.size() > 0) {
+      std::vector<std::pair<uint64_t, HexCounts>> merged;
+      std::vector<std::pair<uint64_t, const PriorHex*>> stored = SortedHexes(stored_);
+      merged.reserve(hexes.size() + stored.size());
+      size_t j = 0;
+      for (const auto& [key, p] : stored) {
+        for (; j < hexes.size() && hexes[j].first < key; ++j) merged.push_back(hexes[j]);
+        HexCounts hc;
+        if (j < hexes.size() && hexes[j].first == key) hc = hexes[j++].second;
+        for (int e = 0; e < 6; ++e) hc.counts[e] += p->edge[e];
+        merged.push_back({key, hc});
+      }
+      for (; j < hexes.size(); ++j) merged.push_back(hexes[j]);
+      hexes.swap(merged);
+    }
+    std::vector<HexCounts> out;
+    out.reserve(hexes.size());
+    for (const auto& [key, counts] : hexes) {
+      HexCounts hc = HexOf(key);
+      std::copy(counts.counts, counts.counts + 6, hc.counts);
+      out.push_back(hc);
+    }
+    return out;
+  }
+
+  static std::vector<std::pair<uint64_t, const PriorHex*>> SortedHexes(const PriorMap& map) {
     std::vector<std::pair<uint64_t, const PriorHex*>> hexes;
-    prior_.ForEach([&](uint64_t key, const PriorHex& p) { hexes.push_back({key, &p}); });
+    map.ForEach([&](uint64_t key, const PriorHex& p) { hexes.push_back({key, &p}); });
     std::sort(hexes.begin(), hexes.end());
+    return hexes;
+  }
+
+  // A table of hexagons in key order: u64 hexagon count, then per hexagon its u64 key and six
+  // f64 counters.
+  static void SaveTable(const PriorMap& map, ByteWriter* w) {
+    std::vector<std::pair<uint64_t, const PriorHex*>> hexes = SortedHexes(map);
     w->Put<uint64_t>(hexes.size());
-    w->Put<uint64_t>(static_cast<uint64_t>(prior_outside_));
     for (const auto& [key, p] : hexes) {
       w->Put(key);
       w->PutBytes(p->edge, sizeof(p->edge));
     }
   }
-  Status LoadPrior(ByteReader* r) {
-    uint64_t count = 0, outside = 0;
-    GROVE_RETURN_IF_ERROR(r->GetCount("prior hexagon count", 7 * sizeof(uint64_t), &count));
-    GROVE_RETURN_IF_ERROR(r->Get("prior hexagons outside", &outside));
-    if (outside > (uint64_t{1} << 62)) return r->Error("prior hexagons outside", "too large");
-    PriorMap prior;
+  Status LoadTable(ByteReader* r, const char* what, PriorMap* map) const {
+    const std::string name(what);
+    uint64_t count = 0;
+    GROVE_RETURN_IF_ERROR(
+        r->GetCount((name + " hexagon count").c_str(), 7 * sizeof(uint64_t), &count));
     uint64_t last = 0;
     for (uint64_t k = 0; k < count; ++k) {
       uint64_t key = 0;
       PriorHex p{};
-      GROVE_RETURN_IF_ERROR(r->Get("prior hexagon key", &key));
+      GROVE_RETURN_IF_ERROR(r->Get((name + " hexagon key").c_str(), &key));
       if (key >= layout_.key_count() || (k > 0 && key <= last)) {
-        return r->Error("prior hexagon key", "outside the grid or not in increasing order");
+        return r->Error((name + " hexagon key").c_str(),
+                        "outside the grid or not in increasing order");
       }
       last = key;
-      GROVE_RETURN_IF_ERROR(r->GetBytes("prior hexagon counters", p.edge, sizeof(p.edge)));
+      GROVE_RETURN_IF_ERROR(
+          r->GetBytes((name + " hexagon counters").c_str(), p.edge, sizeof(p.edge)));
       for (double c : p.edge) {
         if (!std::isfinite(c) || c < 0)
-          return r->Error("prior hexagon counters", "impossible value");
-        p.total += c;
+          return r->Error((name + " hexagon counters").c_str(), "impossible value");
       }
-      if (!std::isfinite(p.total)) return r->Error("prior hexagon counters", "impossible value");
-      prior.Insert(key, p);
+      p.total = EdgeSum(p);
+      if (!std::isfinite(p.total))
+        return r->Error((name + " hexagon counters").c_str(), "impossible value");
+      map->Insert(key, p);
     }
+    return Status::Ok();
+  }
+
+  // The user's prior map (times the confidence): the table, then u64 hexagons outside the grid.
+  void SavePrior(ByteWriter* w) const {
+    SaveTable(user_prior_, w);
+    w->Put<uint64_t>(static_cast<uint64_t>(prior_outside_));
+  }
+  Status LoadPrior(ByteReader* r) {
+    PriorMap prior;
+    GROVE_RETURN_IF_ERROR(LoadTable(r, "prior", &prior));
+    uint64_t outside = 0;
+    GROVE_RETURN_IF_ERROR(r->Get("prior hexagons outside", &outside));
+    if (outside > (uint64_t{1} << 62)) return r->Error("prior hexagons outside", "too large");
     UsePrior(std::move(prior), static_cast<int64_t>(outside));
     return Status::Ok();
   }
+
+  // Storage of diversity: u64 blocks stored, u64 of them exact, f64 seconds spent, then the
+  // stored map's table and the combined table (saved, not summed again: the same bits).
+  void SaveStored(ByteWriter* w) const {
+    w->Put<uint64_t>(static_cast<uint64_t>(stored_blocks_));
+    w->Put<uint64_t>(static_cast<uint64_t>(stored_blocks_exact_));
+    w->Put<double>(store_s_);
+    SaveTable(stored_, w);
+    SaveTable(combined_, w);
+  }
+  Status LoadStored(ByteReader* r) {
+    uint64_t blocks = 0, exact = 0;
+    double seconds = 0;
+    GROVE_RETURN_IF_ERROR(r->Get("stored blocks", &blocks));
+    GROVE_RETURN_IF_ERROR(r->Get("exactly stored blocks", &exact));
+    GROVE_RETURN_IF_ERROR(r->Get("store time", &seconds));
+    if (blocks > (uint64_t{1} << 62) || exact > blocks) {
+      return r->Error("stored blocks", "too many, or more exact ones than blocks");
+    }
+    if (!(seconds >= 0 && seconds < 1e12)) return r->Error("store time", "not a duration");
+    PriorMap stored, combined;
+    GROVE_RETURN_IF_ERROR(LoadTable(r, "stored", &stored));
+    GROVE_RETURN_IF_ERROR(LoadTable(r, "combined prior", &combined));
+    const bool both = user_prior_.size() > 0 && stored.size() > 0;
+    if (both != (combined.size() > 0)) {
+      return r->Error("combined prior hexagon count",
+                      "a combined prior without both a prior map and a stored map, or missing");
+    }
+    stored_blocks_ = static_cast<int64_t>(blocks);
+    stored_blocks_exact_ = static_cast<int64_t>(exact);
+    store_s_ = seconds;
+    stored_ = std::move(stored);
+    combined_ = std::move(combined);
+    SelectPrior();
+    return Status::Ok();
+  }
   void UsePrior(PriorMap prior, int64_t outside) {
-    prior_ = std::move(prior);
+    user_prior_ = std::move(prior);
     prior_outside_ = outside;
-    model_.set_prior(prior_.size() == 0 ? nullptr : &prior_);
+    SelectPrior();
+  }
+  // The table the weighting reads: the user's prior map plus the stored map.
+  void SelectPrior() {
+    const PriorMap* prior = combined_.size() > 0     ? &combined_
+                            : stored_.size() > 0     ? &stored_
+                            : user_prior_.size() > 0 ? &user_prior_
+                                                     : nullptr;
+    model_.set_prior(prior);
   }
 
   HexCounts HexOf(uint64_t key) const {
@@ -352,8 +583,19 @@ class Engine final : public FootSlam::Impl {
   HTreeLayout layout_;
   std::unique_ptr<const Alphabet> alphabet_;  // null unless the map uses the alphabet
   Map map_;
-  PriorMap prior_;  // empty: no prior map
+  // The user's prior map (times the confidence); empty: none.
+  PriorMap user_prior_;
   int64_t prior_outside_ = 0;
+  // Storage of diversity: the blocks' level, the stored map (the folded blocks' weighted mean
+  // counters, summed over every time a block was stored), its sum with the user's prior map
+  // (only while both are non-empty) and the statistics.
+  static constexpr bool kCanStore = requires(Map & m) { m.DropBlock(0, uint64_t{0}, 0); };
+  int store_level_ = 0;
+  PriorMap stored_;
+  PriorMap combined_;
+  int64_t stored_blocks_ = 0;
+  int64_t stored_blocks_exact_ = 0;
+  double store_s_ = 0;
   FootSlamModel<Map> model_;
   FilterDriver<FootSlamModel<Map>> driver_;
 };
@@ -491,6 +733,9 @@ StatusOr<std::vector<HexCounts>> FootSlam::CumulativeMap() const {
 }
 StatusOr<std::vector<HexCounts>> FootSlam::HeaviestMap() const {
   return NoThrow([&]() -> StatusOr<std::vector<HexCounts>> { return impl_->HeaviestMap(); });
+}
+StatusOr<std::vector<HexCounts>> FootSlam::StoredMap() const {
+  return NoThrow([&]() -> StatusOr<std::vector<HexCounts>> { return impl_->StoredMap(); });
 }
 FootSlamSummary FootSlam::Summary() const { return impl_->Summary(); }
 Status FootSlam::CheckInvariants() const { return impl_->CheckInvariants(); }

@@ -24,6 +24,8 @@ const std::vector<ConfigField<FootSlamConfig>>& FootSlamConfigFields() {
                   "Weighting rule: paper or prior_ratio"),
       RealField("prior_map_confidence", &C::prior_map_confidence, I::Closed(0, 1e6),
                 kChangesResults, "Weight of a prior map's counts, added to the prior count"),
+      RealField("store_distance_m", &C::store_distance_m, I::Closed(0, 1e9), kChangesResults,
+                "Store map areas this far from every particle (storage of diversity); 0: off"),
       RealField("start_x_m", &C::start_x_m, I::Closed(-1e12, 1e12), kChangesResults,
                 "Start position x in the map frame, metres"),
       RealField("start_y_m", &C::start_y_m, I::Closed(-1e12, 1e12), kChangesResults,
@@ -80,6 +82,17 @@ Status FootSlamConfig::Validate() const {
   }
   StatusOr<footslam::HTreeLayout> layout = footslam::HTreeLayout::Create(grid_size, degree, grid);
   if (!layout.ok()) return layout.status();
+  if (store_distance_m > 0 && map == FootSlamMapKind::kNaive) {
+    return InvalidArgumentError(
+        fmt::format("store_distance_m = {}: storage of diversity needs map = htree (map = naive)",
+                    store_distance_m));
+  }
+  if (store_distance_m > 0 && layout->height() < 2) {
+    return InvalidArgumentError(fmt::format(
+        "store_distance_m = {}: storage of diversity needs grid_size >= degree (grid_size = {}, "
+        "degree = {}): a stored block is a subtree below the first grid's root",
+        store_distance_m, grid_size, degree));
+  }
   return Status::Ok();
 }
 

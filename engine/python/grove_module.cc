@@ -674,6 +674,10 @@ py::dict FootSlamSummaryDict(const FootSlamSummary& s) {
   d["grid_size"] = s.grid_size;
   d["prior_hexagons"] = s.prior_hexagons;
   d["prior_hexagons_outside"] = s.prior_hexagons_outside;
+  d["stored_blocks"] = s.stored_blocks;
+  d["stored_blocks_exact"] = s.stored_blocks_exact;
+  d["stored_hexagons"] = s.stored_hexagons;
+  d["store_s"] = s.store_s;
   d["map_memory"] = MemoryDict(s.map_memory);
   d["trajectory_memory"] = MemoryDict(s.trajectory_memory);
   d["report"] = s.BriefReport();
@@ -800,7 +804,16 @@ void BindFootSlam(py::module_& m) {
             return StructArray(g_hex_dtype,
                                ValueOrRaise(f.Locked([](FootSlam& e) { return e.HeaviestMap(); })));
           },
-          "The heaviest particle's own map, as cumulative_map() (whole-number counts).")
+          "The heaviest particle's own map, as cumulative_map() (whole-number counts), plus the "
+          "stored map.")
+      .def(
+          "stored_map",
+          [](const PyFootSlam& f) {
+            return StructArray(g_hex_dtype,
+                               ValueOrRaise(f.Locked([](FootSlam& e) { return e.StoredMap(); })));
+          },
+          "Storage of diversity (store_distance_m): the weighted mean counters of the map "
+          "areas folded so far, as cumulative_map(); empty when nothing was stored.")
       .def(
           "summary",
           [](const PyFootSlam& f) {

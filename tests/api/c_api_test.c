@@ -1070,6 +1070,40 @@ static void TestFootPriorMap(void) {
   printf("ok: footslam prior map\n");
 }
 
+static void TestFootStorage(void) {
+  grove_footslam_config c = FootConfig();
+  grove_footslam* h;
+  grove_footslam_summary summary;
+  grove_hex_counts* stored;
+  size_t n = 0, filled = 0;
+  int k;
+  c.store_distance_m = 10;
+  h = NewFoot(&c);
+  /* Out 42 m and back: the start's area is stored on the way out. */
+  for (k = 1; k <= 120; ++k) {
+    CHECK_FOOT(h, grove_footslam_step(h, k, k <= 60 ? 0.7 : -0.7, 0), GROVE_OK);
+  }
+  CHECK_FOOT(h, grove_footslam_get_summary(h, &summary), GROVE_OK);
+  CHECK(summary.stored_blocks > 0);
+  CHECK(summary.stored_blocks_exact <= summary.stored_blocks);
+  CHECK_FOOT(h, grove_footslam_stored_map(h, NULL, 0, &n), GROVE_OK);
+  CHECK(n > 0 && (int64_t)n == summary.stored_hexagons);
+  stored = (grove_hex_counts*)malloc(n * sizeof *stored);
+  CHECK(stored != NULL);
+  CHECK_FOOT(h, grove_footslam_stored_map(h, stored, n, &filled), GROVE_OK);
+  CHECK(filled == n);
+  free(stored);
+  grove_footslam_destroy(h);
+  c.map = GROVE_FOOTSLAM_MAP_NAIVE;
+  {
+    char error[512];
+    CHECK_STATUS_MSG(grove_footslam_create(&c, &h, error, sizeof error), GROVE_INVALID_ARGUMENT,
+                     error);
+    CHECK(Contains(error, "store_distance_m = 10"));
+  }
+  printf("ok: footslam storage of diversity\n");
+}
+
 int main(void) {
   setvbuf(stdout, NULL, _IONBF, 0); /* keep the lines in order with a failure on stderr */
   TestVersionAndStatus();
@@ -1079,6 +1113,7 @@ int main(void) {
   TestFootFatalError();
   TestFootRuns();
   TestFootPriorMap();
+  TestFootStorage();
   TestFastNullHandle();
   TestFastErrors();
   TestFastRuns();

@@ -48,9 +48,9 @@ FootSlamConfig Small() {
 
 // A tripwire: a member added to FootSlamConfig without a row in the table changes the size.
 TEST(FootSlamConfigTableTest, EveryMemberHasARow) {
-  EXPECT_EQ(FootSlamConfigFields().size(), 25u)
+  EXPECT_EQ(FootSlamConfigFields().size(), 26u)
       << "add the new FootSlamConfig field to FootSlamConfigFields() and update this count";
-  EXPECT_EQ(sizeof(FootSlamConfig), 176u)
+  EXPECT_EQ(sizeof(FootSlamConfig), 184u)
       << "FootSlamConfig changed: give the new field a row in FootSlamConfigFields()";
   std::set<std::string> names;
   for (const auto& f : FootSlamConfigFields()) {
@@ -88,7 +88,7 @@ TEST(FootSlamConfigTableTest, CheckpointBlockIsEveryResultChangingField) {
       EXPECT_TRUE(resumed.ok()) << resumed.status().ToString();
     }
   }
-  EXPECT_EQ(result_fields, 23);
+  EXPECT_EQ(result_fields, 24);
 }
 
 // Fields marked speed-only really change nothing but speed.

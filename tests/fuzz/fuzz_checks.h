@@ -478,10 +478,11 @@ inline std::vector<FootSlamConfig> CheckpointConfigs() {
   base.particles = 3;
   base.grid_size = 16;
   base.threads = 1;
-  std::vector<FootSlamConfig> configs(3, base);
+  std::vector<FootSlamConfig> configs(4, base);
   configs[1].degree = 4;
   configs[1].alphabet = 0;
   configs[2].map = FootSlamMapKind::kNaive;
+  configs[3].store_distance_m = 5;  // stored map blocks
   return configs;
 }
 

@@ -301,6 +301,19 @@ class FootSlamRunTest(unittest.TestCase):
         g.run(self.walk)
         self.assertSameFilter(g, self.run_walk())
 
+    def test_storage_of_diversity_stores_areas_left_behind(self):
+        # Out 40 m and back: the start's area is stored on the way out, and the return is
+        # weighted by the stored map.
+        walk = np.array([(0.5 * (k + 1), 0.7 if k < 60 else -0.7, 0.0) for k in range(120)])
+        f = grove.FootSlam(SMALL, store_distance_m=10)
+        self.assertEqual(len(f.stored_map()), 0)
+        f.run(walk)
+        s = f.summary()
+        self.assertGreater(s["stored_blocks"], 0)
+        self.assertEqual(s["stored_hexagons"], len(f.stored_map()))
+        self.assertGreater(s["stored_hexagons"], 0)
+        self.assertEqual(f.stored_map().dtype, f.cumulative_map().dtype)
+
     def test_non_finite_step_raises_and_changes_nothing(self):
         f = grove.FootSlam(SMALL)
         f.run(self.walk[:5])

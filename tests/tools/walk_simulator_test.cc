@@ -56,7 +56,7 @@ std::string WriteTempFile(const std::string& content, const std::string& name) {
 }
 
 TEST(WalkSimulatorTest, SameSeedGivesIdenticalWalk) {
-  for (Scenario scenario : {Scenario::kBuilding, Scenario::kOpen}) {
+  for (Scenario scenario : {Scenario::kBuilding, Scenario::kOpen, Scenario::kCampus}) {
     SimulatorOptions options;
     options.scenario = scenario;
     options.seed = 42;
@@ -98,7 +98,7 @@ TEST(WalkSimulatorTest, DurationMatchesMinutes) {
 }
 
 TEST(WalkSimulatorTest, TruthStartsAtOriginAndStaysInsideTheScenarioArea) {
-  for (Scenario scenario : {Scenario::kBuilding, Scenario::kOpen}) {
+  for (Scenario scenario : {Scenario::kBuilding, Scenario::kOpen, Scenario::kCampus}) {
     const Area area = ScenarioArea(scenario);
     for (uint64_t seed = 1; seed <= 8; ++seed) {
       SCOPED_TRACE(testing::Message()
@@ -143,7 +143,7 @@ TEST(WalkSimulatorTest, TrueStepsHaveAboutTheStepLength) {
 }
 
 TEST(WalkSimulatorTest, ZeroNoiseGivesOdometryEqualToTruth) {
-  for (Scenario scenario : {Scenario::kBuilding, Scenario::kOpen}) {
+  for (Scenario scenario : {Scenario::kBuilding, Scenario::kOpen, Scenario::kCampus}) {
     SimulatorOptions options = NoOdometryErrors(SimulatorOptions{});
     options.scenario = scenario;
     options.seed = 5;

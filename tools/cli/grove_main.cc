@@ -56,7 +56,10 @@ int Main(int argc, char** argv) {
   simulate->add_option("--out", sim.out_dir, "Output directory (steps.csv, truth.csv)")->required();
   simulate->add_option("--minutes", sim.minutes, "Walk duration in minutes")->capture_default_str();
   simulate->add_option("--seed", sim_seed, "Seed, a non-negative integer")->capture_default_str();
-  simulate->add_option("--scenario", sim.scenario, "building or open")->capture_default_str();
+  simulate
+      ->add_option("--scenario", sim.scenario,
+                   "building, open or campus (three buildings in a row)")
+      ->capture_default_str();
   CLI::Option* drift_option = simulate->add_option(
       "--heading-drift", sim.heading_drift,
       "Heading random walk of the odometry, rad per sqrt(step) (default 0.006)");

@@ -181,6 +181,7 @@ typedef struct grove_footslam_config {
   int grid;                    /* GROVE_FOOTSLAM_GRID_*; growing by default */
   double prior_map_confidence; /* weight of a prior map's counts; default 1 */
   int alphabet;
+  double store_distance_m; /* storage of diversity: store areas this far away; 0 (default): off */
   /* Options that change only speed. */
   int threads; /* 0: one per hardware thread */
   int64_t batch;
@@ -209,6 +210,11 @@ typedef struct grove_footslam_summary {
   /* Hexagons of the prior map in use, and those outside the grid, left out. */
   int64_t prior_hexagons;
   int64_t prior_hexagons_outside;
+  /* Storage of diversity: blocks stored, hexagons of the stored map, seconds spent. */
+  int64_t stored_blocks;
+  int64_t stored_blocks_exact; /* folds that lost nothing: every particle held the same counts */
+  int64_t stored_hexagons;
+  double store_s;
 } grove_footslam_summary;
 
 /* Writes grove::FootSlamConfig's defaults into *config (nothing when config is NULL). */
@@ -281,13 +287,16 @@ GROVE_EXPORT grove_status grove_footslam_heaviest_trajectory(grove_footslam* sla
  * per step. Size-query rule; computed by the call and kept between a size query and the fill. */
 GROVE_EXPORT grove_status grove_footslam_smoothed_trajectory(grove_footslam* slam, grove_pose* out,
                                                              size_t capacity, size_t* count);
-/* The cumulative map (sum over particles of weight times the particle's counters) and the
- * heaviest particle's own map, hexagons in key order. Size-query rule; computed by the call
+/* The cumulative map (sum over particles of weight times the particle's counters), the
+ * heaviest particle's own map (both plus the stored map) and the stored map of storage of
+ * diversity (store_distance_m), hexagons in key order. Size-query rule; computed by the call
  * and kept between a size query and the fill. */
 GROVE_EXPORT grove_status grove_footslam_cumulative_map(grove_footslam* slam, grove_hex_counts* out,
                                                         size_t capacity, size_t* count);
 GROVE_EXPORT grove_status grove_footslam_heaviest_map(grove_footslam* slam, grove_hex_counts* out,
                                                       size_t capacity, size_t* count);
+GROVE_EXPORT grove_status grove_footslam_stored_map(grove_footslam* slam, grove_hex_counts* out,
+                                                    size_t capacity, size_t* count);
 GROVE_EXPORT grove_status grove_footslam_get_summary(grove_footslam* slam,
                                                      grove_footslam_summary* summary);
 /* The whole state after the last step as checkpoint bytes (the grove command's checkpoint

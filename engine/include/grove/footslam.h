@@ -81,6 +81,13 @@ struct GROVE_EXPORT FootSlamConfig {
   // prior count a of its edge. 1 counts the earlier walk's weighted crossings as if this walk had
   // made them; 0 ignores the prior map. Range: [0, 1e6]. Default: 1.
   double prior_map_confidence = 1;
+  // Storage of diversity (paper §VI): every 50 steps, each block of the particles' maps (a
+  // square H-tree subtree, the largest no wider than this distance) farther than this from
+  // every particle is folded into one weighted mean map, the stored map, and dropped from the
+  // particles' trees. The stored map is a prior map from then on (confidence 1), so a particle
+  // that comes back is weighted by it. 0 switches storage off. H-tree maps only, with
+  // grid_size >= degree. Range: [0, 1e9] metres. Default: 0.
+  double store_distance_m = 0;
 
   // Start pose in the map frame. Range: |start_x_m|, |start_y_m| <= 1e9 hexagon radii (the
   // grid's integer coordinates); |start_heading_rad| <= 1000. Default: origin, heading 0.
@@ -169,6 +176,14 @@ struct GROVE_EXPORT FootSlamSummary : FilterSummary {
   // Hexagons of the prior map in use, and those left out (outside the grid).
   int64_t prior_hexagons = 0;
   int64_t prior_hexagons_outside = 0;
+  // Storage of diversity (store_distance_m): blocks folded into the stored map, its hexagons,
+  // and the seconds it took (choosing, folding and dropping blocks).
+  int64_t stored_blocks = 0;
+  // Blocks whose fold lost nothing: every particle held the same counters there, so the stored
+  // map weighs a return exactly as the particles' own maps would have.
+  int64_t stored_blocks_exact = 0;
+  int64_t stored_hexagons = 0;
+  double store_s = 0;
   // One paragraph for a terminal.
   std::string BriefReport() const;
 };
@@ -230,11 +245,14 @@ class GROVE_EXPORT FootSlam {
   // pose (to the history's single precision). Visits each distinct path entry once; the same
   // bits at any thread count.
   StatusOr<std::vector<StampedPose>> SmoothedTrajectory() const;
-  // Eq. 5-6 of the paper: sum over particles of w_i * C_i, hexagons in key order. Visits each
-  // distinct map node once.
+  // Eq. 5-6 of the paper: sum over particles of w_i * C_i, hexagons in key order, plus the
+  // stored map (storage of diversity). Visits each distinct map node once.
   StatusOr<std::vector<HexCounts>> CumulativeMap() const;
-  // The heaviest particle's own map.
+  // The heaviest particle's own map, plus the stored map.
   StatusOr<std::vector<HexCounts>> HeaviestMap() const;
+  // The stored map (store_distance_m): the weighted mean counters of every block folded so
+  // far, hexagons in key order; empty when nothing was stored.
+  StatusOr<std::vector<HexCounts>> StoredMap() const;
   FootSlamSummary Summary() const;
   // Walks every shared map node and path pose and checks its reference count against its links
   // (and that every live node is reached): Internal naming the broken rule. Slow (the whole
