@@ -83,9 +83,9 @@ TEST(StorageOfDiversityTest, RestoringExactFoldsGivesTheResultsOfNeverStoring) {
   RunSteps(plain.get(), walk, 0, walk.steps.size());
   RunSteps(storing.get(), walk, 0, walk.steps.size());
   const FootSlamSummary s = storing->Summary();
-  std::printf("stored %lld blocks (%lld exact), %lld hexagons\n",
-              static_cast<long long>(s.stored_blocks), static_cast<long long>(s.stored_blocks_exact),
-              static_cast<long long>(s.stored_hexagons));
+  std::printf(
+      "stored %lld blocks (%lld exact), %lld hexagons\n", static_cast<long long>(s.stored_blocks),
+      static_cast<long long>(s.stored_blocks_exact), static_cast<long long>(s.stored_hexagons));
   ASSERT_GT(s.stored_blocks, 0);
   ASSERT_EQ(s.stored_blocks_exact, s.stored_blocks) << "the case this test is about";
   // The walk came back to stored areas: the heaviest particle's own map (its map minus the
@@ -181,7 +181,8 @@ TEST(StorageOfDiversityTest, ResumingFromACheckpointContinuesBitIdentically) {
   ASSERT_GT(first->Summary().stored_blocks, 0) << "the checkpoint should hold stored blocks";
   const std::string checkpoint = ValueOf(first->Checkpoint());
   config.threads = 1;
-  StatusOr<std::unique_ptr<FootSlam>> resumed = FootSlam::Resume(config, checkpoint, "run.ckpt", nullptr);
+  StatusOr<std::unique_ptr<FootSlam>> resumed =
+      FootSlam::Resume(config, checkpoint, "run.ckpt", nullptr);
   ASSERT_TRUE(resumed.ok()) << resumed.status().ToString();
   RunSteps(resumed->get(), walk, cut, walk.steps.size());
   const FootSlamSummary a = whole->Summary(), b = (*resumed)->Summary();
@@ -238,8 +239,7 @@ TEST(StorageOfDiversityTest, ConfigurationsThatCannotStoreAreRefused) {
   config.grid_size = 4;  // one level: no block below the root
   s = config.Validate();
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
-  EXPECT_NE(s.message().find("grid_size >= degree (grid_size = 4, degree = 16)"),
-            std::string::npos)
+  EXPECT_NE(s.message().find("grid_size >= degree (grid_size = 4, degree = 16)"), std::string::npos)
       << s.ToString();
   config.grid_size = 16;
   EXPECT_TRUE(config.Validate().ok());
