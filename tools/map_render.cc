@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <memory>
 #include <new>
 #include <numbers>
@@ -535,6 +536,34 @@ StatusOr<std::string> RenderPng(const MapImage& image, const RenderOptions& opti
   return png;
 }
 
+namespace {
+
+// cairo names an SVG's groups after its surfaces, numbered across the whole process: the same
+// map drawn after other images would differ. Renumbers them 1, 2, ... in order of appearance.
+std::string RenumberSurfaces(const std::string& svg) {
+  constexpr std::string_view kName = "surface";
+  std::map<std::string, std::string> numbers;
+  std::string out;
+  out.reserve(svg.size());
+  size_t at = 0;
+  for (size_t found; (found = svg.find(kName, at)) != std::string::npos;) {
+    size_t end = found + kName.size();
+    while (end < svg.size() && svg[end] >= '0' && svg[end] <= '9') ++end;
+    out.append(svg, at, found + kName.size() - at);
+    const std::string number = svg.substr(found + kName.size(), end - found - kName.size());
+    if (!number.empty()) {
+      auto [it, added] = numbers.emplace(number, "");
+      if (added) it->second = std::to_string(numbers.size());
+      out += it->second;
+    }
+    at = end;
+  }
+  out.append(svg, at, std::string::npos);
+  return out;
+}
+
+}  // namespace
+
 StatusOr<std::string> RenderSvg(const MapImage& image, const RenderOptions& options) {
   StatusOr<MapLayout> layout = ComputeMapLayout(image, options);
   if (!layout.ok()) return layout.status();
@@ -548,7 +577,7 @@ StatusOr<std::string> RenderSvg(const MapImage& image, const RenderOptions& opti
   if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) {
     return CairoError(cairo_surface_status(surface.get()), "encoding the SVG map");
   }
-  return svg;
+  return RenumberSurfaces(svg);
 }
 
 Status WriteMapImages(const std::string& png_path, const std::string& svg_path,

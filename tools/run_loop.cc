@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,41 +34,6 @@ static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_alw
 
 extern "C" void OnStopSignal(int signal) { g_stop_signal.store(signal, std::memory_order_relaxed); }
 extern "C" void OnHangup(int) { g_hangup.store(true, std::memory_order_relaxed); }
-
-// Installs the handlers while alive (see the header for what each signal does).
-class Signals {
- public:
-  Signals() {
-    g_stop_signal.store(0);
-    g_hangup.store(false);
-    struct sigaction stop = {};
-    stop.sa_handler = OnStopSignal;
-    sigemptyset(&stop.sa_mask);
-    stop.sa_flags = SA_RESETHAND | SA_RESTART;  // interrupted reads and writes resume
-    sigaction(SIGINT, &stop, &old_int_);
-    sigaction(SIGTERM, &stop, &old_term_);
-    struct sigaction hup = {};
-    hup.sa_handler = OnHangup;
-    sigemptyset(&hup.sa_mask);
-    hup.sa_flags = SA_RESTART;
-    sigaction(SIGHUP, &hup, &old_hup_);
-    struct sigaction pipe = {};
-    pipe.sa_handler = SIG_IGN;
-    sigemptyset(&pipe.sa_mask);
-    sigaction(SIGPIPE, &pipe, &old_pipe_);
-  }
-  ~Signals() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
-    sigaction(SIGHUP, &old_hup_, nullptr);
-    sigaction(SIGPIPE, &old_pipe_, nullptr);
-  }
-  int stop() const { return g_stop_signal.load(std::memory_order_relaxed); }
-  bool hangup() const { return g_hangup.load(std::memory_order_relaxed); }
-
- private:
-  struct sigaction old_int_ = {}, old_term_ = {}, old_hup_ = {}, old_pipe_ = {};
-};
 
 // Where the run stands in its input: kept in each checkpoint so that a resumed run can check
 // that it reads the same records.
@@ -289,11 +255,41 @@ int64_t AvailableMemoryBytes(std::string* source) {
   return best;
 }
 
+SignalHandlers::SignalHandlers() {
+  g_stop_signal.store(0);
+  g_hangup.store(false);
+  struct sigaction stop = {};
+  stop.sa_handler = OnStopSignal;
+  sigemptyset(&stop.sa_mask);
+  stop.sa_flags = SA_RESETHAND | SA_RESTART;  // interrupted reads and writes resume
+  sigaction(SIGINT, &stop, &old_int_);
+  sigaction(SIGTERM, &stop, &old_term_);
+  struct sigaction hup = {};
+  hup.sa_handler = OnHangup;
+  sigemptyset(&hup.sa_mask);
+  hup.sa_flags = SA_RESTART;
+  sigaction(SIGHUP, &hup, &old_hup_);
+  struct sigaction pipe = {};
+  pipe.sa_handler = SIG_IGN;
+  sigemptyset(&pipe.sa_mask);
+  sigaction(SIGPIPE, &pipe, &old_pipe_);
+}
+
+SignalHandlers::~SignalHandlers() {
+  sigaction(SIGINT, &old_int_, nullptr);
+  sigaction(SIGTERM, &old_term_, nullptr);
+  sigaction(SIGHUP, &old_hup_, nullptr);
+  sigaction(SIGPIPE, &old_pipe_, nullptr);
+}
+
 bool StopRequested() { return g_stop_signal.load(std::memory_order_relaxed) != 0; }
+int StopSignal() { return g_stop_signal.load(std::memory_order_relaxed); }
+bool HangupSeen() { return g_hangup.load(std::memory_order_relaxed); }
 
 int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& config) {
   auto wall_start = std::chrono::steady_clock::now();
-  Signals signals;
+  std::optional<SignalHandlers> signals;
+  if (options.handle_signals) signals.emplace();
   const std::string checkpoint_path = options.checkpoint_path.empty()
                                           ? options.out_dir + "/checkpoint.grove"
                                           : options.checkpoint_path;
@@ -381,7 +377,7 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
   ProgressReporter progress(records, job->particles(), stderr, terminal);
   std::string digest_bytes;
   while (true) {
-    if (int signal = signals.stop(); signal != 0) return stop_with_checkpoint(signal);
+    if (int signal = StopSignal(); signal != 0) return stop_with_checkpoint(signal);
     digest_bytes.clear();
     StatusOr<bool> more = job->Read(&digest_bytes);
     if (!more.ok()) return Fail(kExitInput, more.status().message());
@@ -405,7 +401,7 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
       return Fail(s.code() == StatusCode::kResourceExhausted ? kExitMemory : ExitCodeOf(s),
                   s.message());
     }
-    if (options.progress && !signals.hangup()) progress.Update(position.records);
+    if (options.progress && !HangupSeen()) progress.Update(position.records);
     if (options.checkpoint_every > 0 && job->steps() % options.checkpoint_every == 0) {
       if (Status s = write_checkpoint(); !s.ok()) return Fail(ExitCodeOf(s), s.message());
     }
@@ -417,7 +413,7 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
                                         options.resume_path, resumed_at.records));
   }
   if (job->steps() == 0) return Fail(kExitInput, fmt::format("{}: no steps", job->InputName()));
-  if (options.progress && !signals.hangup()) progress.Finish();
+  if (options.progress && !HangupSeen()) progress.Finish();
 
   // The outputs as a set: staged, then renamed into place, summary.json last.
   StatusOr<OutputSet> out = OutputSet::Begin(options.out_dir);
@@ -426,7 +422,7 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
   if (Status s = job->WriteOutputs(&*out, &summary); !s.ok()) {
     return Fail(ExitCodeOf(s), s.message());
   }
-  if (int signal = signals.stop(); signal != 0) return stop_with_checkpoint(signal);
+  if (int signal = StopSignal(); signal != 0) return stop_with_checkpoint(signal);
   summary["wall_time_s"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   summary["peak_rss_bytes"] = PeakRssBytes();

@@ -10,6 +10,7 @@
 #ifndef GROVE_TOOLS_RUN_LOOP_H_
 #define GROVE_TOOLS_RUN_LOOP_H_
 
+#include <csignal>
 #include <cstdint>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -61,6 +62,22 @@ struct RunOptions {
   int64_t checkpoint_every = 0;     // steps between checkpoints; 0: only when stopped by a signal
   std::string checkpoint_path;      // empty: out_dir + "/checkpoint.grove"
   std::string resume_path;          // continue from this checkpoint
+  // Install SignalHandlers for the run; false when the caller has (runs side by side).
+  bool handle_signals = true;
+};
+
+// The run loop's handling of SIGINT, SIGTERM (stop: StopSignal()), SIGHUP (HangupSeen()) and
+// SIGPIPE (ignored), installed for the object's lifetime and the previous handlers restored
+// after. Construction clears the stop and hangup flags.
+class SignalHandlers {
+ public:
+  SignalHandlers();
+  ~SignalHandlers();
+  SignalHandlers(const SignalHandlers&) = delete;
+  SignalHandlers& operator=(const SignalHandlers&) = delete;
+
+ private:
+  struct sigaction old_int_ = {}, old_term_ = {}, old_hup_ = {}, old_pipe_ = {};
 };
 
 // What a model's run gives the loop.
@@ -149,8 +166,11 @@ int64_t CountRegularFileLines(const std::string& path);
 // Returns the exit code after printing any error on stderr as one line.
 int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& config);
 
-// True when SIGINT or SIGTERM asked the current run to stop.
+// True when SIGINT or SIGTERM asked the current run to stop; the signal (0: none); whether a
+// SIGHUP came.
 bool StopRequested();
+int StopSignal();
+bool HangupSeen();
 
 // Renders `image` as map.png and map.svg into `out`, stopping early (Ok, with what is done)
 // when StopRequested().

@@ -352,6 +352,142 @@ TEST_F(CliTest, SigtermStopsAtAStepBoundaryWithACheckpoint) {
   ExpectSameOutputs(full, out);
 }
 
+// ---- grove footslam batch ----
+
+size_t Occurrences(const std::string& text, const std::string& what) {
+  size_t n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+// Three walks side by side: each walk's outputs are those of `footslam run` on it alone; a second
+// batch skips every walk; a walk whose configuration changed is run again, alone.
+TEST_F(CliTest, ABatchRunsEachWalkAsRunWouldAndSkipsWhatIsDone) {
+  for (int s = 1; s <= 3; ++s) {
+    ASSERT_EQ(Grove("footslam simulate --minutes 1 --seed " + std::to_string(s) + " --out " +
+                    (dir_ / ("w" + std::to_string(s))).string())
+                  .exit_code,
+              0);
+  }
+  const std::string lines =
+      "{\"name\": \"a\", \"steps\": \"w1/steps.csv\"}\n"
+      "{\"name\": \"b\", \"steps\": \"w2/steps.csv\", \"config\": {\"particles\": 300}}\n\n"
+      "{\"name\": \"c\", \"steps\": \"w3/steps.csv\", \"config\": {\"seed\": 5}}\n";
+  const std::string manifest = Write("walks.jsonl", lines);
+  const fs::path out = dir_ / "out";
+  const std::string batch = "footslam batch --particles 600 --manifest " + manifest + " --out " +
+                            out.string() + " --jobs ";
+  Outcome o = Grove(batch + "2");
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_EQ(std::count(o.out.begin(), o.out.end(), '\n'), 3) << o.out;
+  const std::string summary = Slurp(out / "batch_summary.jsonl");
+  for (const char* name : {"a", "b", "c"}) {
+    EXPECT_NE(summary.find(std::string("\"name\":\"") + name + "\""), std::string::npos);
+  }
+  EXPECT_EQ(Occurrences(summary, "\"status\":\"ok\""), 3u) << summary;
+  // Walk c alone, as run does it.
+  o = Grove("footslam run --no-progress --particles 600 --seed 5 --steps " +
+            (dir_ / "w3" / "steps.csv").string() + " --out " + (dir_ / "solo").string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  ExpectSameOutputs(dir_ / "solo", out / "c");
+
+  const std::string before = Slurp(out / "a" / "summary.json");
+  o = Grove(batch + "1");
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_EQ(Occurrences(o.out, "\"status\":\"skipped\""), 3u) << o.out;
+  EXPECT_EQ(Slurp(out / "a" / "summary.json"), before) << "a skipped walk was written again";
+
+  std::string changed = lines;
+  changed.replace(changed.find("\"seed\": 5"), 9, "\"seed\": 6");
+  Write("walks.jsonl", changed);
+  o = Grove(batch + "2");
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.out.find("\"name\":\"c\",\"ns_per_particle_step\""), std::string::npos) << o.out;
+  EXPECT_EQ(o.out.find("\"name\":\"c\",\"out\""), std::string::npos) << o.out;
+  EXPECT_NE(Slurp(out / "c" / "trajectory.csv"), Slurp(dir_ / "solo" / "trajectory.csv"));
+}
+
+// A bad manifest line stops the batch before any walk with FILE:LINE:COLUMN; a walk that fails
+// fails alone, and the exit code tells a scheduler a retry will not help.
+TEST_F(CliTest, ABatchRefusesABadManifestAndReportsAFailedWalk) {
+  ASSERT_EQ(Grove("footslam simulate --minutes 1 --out " + (dir_ / "w").string()).exit_code, 0);
+  const fs::path out = dir_ / "out";
+  struct Case {
+    const char* text;
+    const char* error;
+  };
+  for (const Case& c : {
+           Case{"{\"name\": \"a\", \"steps\": \"w/steps.csv\"}\n{\"name\": \"a\", \"steps\": "
+                "\"w/steps.csv\"}\n",
+                "walks.jsonl:2:2: name = a: already used on line 1"},
+           Case{"{\"name\": \"a\", \"steps\": \"w/steps.csv\", \"config\": {\"particles\": -4}}\n",
+                "walks.jsonl:1:39: walk a: config:1:2: particles = -4: must be in"},
+           Case{"{\"name\": \"a\", \"steps\": \"w/steps.csv\",}\n",
+                "walks.jsonl:1:38: not a JSON object"},
+           Case{"{\"name\": \"../a\", \"steps\": \"w/steps.csv\"}\n",
+                "walks.jsonl:1:2: name = \"../a\""},
+           Case{"{\"name\": \"a\", \"stpes\": \"w/steps.csv\"}\n",
+                "walks.jsonl:1:15: unknown key \"stpes\""},
+           Case{"\n\n", "walks.jsonl: no walks"},
+       }) {
+    SCOPED_TRACE(c.text);
+    const std::string manifest = Write("walks.jsonl", c.text);
+    Outcome o = Grove("footslam batch --manifest " + manifest + " --out " + out.string());
+    EXPECT_EQ(o.exit_code, 2) << o.err;
+    EXPECT_NE(o.err.find(c.error), std::string::npos) << o.err;
+    EXPECT_FALSE(fs::exists(out)) << "a refused batch made its output directory";
+  }
+  const std::string manifest = Write("walks.jsonl",
+                                     "{\"name\": \"gone\", \"steps\": \"missing.csv\"}\n{\"name\": "
+                                     "\"b\", \"steps\": \"w/steps.csv\"}\n");
+  Outcome o =
+      Grove("footslam batch --particles 200 --manifest " + manifest + " --out " + out.string());
+  EXPECT_EQ(o.exit_code, 4) << o.err;
+  EXPECT_NE(o.err.find("walk gone: steps"), std::string::npos) << o.err;
+  EXPECT_NE(o.out.find("\"exit_code\":3,\"line\":1,\"name\":\"gone\""), std::string::npos) << o.out;
+  EXPECT_TRUE(fs::exists(out / "b" / "map.csv"));
+}
+
+// SIGTERM stops a batch with the running walk checkpointed and the rest not started; the same
+// command again resumes that walk and runs the rest, with the outputs of an uninterrupted run.
+TEST_F(CliTest, ABatchStoppedBySigtermResumesWhereItStopped) {
+  const std::string steps = (dir_ / "w" / "steps.csv").string();
+  ASSERT_EQ(
+      Grove("footslam simulate --minutes 8 --seed 4 --out " + (dir_ / "w").string()).exit_code, 0);
+  const std::string manifest =
+      Write("walks.jsonl",
+            "{\"name\": \"x\", \"steps\": \"w/steps.csv\"}\n"
+            "{\"name\": \"y\", \"steps\": \"w/steps.csv\", \"config\": {\"seed\": 2}}\n");
+  const fs::path out = dir_ / "out";
+  const std::string batch = "footslam batch --particles 4000 --checkpoint-every 25 --manifest " +
+                            manifest + " --out " + out.string();
+  fs::path err = dir_ / "bg.err", pid_file = dir_ / "pid", rc = dir_ / "rc";
+  std::string cmd = std::string(GROVE_BINARY) + " " + batch + " >" + (dir_ / "bg.out").string() +
+                    " 2>" + err.string() + " & echo $! >" + pid_file.string() +
+                    "; wait $!; echo $? >" + rc.string();
+  ASSERT_EQ(std::system(("sh -c '" + cmd + "' &").c_str()), 0);
+  while (!fs::exists(out / "x" / "checkpoint.grove") || !fs::exists(pid_file) ||
+         Slurp(pid_file).empty()) {
+    ASSERT_FALSE(fs::exists(rc)) << "the batch ended before it was signalled: " << Slurp(err);
+    std::system("sleep 0.01");
+  }
+  ASSERT_EQ(std::system(("kill -TERM " + Slurp(pid_file)).c_str()), 0);
+  while (!fs::exists(rc) || Slurp(rc).empty()) std::system("sleep 0.01");
+  EXPECT_EQ(std::stoi(Slurp(rc)), 143) << Slurp(err);
+  const std::string stopped = Slurp(out / "batch_summary.jsonl");
+  EXPECT_NE(stopped.find("\"name\":\"x\",\"out\""), std::string::npos) << stopped;
+  EXPECT_NE(stopped.find("\"status\":\"stopped\""), std::string::npos) << stopped;
+  EXPECT_NE(stopped.find("\"status\":\"not run\""), std::string::npos) << stopped;
+
+  Outcome o = Grove(batch);
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.out.find("\"resumed\":true"), std::string::npos) << o.out;
+  o = Grove("footslam run --no-progress --particles 4000 --steps " + steps + " --out " +
+            (dir_ / "solo").string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  ExpectSameOutputs(dir_ / "solo", out / "x");
+}
+
 // ---- Reliability, round two (the numbers in the test names' comments) ----
 
 // 1: a step file from a pipe is read once, whole.

@@ -18,6 +18,7 @@
 #include "tools/fastslam_montecarlo.h"
 #include "tools/fastslam_run.h"
 #include "tools/fastslam_simulator.h"
+#include "tools/footslam_batch.h"
 #include "tools/footslam_run.h"
 #include "tools/victoria_park.h"
 
@@ -48,6 +49,27 @@ int Main(int argc, char** argv) {
       "--prior-map", run_options.prior_map_path,
       "map.csv of an earlier walk through the same area, in this run's map frame: prior counts "
       "(weighted by prior_map_confidence)");
+
+  // ---- batch ----
+  CLI::App* batch = footslam->add_subcommand(
+      "batch", "Run many walks, one filter each, from a JSON Lines manifest, side by side");
+  gt::FootSlamBatchOptions batch_options;
+  std::string batch_config_path;
+  batch
+      ->add_option("--manifest", batch_options.manifest_path,
+                   "JSON Lines: {\"name\", \"steps\", optional \"prior_map\" and \"config\"} per "
+                   "line")
+      ->required();
+  batch->add_option("--out", batch_options.out_dir, "Output directory: OUT/NAME per walk")
+      ->required();
+  batch->add_option("--jobs", batch_options.jobs, "Walks run side by side; --threads is shared")
+      ->capture_default_str();
+  batch
+      ->add_option("--checkpoint-every", batch_options.checkpoint_every,
+                   "Each walk writes a checkpoint every N steps (a killed batch resumes from it)")
+      ->check(CLI::NonNegativeNumber);
+  batch->add_option("--config", batch_config_path, "JSON file setting any parameter of every walk");
+  gt::ConfigFlags<FootSlamConfig> batch_flags(batch, grove::FootSlamConfigFields());
 
   // ---- simulate ----
   CLI::App* simulate = footslam->add_subcommand("simulate", "Simulate a pedestrian walk");
@@ -271,6 +293,23 @@ int Main(int argc, char** argv) {
                                        {{steps_option, "--steps"}, {prior_option, "--prior-map"}});
     if (code >= 0) return code;
     return gt::RunFootSlamCommand(config, run_options);
+  }
+  if (*batch) {
+    FootSlamConfig config;
+    if (!batch_config_path.empty()) {
+      grove::Status s =
+          grove::LoadConfigFile(grove::FootSlamConfigFields(), batch_config_path, &config);
+      if (!s.ok()) {
+        return gt::Fail(
+            s.code() == grove::StatusCode::kNotFound || s.code() == grove::StatusCode::kIoError
+                ? gt::kExitInput
+                : gt::kExitUsage,
+            s.message());
+      }
+    }
+    if (grove::Status s = batch_flags.Apply(&config); !s.ok())
+      return gt::Fail(gt::kExitUsage, s.message());
+    return gt::RunFootSlamBatch(config, batch_options);
   }
   if (*fs_run) {
     grove::FastSlamConfig config;
