@@ -44,7 +44,6 @@
 #include <string>
 #include <type_traits>
 #include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
 #include "alloc/cache_line.h"
@@ -454,9 +453,24 @@ class PersistentTrie {
       uint64_t prefix;
     };
     std::vector<Item> stack;
-    std::unordered_set<const Node*> seen;
+    // The nodes visited: an open-addressing set (power-of-two capacity, at most half full), no
+    // allocation per node.
+    std::vector<const Node*> seen(64, nullptr);
+    size_t seen_count = 0;
+    auto first_visit = [&](const Node* n) {
+      if ((seen_count + 1) * 2 > seen.size()) {
+        std::vector<const Node*> bigger(2 * seen.size(), nullptr);
+        for (const Node* m : seen) {
+          if (m != nullptr) InsertPointer(&bigger, m);
+        }
+        seen.swap(bigger);
+      }
+      const bool added = InsertPointer(&seen, n);
+      seen_count += added ? 1 : 0;
+      return added;
+    };
     for (const Node* root : roots) {
-      if (root != nullptr && seen.insert(root).second) {
+      if (root != nullptr && first_visit(root)) {
         stack.push_back({static_cast<const Inner*>(root), FillPrefix(Height(root))});
       }
     }
@@ -470,7 +484,7 @@ class PersistentTrie {
         const uint64_t prefix = (item.prefix << kLog2Degree) | static_cast<uint64_t>(i);
         if (child->level == level) {
           out.push_back(prefix);
-        } else if (seen.insert(child).second) {
+        } else if (first_visit(child)) {
           stack.push_back({static_cast<const Inner*>(child), prefix});
         }
       }
@@ -834,6 +848,20 @@ class PersistentTrie {
       }
     }
     return distinct;
+  }
+
+  // Adds `n` to an open-addressing set of pointers with room for it; false when present.
+  static bool InsertPointer(std::vector<const Node*>* set, const Node* n) {
+    const size_t mask = set->size() - 1;
+    size_t i = ((reinterpret_cast<uintptr_t>(n) >> 6) * 0x9E3779B97F4A7C15ull >> 20) & mask;
+    for (;; i = (i + 1) & mask) {
+      const Node*& slot = (*set)[i];
+      if (slot == n) return false;
+      if (slot == nullptr) {
+        slot = n;
+        return true;
+      }
+    }
   }
 
   void RaiseTopHeight(int h) {

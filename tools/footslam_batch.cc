@@ -2,6 +2,7 @@
 #include "tools/footslam_batch.h"
 
 #include <fmt/format.h>
+#include <sched.h>
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -43,6 +44,15 @@ struct WalkResult {
   double wall_time_s = 0;
 };
 
+// The CPUs this process may run on (its affinity mask: a scheduler's or taskset's CPU set), at
+// least 1.
+int UsableCpus() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof(set), &set) == 0) return std::max(1, CPU_COUNT(&set));
+  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+}
+
 bool FileExists(const std::string& path) {
   struct stat st;
   return ::stat(path.c_str(), &st) == 0;
@@ -60,8 +70,8 @@ StatusOr<std::string> ReadWholeFile(const std::string& path, const char* what) {
 bool ValidName(const std::string& name) {
   if (name.empty() || name.size() > 200 || name[0] == '.') return false;
   return std::all_of(name.begin(), name.end(), [](char c) {
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-           c == '.' || c == '_' || c == '-';
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' ||
+           c == '_' || c == '-';
   });
 }
 
@@ -110,7 +120,8 @@ StatusOr<std::vector<Walk>> ReadManifest(const std::string& path, const FootSlam
     auto column_of = [&](const char* key) { return line.find(std::string("\"") + key) + 1; };
     Walk w;
     w.line = number;
-    if (!j.contains("name") || !j["name"].is_string()) return error(1, "name: a string is required");
+    if (!j.contains("name") || !j["name"].is_string())
+      return error(1, "name: a string is required");
     w.name = j["name"].get<std::string>();
     if (!ValidName(w.name)) {
       return error(column_of("name"),
@@ -137,12 +148,10 @@ StatusOr<std::vector<Walk>> ReadManifest(const std::string& path, const FootSlam
     w.config.threads = walk_threads;
     if (j.contains("config")) {
       if (!j["config"].is_object()) return error(column_of("config"), "config: must be an object");
-      Status s =
-          ApplyConfigJson(FootSlamConfigFields(), "config", j["config"].dump(), &w.config);
+      Status s = ApplyConfigJson(FootSlamConfigFields(), "config", j["config"].dump(), &w.config);
       if (!s.ok()) {
         return error(column_of("config"), fmt::format("walk {}: {}", w.name, s.message()));
       }
-      if (j["config"].contains("threads")) w.config.threads = j["config"]["threads"].get<int>();
     }
     if (Status s = w.config.Validate(); !s.ok()) {
       return error(column_of("config"), fmt::format("walk {}: {}", w.name, s.message()));
@@ -230,9 +239,12 @@ WalkResult RunWalk(const Walk& w, const FootSlamBatchOptions& options, int64_t m
 }
 
 nlohmann::json ResultJson(const Walk& w, const WalkResult& r, const std::string& out_dir) {
-  nlohmann::json j = {{"name", w.name},         {"line", w.line},
-                      {"status", r.status},     {"exit_code", r.exit_code},
-                      {"resumed", r.resumed},   {"wall_time_s", r.wall_time_s},
+  nlohmann::json j = {{"name", w.name},
+                      {"line", w.line},
+                      {"status", r.status},
+                      {"exit_code", r.exit_code},
+                      {"resumed", r.resumed},
+                      {"wall_time_s", r.wall_time_s},
                       {"out", out_dir + "/" + w.name}};
   if (r.status == "ok" || r.status == "skipped") {
     StatusOr<std::string> text = ReadWholeFile(out_dir + "/" + w.name + "/summary.json", "summary");
@@ -254,15 +266,44 @@ int RunFootSlamBatch(const FootSlamConfig& base, const FootSlamBatchOptions& opt
   if (options.jobs < 1 || options.jobs > 1024) {
     return Fail(kExitUsage, fmt::format("--jobs = {}: must be in [1, 1024]", options.jobs));
   }
-  const int total_threads = base.threads > 0
-                                ? base.threads
-                                : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const int total_threads = base.threads > 0 ? base.threads : UsableCpus();
   const int walk_threads = std::max(1, total_threads / options.jobs);
+  const int ranks = options.all_gather ? std::max(1, options.ranks) : 1;
+  auto all_gather = [&](const std::string& mine) {
+    return ranks > 1 ? options.all_gather(mine) : std::vector<std::string>{mine};
+  };
   StatusOr<std::vector<Walk>> walks = ReadManifest(options.manifest_path, base, walk_threads);
-  if (!walks.ok()) {
+  // Every rank reports how its reading went (so none waits for a rank that gave up), and the
+  // ranks must have read the same walks and configuration.
+  std::string mine;
+  if (walks.ok()) {
+    uint32_t crc = 0;
+    for (const Walk& w : *walks) {
+      crc = Crc32(w.name + '\n' + w.steps_path + '\n' + w.prior_map_path + '\n' +
+                      ResultConfigJson(w.config) + '\n',
+                  crc);
+    }
+    mine = fmt::format("ok {:08x}", crc);
+  } else {
     const StatusCode c = walks.status().code();
-    return Fail(c == StatusCode::kNotFound || c == StatusCode::kIoError ? kExitInput : kExitUsage,
-                walks.status().message());
+    mine = fmt::format("error {}", c == StatusCode::kNotFound || c == StatusCode::kIoError
+                                       ? kExitInput
+                                       : kExitUsage);
+  }
+  const std::vector<std::string> readings = all_gather(mine);
+  if (!walks.ok()) return Fail(std::stoi(mine.substr(6)), walks.status().message());
+  for (int r = 0; r < static_cast<int>(readings.size()); ++r) {
+    if (readings[static_cast<size_t>(r)].rfind("error ", 0) == 0) {
+      return Fail(
+          std::stoi(readings[static_cast<size_t>(r)].substr(6)),
+          fmt::format("rank {} could not read the manifest (its error is in its output)", r));
+    }
+    if (readings[static_cast<size_t>(r)] != readings[0]) {
+      return Fail(kExitUsage, fmt::format("rank {} read other walks or another configuration "
+                                          "than rank 0 from {}: give every rank the same "
+                                          "manifest, files and options",
+                                          r, options.manifest_path));
+    }
   }
   if (Status s = EnsureDirectory(options.out_dir); !s.ok()) return Fail(kExitOutput, s.message());
   const int64_t available = AvailableMemoryBytes();
@@ -275,7 +316,9 @@ int RunFootSlamBatch(const FootSlamConfig& base, const FootSlamBatchOptions& opt
   auto worker = [&] {
     for (;;) {
       if (StopRequested()) return;
-      const size_t i = next.fetch_add(1);
+      // This rank's walks: every ranks-th from its own.
+      const size_t i = next.fetch_add(1) * static_cast<size_t>(ranks) +
+                       static_cast<size_t>(ranks > 1 ? options.rank : 0);
       if (i >= walks->size()) return;
       results[i] = RunWalk((*walks)[i], options, budget);
       const std::string line = ResultJson((*walks)[i], results[i], options.out_dir).dump();
@@ -290,18 +333,40 @@ int RunFootSlamBatch(const FootSlamConfig& base, const FootSlamBatchOptions& opt
   worker();
   for (std::thread& t : threads) t.join();
 
+  // Every rank's results, as "index<TAB>JSON" lines of its walks, then in manifest order.
+  std::string own;
+  for (size_t i = static_cast<size_t>(ranks > 1 ? options.rank : 0); i < walks->size();
+       i += static_cast<size_t>(ranks)) {
+    own += fmt::format("{}\t{}\n", i, ResultJson((*walks)[i], results[i], options.out_dir).dump());
+  }
+  std::vector<std::string> lines(walks->size());
+  std::vector<int> codes(walks->size(), 0);
+  for (const std::string& part : all_gather(own)) {
+    std::istringstream in(part);
+    std::string line;
+    while (std::getline(in, line)) {
+      const size_t tab = line.find('\t');
+      const size_t i = std::stoul(line.substr(0, tab));
+      lines[i] = line.substr(tab + 1);
+      codes[i] = nlohmann::json::parse(lines[i]).value("exit_code", 0);
+    }
+  }
   std::string summary;
   bool permanent = false, temporary = false;
+  int stopped = 0;
   for (size_t i = 0; i < walks->size(); ++i) {
-    summary += ResultJson((*walks)[i], results[i], options.out_dir).dump() + "\n";
-    const int code = results[i].exit_code;
+    summary += lines[i] + "\n";
+    const int code = codes[i];
     if (code == kExitUsage || code == kExitInput || code == kExitRun) permanent = true;
     if (code == kExitInternal || code == kExitOutput || code == kExitMemory) temporary = true;
+    if (code >= kExitSignalBase) stopped = std::max(stopped, code);
   }
-  if (Status s = WriteFileAtomically(options.out_dir + "/batch_summary.jsonl", summary); !s.ok()) {
-    return Fail(kExitOutput, s.message());
+  if (ranks == 1 || options.rank == 0) {
+    Status s = WriteFileAtomically(options.out_dir + "/batch_summary.jsonl", summary);
+    if (!s.ok()) return Fail(kExitOutput, s.message());
   }
   if (const int signal = StopSignal(); signal != 0) return kExitSignalBase + signal;
+  if (stopped != 0) return stopped;
   if (permanent) return kExitRun;
   if (temporary) return 75;  // EX_TEMPFAIL: a retry may succeed
   return kExitOk;

@@ -13,11 +13,15 @@
 // configuration) is skipped; a walk stopped part-way (a signal, a kill) with a checkpoint of the
 // same digest is resumed from it. Each walk's result is a JSON line on stdout as it ends, and
 // all of them, in manifest order, in OUT/batch_summary.jsonl (written atomically at the end).
+// Under mpirun the walks are dealt to the ranks (every rank checks the manifest, and the ranks
+// must agree on it and on the configuration); rank 0 writes batch_summary.jsonl.
 #ifndef GROVE_TOOLS_FOOTSLAM_BATCH_H_
 #define GROVE_TOOLS_FOOTSLAM_BATCH_H_
 
 #include <cstdint>
+#include <functional>
 #include <string>
+#include <vector>
 
 #include "grove/footslam.h"
 
@@ -26,11 +30,16 @@ namespace grove::tools {
 struct FootSlamBatchOptions {
   std::string manifest_path;
   std::string out_dir;
-  // Walks run side by side. Each gets threads / jobs worker threads (at least 1) unless its
-  // configuration sets threads; threads 0 means one per hardware thread.
+  // Walks run side by side. Each gets T / jobs worker threads (at least 1) unless its own
+  // configuration sets threads, T being the batch configuration's threads or, when that is 0,
+  // the CPUs in the process's affinity mask (a scheduler's CPU set).
   int jobs = 1;
-  int threads = 0;
   int64_t checkpoint_every = 0;  // per walk, as `run --checkpoint-every`
+  // MPI ranks (tools/cli/mpi_world.h): walk i runs on rank i % ranks; all_gather(mine) returns
+  // every rank's string in rank order on every rank (collective). Unset: one rank.
+  int rank = 0;
+  int ranks = 1;
+  std::function<std::vector<std::string>(const std::string&)> all_gather;
 };
 
 // Exit codes: 0 every walk ran or was skipped; 2 a bad manifest or option (nothing ran); 3 the

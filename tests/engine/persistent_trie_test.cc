@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <map>
 #include <random>
+#include <set>
 #include <span>
 #include <string>
 #include <vector>
@@ -544,6 +545,13 @@ void RunDropCheck(uint64_t fill, uint64_t seed) {
   for (int level : {0, 1, 2}) {
     SCOPED_TRACE(testing::Message() << "level " << level);
     const int shift = 2 * (level + 1);
+    // The blocks some version holds, listed once each in key order.
+    std::set<uint64_t> blocks;
+    for (const auto& model : models) {
+      for (const auto& kv : model) blocks.insert(kv.first >> shift);
+    }
+    EXPECT_EQ(trie.SubtreePrefixes(roots, level),
+              std::vector<uint64_t>(blocks.begin(), blocks.end()));
     // A block some version holds: the one of a key of version 0.
     ASSERT_FALSE(models[0].empty());
     const uint64_t prefix = models[0].begin()->first >> shift;

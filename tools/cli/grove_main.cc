@@ -14,6 +14,7 @@
 #include "grove/footslam.h"
 #include "grove/version.h"
 #include "tools/bench_commands.h"
+#include "tools/cli/mpi_world.h"
 #include "tools/cli/run_flags.h"
 #include "tools/fastslam_montecarlo.h"
 #include "tools/fastslam_run.h"
@@ -307,8 +308,17 @@ int Main(int argc, char** argv) {
             s.message());
       }
     }
-    if (grove::Status s = batch_flags.Apply(&config); !s.ok())
+    if (grove::Status s = batch_flags.Apply(&config); !s.ok()) {
       return gt::Fail(gt::kExitUsage, s.message());
+    }
+    gt::MpiWorld world;  // one rank unless started by mpirun
+    if (world.active()) {
+      batch_options.rank = world.rank();
+      batch_options.ranks = world.size();
+      batch_options.all_gather = [&world](const std::string& mine) {
+        return world.AllGather(mine);
+      };
+    }
     return gt::RunFootSlamBatch(config, batch_options);
   }
   if (*fs_run) {
