@@ -19,6 +19,7 @@
 #include <new>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 #include <thread>
 #include <utility>
 #include <variant>
@@ -891,26 +892,48 @@ int FastSlamMonteCarloCommand(const MonteCarloOptions& options) {
     }
   }
 
-  // ---- Output directory ----
-  StatusOr<OutputDirectory> out = OutputDirectory::Open(options.out_dir);
-  if (!out.ok()) {
-    return Fail(out.status().code() == StatusCode::kInvalidArgument ? kExitUsage : kExitOutput,
-                out.status().message());
-  }
+  // ---- Output directory: rank 0 makes and locks it while the others wait ----
+  const int ranks = options.all_gather ? std::max(1, options.ranks) : 1;
+  const size_t rank = static_cast<size_t>(ranks > 1 ? options.rank : 0);
+  // Every rank's exit code (0: ok) after a step that may fail on some rank: the largest, so
+  // that every rank stops when one does and none waits for it.
+  auto agree = [&](int code) {
+    if (ranks == 1) return code;
+    int worst = 0;
+    for (const std::string& c : options.all_gather(std::to_string(code))) {
+      worst = std::max(worst, std::stoi(c));
+    }
+    return worst;
+  };
+  std::optional<OutputDirectory> out;
   const std::string& dir = options.out_dir;
-  for (const Group& g : groups) {
-    if (Status s = EnsureDirectory(dir + "/runs/" + g.name); !s.ok()) {
-      return Fail(kExitOutput, s.message());
+  int code = kExitOk;
+  if (rank == 0) {
+    StatusOr<OutputDirectory> opened = OutputDirectory::Open(options.out_dir);
+    if (!opened.ok()) {
+      code = Fail(opened.status().code() == StatusCode::kInvalidArgument ? kExitUsage : kExitOutput,
+                  opened.status().message());
+    } else {
+      out.emplace(std::move(opened).value());
+      for (const Group& g : groups) {
+        if (Status s = EnsureDirectory(dir + "/runs/" + g.name); !s.ok() && code == kExitOk) {
+          code = Fail(kExitOutput, s.message());
+        }
+      }
+      if (code == kExitOk) out->Keep();
     }
   }
-  out->Keep();
+  if (const int agreed = agree(code); agreed != kExitOk) return agreed;
 
   // ---- Jobs ----
+  // This rank's jobs: every ranks-th from its own.
   std::vector<size_t> todo;
-  for (size_t i = 0; i < jobs.size(); ++i) {
+  int64_t own_jobs = 0;
+  for (size_t i = rank; i < jobs.size(); i += static_cast<size_t>(ranks)) {
+    ++own_jobs;
     if (!ReadFinishedJob(dir, scenario, groups[jobs[i].group], jobs[i]).ok()) todo.push_back(i);
   }
-  const int64_t reused = static_cast<int64_t>(jobs.size() - todo.size());
+  const int64_t reused = own_jobs - static_cast<int64_t>(todo.size());
   // The costliest first (most particles), so that the last jobs to start are short; ties in job
   // order (std::sort with the index as tie-break: libstdc++ 12's stable_sort trips clang's
   // deprecation warning).
@@ -935,7 +958,11 @@ int FastSlamMonteCarloCommand(const MonteCarloOptions& options) {
           ? ""
           : fmt::format(" on {} thread{}", threads_used, threads_used == 1 ? "" : "s").c_str());
 
-  JobProgress progress(static_cast<int64_t>(jobs.size()), reused, options.progress);
+  if (ranks > 1) {
+    std::fprintf(stderr, "montecarlo: rank %zu of %d runs %lld of the %zu jobs\n", rank, ranks,
+                 static_cast<long long>(own_jobs), jobs.size());
+  }
+  JobProgress progress(own_jobs, reused, options.progress);
   std::atomic<size_t> next{0};
   std::atomic<bool> stop{false};
   std::mutex error_mu;
@@ -966,7 +993,9 @@ int FastSlamMonteCarloCommand(const MonteCarloOptions& options) {
     });
   }
   progress.Finish();
-  if (!write_error.ok()) return Fail(kExitOutput, write_error.message());
+  if (!write_error.ok()) code = Fail(kExitOutput, write_error.message());
+  // Every rank's jobs are on disk once all have come here; rank 0 writes the aggregates.
+  if (const int agreed = agree(code); agreed != kExitOk || rank != 0) return agreed;
 
   // ---- Aggregates, from the files (the same numbers whether a job ran now or before) ----
   std::vector<GroupResult> results(groups.size());

@@ -17,6 +17,7 @@
 #define GROVE_TOOLS_FASTSLAM_MONTECARLO_H_
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -96,6 +97,12 @@ struct MonteCarloOptions {
   int64_t loops = 0;       // 0: the scenario's; else 1..1000
   bool progress = true;    // progress on stderr
   bool charts = true;      // not a flag: lets tests skip gnuplot
+  // MPI ranks (tools/cli/mpi_world.h): job i runs on rank i % ranks, then rank 0 writes the
+  // tables from the files every rank wrote (DIR on a file system they share). all_gather(mine)
+  // returns every rank's string in rank order on every rank (collective). Unset: one rank.
+  int rank = 0;
+  int ranks = 1;
+  std::function<std::vector<std::string>(const std::string&)> all_gather;
 };
 
 // Runs the command. Returns 0, or prints "grove: error: ..." and returns 2 (a bad option: it is

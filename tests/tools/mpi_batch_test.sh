@@ -1,7 +1,8 @@
 #!/bin/sh
-# grove footslam batch under mpirun: the walks dealt to 1, 2 and 3 ranks (oversubscribed on any
-# machine) give byte-identical outputs to the batch without MPI, every rank agrees on the exit
-# code, and rank 0 writes the summary of every walk.
+# grove footslam batch and grove fastslam montecarlo under mpirun: the walks dealt to 1, 2 and 3
+# ranks (oversubscribed on any machine) give byte-identical outputs to the batch without MPI,
+# every rank agrees on the exit code, and rank 0 writes the summary of every walk; the Monte
+# Carlo runs dealt to 3 ranks are those of one process.
 # Usage: mpi_batch_test.sh GROVE_BINARY MPIEXEC
 set -eu
 grove=$1
@@ -55,4 +56,18 @@ status=0
 [ "$status" -eq 2 ] || { echo "FAIL: a bad manifest under mpirun exited $status"; cat "$work/bad.err"; fail=1; }
 grep -q 'bad.jsonl:1:1: steps: a non-empty path is required' "$work/bad.err" ||
   { echo "FAIL: no file:line:column error"; cat "$work/bad.err"; fail=1; }
+# Monte Carlo runs dealt to 3 ranks: every run's series is the one the command writes alone, and
+# rank 0 writes the tables.
+"$grove" fastslam montecarlo --scenario sim1 --filters fastslam1,fastslam2 --particles 20 \
+  --runs 4 --out "$work/mc1" --no-progress >/dev/null 2>&1
+status=0
+"$mpiexec" --oversubscribe --bind-to none -np 3 "$grove" fastslam montecarlo --scenario sim1 \
+  --filters fastslam1,fastslam2 --particles 20 --runs 4 --out "$work/mc3" --no-progress \
+  >/dev/null 2>"$work/mc3.err" || status=$?
+[ "$status" -eq 0 ] || { echo "FAIL: montecarlo -np 3 exited $status"; cat "$work/mc3.err"; fail=1; }
+for f in $(cd "$work/mc1/runs" && find . -name '*.csv' | sort); do
+  cmp -s "$work/mc1/runs/$f" "$work/mc3/runs/$f" || { echo "FAIL: montecarlo run $f differs"; fail=1; }
+done
+[ -s "$work/mc3/table.md" ] || { echo "FAIL: rank 0 wrote no table"; fail=1; }
+[ "$fail" -eq 0 ] && echo "ok: montecarlo -np 3"
 exit $fail

@@ -340,6 +340,13 @@ int Main(int argc, char** argv) {
   }
   if (*fs_mc) {
     mc_options.progress = !mc_no_progress;
+    gt::MpiWorld world;  // one rank unless started by mpirun
+    if (world.active()) {
+      mc_options.rank = world.rank();
+      mc_options.ranks = world.size();
+      mc_options.all_gather = [&world](const std::string& mine) { return world.AllGather(mine); };
+      mc_options.progress = mc_options.progress && world.rank() == 0;
+    }
     return gt::FastSlamMonteCarloCommand(mc_options);
   }
   if (*fs_evaluate) {
