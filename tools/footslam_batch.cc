@@ -9,7 +9,6 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -20,6 +19,7 @@
 #include "engine/config_json.h"
 #include "grove/checksum.h"
 #include "tools/atomic_file.h"
+#include "tools/csv_reader.h"
 #include "tools/footslam_run.h"
 #include "tools/run_loop.h"
 
@@ -42,6 +42,7 @@ struct WalkResult {
   int exit_code = 0;
   bool resumed = false;
   double wall_time_s = 0;
+  std::string line;  // ResultJson's, once the walk is done
 };
 
 // The CPUs this process may run on (its affinity mask: a scheduler's or taskset's CPU set), at
@@ -56,15 +57,6 @@ int UsableCpus() {
 bool FileExists(const std::string& path) {
   struct stat st;
   return ::stat(path.c_str(), &st) == 0;
-}
-
-StatusOr<std::string> ReadWholeFile(const std::string& path, const char* what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return NotFoundError(fmt::format("{} {}: cannot be opened", what, path));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) return IoError(fmt::format("{} {}: cannot be read", what, path));
-  return text.str();
 }
 
 bool ValidName(const std::string& name) {
@@ -89,8 +81,8 @@ std::string ResultConfigJson(const FootSlamConfig& config) {
 // first bad one, NotFound or IoError when the manifest cannot be read.
 StatusOr<std::vector<Walk>> ReadManifest(const std::string& path, const FootSlamConfig& base,
                                          int walk_threads) {
-  StatusOr<std::string> text = ReadWholeFile(path, "--manifest");
-  if (!text.ok()) return text.status();
+  StatusOr<std::string> text = ReadWholeFile(path);
+  if (!text.ok()) return Status(text.status().code(), "--manifest " + text.status().message());
   const size_t slash = path.find_last_of('/');
   const std::string dir = slash == std::string::npos ? "" : path.substr(0, slash + 1);
   auto resolve = [&](const std::string& p) { return p[0] == '/' ? p : dir + p; };
@@ -164,13 +156,15 @@ StatusOr<std::vector<Walk>> ReadManifest(const std::string& path, const FootSlam
 
 // The digest of what a walk's outputs depend on; the files are read whole.
 StatusOr<std::string> DigestOf(const Walk& w) {
-  StatusOr<std::string> steps = ReadWholeFile(w.steps_path, "steps");
-  if (!steps.ok()) return steps.status();
+  StatusOr<std::string> steps = ReadWholeFile(w.steps_path);
+  if (!steps.ok()) return Status(steps.status().code(), "steps " + steps.status().message());
   uint32_t crc = Crc32(*steps);
   crc = Crc32(std::string_view("\0prior\0", 7), crc);
   if (!w.prior_map_path.empty()) {
-    StatusOr<std::string> prior = ReadWholeFile(w.prior_map_path, "prior_map");
-    if (!prior.ok()) return prior.status();
+    StatusOr<std::string> prior = ReadWholeFile(w.prior_map_path);
+    if (!prior.ok()) {
+      return Status(prior.status().code(), "prior_map " + prior.status().message());
+    }
     crc = Crc32(*prior, crc);
   }
   crc = Crc32(std::string_view("\0config\0", 8), crc);
@@ -197,7 +191,7 @@ WalkResult RunWalk(const Walk& w, const FootSlamBatchOptions& options, int64_t m
     return finish("failed", kExitInput);
   }
   nlohmann::json marker;
-  if (StatusOr<std::string> text = ReadWholeFile(marker_path, "marker"); text.ok()) {
+  if (StatusOr<std::string> text = ReadWholeFile(marker_path); text.ok()) {
     marker = nlohmann::json::parse(*text, nullptr, /*allow_exceptions=*/false);
   }
   const bool same = marker.is_object() && marker.value("digest", "") == *digest;
@@ -247,7 +241,7 @@ nlohmann::json ResultJson(const Walk& w, const WalkResult& r, const std::string&
                       {"wall_time_s", r.wall_time_s},
                       {"out", out_dir + "/" + w.name}};
   if (r.status == "ok" || r.status == "skipped") {
-    StatusOr<std::string> text = ReadWholeFile(out_dir + "/" + w.name + "/summary.json", "summary");
+    StatusOr<std::string> text = ReadWholeFile(out_dir + "/" + w.name + "/summary.json");
     if (text.ok()) {
       nlohmann::json s = nlohmann::json::parse(*text, nullptr, false);
       for (const char* key : {"steps", "particles", "ns_per_particle_step", "run_id"}) {
@@ -310,7 +304,7 @@ int RunFootSlamBatch(const FootSlamConfig& base, const FootSlamBatchOptions& opt
   const int64_t budget = available > 0 ? available / options.jobs : 0;
 
   SignalHandlers signals;
-  std::vector<WalkResult> results(walks->size(), WalkResult{"not run", 0, false, 0});
+  std::vector<WalkResult> results(walks->size(), WalkResult{"not run", 0, false, 0, ""});
   std::atomic<size_t> next{0};
   std::mutex print;
   auto worker = [&] {
@@ -321,9 +315,9 @@ int RunFootSlamBatch(const FootSlamConfig& base, const FootSlamBatchOptions& opt
                        static_cast<size_t>(ranks > 1 ? options.rank : 0);
       if (i >= walks->size()) return;
       results[i] = RunWalk((*walks)[i], options, budget);
-      const std::string line = ResultJson((*walks)[i], results[i], options.out_dir).dump();
+      results[i].line = ResultJson((*walks)[i], results[i], options.out_dir).dump();
       std::lock_guard<std::mutex> lock(print);
-      std::printf("%s\n", line.c_str());
+      std::printf("%s\n", results[i].line.c_str());
       std::fflush(stdout);
     }
   };
@@ -337,7 +331,11 @@ int RunFootSlamBatch(const FootSlamConfig& base, const FootSlamBatchOptions& opt
   std::string own;
   for (size_t i = static_cast<size_t>(ranks > 1 ? options.rank : 0); i < walks->size();
        i += static_cast<size_t>(ranks)) {
-    own += fmt::format("{}\t{}\n", i, ResultJson((*walks)[i], results[i], options.out_dir).dump());
+    // A walk the batch was stopped before has no line yet.
+    if (results[i].line.empty()) {
+      results[i].line = ResultJson((*walks)[i], results[i], options.out_dir).dump();
+    }
+    own += fmt::format("{}\t{}\n", i, results[i].line);
   }
   std::vector<std::string> lines(walks->size());
   std::vector<int> codes(walks->size(), 0);

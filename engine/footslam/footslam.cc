@@ -337,17 +337,17 @@ class Engine final : public FootSlam::Impl {
       lo_y = std::min(lo_y, model_.y(i));
       hi_y = std::max(hi_y, model_.y(i));
     }
+    // A block's box: its corner hexagons' centres, widened by a hexagon's width (the odd rows
+    // are offset by half of one) and its circumradius.
+    const int shift = layout_.log2_degree() * (store_level_ + 1);
+    const double margin = (std::sqrt(3.0) + 1) * config_.hex_radius_m;
     std::vector<uint64_t> far;
     for (uint64_t prefix : map_.Blocks(store_level_)) {
-      // The block's box: its corner hexagons' centres, widened by a hexagon's width (the odd
-      // rows are offset by half of one) and its circumradius.
-      const int shift = layout_.log2_degree() * (store_level_ + 1);
       const uint64_t first = prefix << shift;
       const uint64_t last = first | ((uint64_t{1} << shift) - 1);
       double x0, y0, x1, y1;
       grid_.Center(model_.HexOfKey(first), &x0, &y0);
       grid_.Center(model_.HexOfKey(last), &x1, &y1);
-      const double margin = (std::sqrt(3.0) + 1) * config_.hex_radius_m;
       const double gap_x =
           std::max({0.0, std::min(x0, x1) - margin - hi_x, lo_x - std::max(x0, x1) - margin});
       const double gap_y =
