@@ -15,7 +15,8 @@ namespace grove {
 // the parent's own reference over and the others call share(), so a parent with c copies costs
 // c - 1 increments; the taken-over entries of *current become nullptr, so what is left in
 // *current is exactly the references of the dead generation, to be released.
-// REQUIRES: parents nondecreasing (as every resampling scheme here produces them).
+// REQUIRES: the copies of a parent are adjacent in `parents` (every resampling scheme here gives
+// a nondecreasing list; across ranks, each rank's particles come in rank order).
 // `next` receives the result; a buffer kept between generations spares an allocation and a fill.
 template <typename Handle, typename Share>
 void GatherShared(std::span<const uint32_t> parents, std::vector<Handle>* current,

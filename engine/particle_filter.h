@@ -37,6 +37,7 @@
 
 #include "concurrency/worker_pool.h"
 #include "engine/checkpoint_io.h"
+#include "engine/collective.h"
 #include "engine/resampler.h"
 #include "grove/status.h"
 
@@ -52,6 +53,14 @@ struct FilterOptions {
   size_t batch = 512;
   // Seed of every random stream. Default: 1.
   uint64_t seed = 1;
+  // Ranks that run this filter together (nullptr: this process holds every particle). Each
+  // rank's model holds its RankShare(total_particles, ranks, rank, kSumBlock) of the particles,
+  // as global particles [first, first + model size); weights are normalised and resampled over
+  // all of them, and a particle whose copies belong to another rank moves there (the model
+  // exports and imports it: MigratingModel). Only systematic resampling runs across ranks.
+  Collective* collective = nullptr;
+  // The whole filter's particle count, with a collective.
+  uint64_t total_particles = 0;
 };
 
 // Wall time spent in each phase, summed over steps (seconds).
@@ -71,6 +80,17 @@ concept FilterModel = requires(M& m, const M& cm, std::span<const uint32_t> pare
   { m.Gather(parents, workers) } -> std::same_as<void>;
   // Frees what only the previous generation reached.
   { m.ReleaseDead(workers) } -> std::same_as<void>;
+};
+
+// A model whose particles can move between ranks: Export() writes particles `which` (local
+// indices, increasing) with everything they share written once; Import() appends `count`
+// particles so written to the model's own (size() grows by count until the next Gather(), whose
+// parents may name them), checking every value, with paths no newer than `step`.
+template <typename M>
+concept MigratingModel = requires(const M& cm, M& m, std::span<const uint32_t> which, ByteWriter* w,
+                                  ByteReader* r, size_t count, uint64_t step) {
+  { cm.Export(which, w) } -> std::same_as<void>;
+  { m.Import(r, count, step) } -> std::same_as<Status>;
 };
 
 // A model that weights `Input`: adds each particle's log-likelihood increment to log_w[i] for i
@@ -133,7 +153,12 @@ class ParticleFilter {
       : model_(model),
         workers_(workers),
         options_(options),
-        log_w_(model->size(), -std::log(static_cast<double>(model->size()))),
+        total_(options.collective == nullptr ? model->size() : options.total_particles),
+        first_(options.collective == nullptr ? 0
+                                             : RankShare(total_, options.collective->size(),
+                                                         options.collective->rank(), kSumBlock)
+                                                   .first),
+        log_w_(model->size(), -std::log(static_cast<double>(total_))),
         parents_(model->size()) {}
 
   // Runs one weighting step on `input`. Returns the model's error (the lowest failing batch's),
@@ -150,6 +175,7 @@ class ParticleFilter {
     if constexpr (PopulationModel<Model, Input> && !CompletingModel<Model, Input>) {
       if (status.ok()) status = model_->Population(input, step_, *workers_);
     }
+    if (options_.collective != nullptr) status = AgreeStatus(*options_.collective, status);
     auto t1 = Clock::now();
     times_.advance_s += Seconds(t1 - t0);
     if (!status.ok()) {
@@ -165,9 +191,17 @@ class ParticleFilter {
       return status;
     }
     ess_sum_ += ess_;
-    const size_t n = log_w_.size();
+    const double n = static_cast<double>(total_);
     if (options_.resample_threshold >= 1.0 || ess_ < options_.resample_threshold * n) {
-      Resample();
+      if (options_.collective == nullptr) {
+        Resample();
+      } else {
+        status = ResampleAcross();
+        if (!status.ok()) {
+          ++step_;
+          return status;
+        }
+      }
     }
     if constexpr (CompletingModel<Model, Input>) {
       auto t3 = Clock::now();
@@ -252,7 +286,7 @@ class ParticleFilter {
     return Status::Ok();
   }
 
-  // Normalised log weights (log w_i, sum of w_i = 1).
+  // Normalised log weights (log w_i, sum of w_i = 1) of this rank's particles.
   std::span<const double> log_weights() const { return log_w_; }
   // Effective sample size after the last step's update, before any resampling.
   double ess() const { return ess_; }
@@ -266,7 +300,14 @@ class ParticleFilter {
   const FilterOptions& options() const { return options_; }
   // The particle that was heaviest after the last update (lowest index on ties), followed
   // through resampling to its first copy: resampling equalises weights but not evidence.
+  // Across ranks, a global index (it may be another rank's particle).
   size_t heaviest() const { return heaviest_; }
+  // The global index of this rank's first particle and the whole filter's count.
+  uint64_t first_particle() const { return first_; }
+  uint64_t total_particles() const { return total_; }
+  // Across ranks: the bytes of particles this rank has sent to others, and how many particles.
+  uint64_t sent_bytes() const { return sent_bytes_; }
+  uint64_t sent_particles() const { return sent_particles_; }
 
  private:
   template <typename D>
@@ -301,6 +342,19 @@ class ParticleFilter {
           }
           return p;
         });
+    if (options_.collective != nullptr) {
+      // One partial per rank, combined in rank order as the blocks are: the same first maximum.
+      Partial mine;
+      for (const Partial& p : maxes) {
+        mine.nan = mine.nan || p.nan;
+        if (p.max > mine.max) {
+          mine.max = p.max;
+          mine.argmax = first_ + p.argmax;
+        }
+      }
+      GROVE_RETURN_IF_ERROR(
+          AllGatherValues<Partial>(*options_.collective, std::span(&mine, 1), &maxes));
+    }
     double max = -std::numeric_limits<double>::infinity();
     for (const Partial& p : maxes) {
       if (p.nan) return Degenerate("a particle weight is NaN");
@@ -316,6 +370,7 @@ class ParticleFilter {
           for (size_t i = begin; i < end; ++i) s += std::exp(log_w_[i] - max);
           return s;
         });
+    GROVE_RETURN_IF_ERROR(GatherBlocks(&sums));
     double total = 0;
     for (double s : sums) total += s;
     const double log_total = max + std::log(total);
@@ -332,10 +387,20 @@ class ParticleFilter {
           }
           return s;
         });
+    GROVE_RETURN_IF_ERROR(GatherBlocks(&squares));
     double sum_sq = 0;
     for (double s : squares) sum_sq += s;
     ess_ = 1.0 / sum_sq;
     return Status::Ok();
+  }
+
+  // Across ranks, every rank's per-block values in block order (ranks hold whole blocks in
+  // order); alone, nothing to do.
+  Status GatherBlocks(std::vector<double>* blocks) {
+    if (options_.collective == nullptr) return Status::Ok();
+    std::vector<double> mine;
+    mine.swap(*blocks);
+    return AllGatherValues<double>(*options_.collective, mine, blocks);
   }
 
   static Status Degenerate(const char* what) {
@@ -363,12 +428,122 @@ class ParticleFilter {
     times_.release_s += Seconds(t2 - t1);
   }
 
+  // Systematic resampling across ranks: every rank computes its own particles' copies from the
+  // gathered block sums, sends each other rank the particles whose copies it holds (once per
+  // rank, with their copy counts), and gathers its new generation from its own and the received
+  // ones in rank order, which is slot order.
+  Status ResampleAcross() {
+    using Clock = std::chrono::steady_clock;
+    auto t0 = Clock::now();
+    if (options_.resampling != ResamplingScheme::kSystematic) {
+      return InvalidArgumentError(
+          std::string("resampling: a filter across ranks resamples systematically, not ") +
+          ResamplingSchemeName(options_.resampling));
+    }
+    if constexpr (!MigratingModel<Model>) {
+      return InvalidArgumentError("the model's particles cannot move between ranks");
+    } else {
+      Collective& c = *options_.collective;
+      const int ranks = c.size(), me = c.rank();
+      const size_t n = log_w_.size();
+      std::vector<double> block_sums;
+      GROVE_RETURN_IF_ERROR(
+          AllGatherValues<double>(c, BlockSums(weights_, *workers_), &block_sums));
+      slots_.resize(n + 1);
+      SystematicSlots(weights_, first_ / kSumBlock, block_sums, total_,
+                      SystematicUniform(options_.seed, step_), *workers_, slots_);
+      // The heaviest particle's first copy (Resample()'s lower bound), from its rank.
+      uint64_t heaviest = UINT64_MAX;
+      if (heaviest_ >= first_ && heaviest_ - first_ < n) heaviest = slots_[heaviest_ - first_];
+      std::vector<uint64_t> heaviest_all;
+      GROVE_RETURN_IF_ERROR(AllGatherValues<uint64_t>(c, std::span(&heaviest, 1), &heaviest_all));
+      heaviest_ = *std::min_element(heaviest_all.begin(), heaviest_all.end());
+      // Copies of local particle i that slots [lo, hi) hold.
+      auto copies_in = [&](size_t i, const ParticleShare& s) {
+        uint64_t lo = std::max(slots_[i], s.first), hi = std::min(slots_[i + 1], s.first + s.count);
+        return hi > lo ? hi - lo : 0;
+      };
+      std::vector<std::string> to(static_cast<size_t>(ranks));
+      std::vector<uint32_t> which, copies;
+      for (int q = 0; q < ranks; ++q) {
+        if (q == me) continue;
+        const ParticleShare share = RankShare(total_, ranks, q, kSumBlock);
+        which.clear();
+        copies.clear();
+        for (size_t i = 0; i < n; ++i) {
+          if (uint64_t k = copies_in(i, share); k > 0) {
+            which.push_back(static_cast<uint32_t>(i));
+            copies.push_back(static_cast<uint32_t>(k));
+          }
+        }
+        if (which.empty()) continue;
+        ByteWriter w;
+        w.Put<uint64_t>(which.size());
+        w.PutBytes(copies.data(), copies.size() * sizeof(uint32_t));
+        model_->Export(which, &w);
+        to[static_cast<size_t>(q)] = w.Take();
+        sent_bytes_ += to[static_cast<size_t>(q)].size();
+        sent_particles_ += which.size();
+      }
+      std::vector<std::string> from;
+      GROVE_RETURN_IF_ERROR(c.AllToAll(to, &from));
+      parents_.clear();
+      const ParticleShare own{first_, n};
+      Status s;
+      for (int q = 0; q < ranks && s.ok(); ++q) {
+        if (q == me) {
+          for (size_t i = 0; i < n; ++i) {
+            parents_.insert(parents_.end(), copies_in(i, own), static_cast<uint32_t>(i));
+          }
+          continue;
+        }
+        if (from[static_cast<size_t>(q)].empty()) continue;
+        ByteReader r(from[static_cast<size_t>(q)], "particles from rank " + std::to_string(q));
+        uint64_t m = 0;
+        s = r.GetCount("particle count", sizeof(uint32_t), &m);
+        if (s.ok()) {
+          copies.resize(m);
+          s = r.GetBytes("copies", copies.data(), m * sizeof(uint32_t));
+        }
+        const size_t base = model_->size();
+        if (s.ok()) s = model_->Import(&r, m, step_ + 1);
+        if (s.ok() && !r.at_end()) s = r.Error("end", "bytes after the particles");
+        for (size_t j = 0; s.ok() && j < m; ++j) {
+          if (copies[j] == 0 || copies[j] > n - std::min(n, parents_.size())) {
+            s = r.Error("copies", "more copies than the rank's particles");
+          } else {
+            parents_.insert(parents_.end(), copies[j], static_cast<uint32_t>(base + j));
+          }
+        }
+      }
+      if (s.ok() && parents_.size() != n) {
+        s = InternalError("resampling across ranks: " + std::to_string(parents_.size()) +
+                          " copies for " + std::to_string(n) + " particles");
+      }
+      GROVE_RETURN_IF_ERROR(AgreeStatus(c, s));
+      model_->Gather(parents_, *workers_);
+      auto t1 = Clock::now();
+      model_->ReleaseDead(*workers_);
+      auto t2 = Clock::now();
+      std::fill(log_w_.begin(), log_w_.end(), -std::log(static_cast<double>(total_)));
+      ++resamplings_;
+      times_.resample_s += Seconds(t1 - t0);
+      times_.release_s += Seconds(t2 - t1);
+      return Status::Ok();
+    }
+  }
+
   Model* model_;
   WorkerPool* workers_;
   FilterOptions options_;
+  uint64_t total_;  // particles in the whole filter
+  uint64_t first_;  // this rank's first particle
   std::vector<double> log_w_;
   std::vector<double> weights_;  // exp(log_w_) after the last normalisation
   std::vector<uint32_t> parents_;
+  std::vector<uint64_t> slots_;  // across ranks: each particle's first copy
+  uint64_t sent_bytes_ = 0;
+  uint64_t sent_particles_ = 0;
   std::vector<Status> batch_status_;
   size_t heaviest_ = 0;
   uint64_t step_ = 0;

@@ -12,37 +12,47 @@ namespace {
 // Stream keys for the resampler: one (step, particle) pair no particle uses.
 constexpr uint32_t kResampleParticle = 0xFFFFFFFFu;
 
-void SystematicResample(std::span<const double> weights, double u, WorkerPool& workers,
-                        std::span<uint32_t> parents) {
-  const size_t n_in = weights.size();
-  const size_t n_out = parents.size();
-  std::vector<double> block_sum =
-      workers.MapBlocks<double>(n_in, kSumBlock, [&](size_t, size_t begin, size_t end) {
-        double s = 0;
-        for (size_t i = begin; i < end; ++i) s += weights[i];
-        return s;
-      });
-  std::vector<double> prefix(block_sum.size() + 1, 0.0);
-  for (size_t b = 0; b < block_sum.size(); ++b) prefix[b + 1] = prefix[b] + block_sum[b];
+// Calls emit(i, k, k_end) for each particle i of block b (global block index, particles
+// [begin, end) of `weights`, which starts at block first_block): the next generation's slots
+// [k, k_end) copy particle i. Output slot k takes the particle whose cumulative interval holds
+// (k + u) / n_out, so particle i gets slots [ceil(n_out * C_{i-1} - u), ceil(n_out * C_i - u)).
+template <typename Emit>
+void SystematicBlock(std::span<const double> weights, std::span<const double> prefix, size_t b,
+                     size_t begin, size_t end, size_t n_out, double u, Emit&& emit) {
   const double scale = static_cast<double>(n_out) / prefix.back();
-  // Output slot k takes the particle whose cumulative interval holds (k + u) / n_out, so particle
-  // i gets slots [ceil(n_out * C_{i-1} - u), ceil(n_out * C_i - u)).
   auto first_slot = [&](double cumulative) {
     double x = std::ceil(cumulative * scale - u);
     return x <= 0 ? size_t{0} : std::min(n_out, static_cast<size_t>(x));
   };
-  workers.ParallelFor(block_sum.size(), 1, [&](int, size_t b0, size_t b1) {
+  double c = prefix[b];
+  size_t k = first_slot(c);
+  for (size_t i = begin; i < end; ++i) {
+    // The block's last particle ends exactly where the next block starts.
+    c = i + 1 == end ? prefix[b + 1] : c + weights[i];
+    size_t k_end = first_slot(c);
+    emit(i, k, k_end);
+    k = k_end;
+  }
+}
+
+std::vector<double> BlockPrefix(std::span<const double> block_sum) {
+  std::vector<double> prefix(block_sum.size() + 1, 0.0);
+  for (size_t b = 0; b < block_sum.size(); ++b) prefix[b + 1] = prefix[b] + block_sum[b];
+  return prefix;
+}
+
+void SystematicResample(std::span<const double> weights, double u, WorkerPool& workers,
+                        std::span<uint32_t> parents) {
+  const size_t n_in = weights.size();
+  const size_t n_out = parents.size();
+  std::vector<double> prefix = BlockPrefix(BlockSums(weights, workers));
+  workers.ParallelFor(prefix.size() - 1, 1, [&](int, size_t b0, size_t b1) {
     for (size_t b = b0; b < b1; ++b) {
       size_t begin = b * kSumBlock;
       size_t end = std::min(n_in, begin + kSumBlock);
-      double c = prefix[b];
-      size_t k = first_slot(c);
-      for (size_t i = begin; i < end; ++i) {
-        // The block's last particle ends exactly where the next block starts.
-        c = i + 1 == end ? prefix[b + 1] : c + weights[i];
-        size_t k_end = first_slot(c);
-        for (; k < k_end; ++k) parents[k] = static_cast<uint32_t>(i);
-      }
+      SystematicBlock(weights, prefix, b, begin, end, n_out, u, [&](size_t i, size_t k, size_t e) {
+        for (; k < e; ++k) parents[k] = static_cast<uint32_t>(i);
+      });
     }
   });
 }
@@ -67,6 +77,39 @@ void AssignSorted(std::span<const double> weights, const std::vector<double>& so
 }
 
 }  // namespace
+
+std::vector<double> BlockSums(std::span<const double> weights, WorkerPool& workers) {
+  return workers.MapBlocks<double>(weights.size(), kSumBlock,
+                                   [&](size_t, size_t begin, size_t end) {
+                                     double s = 0;
+                                     for (size_t i = begin; i < end; ++i) s += weights[i];
+                                     return s;
+                                   });
+}
+
+double SystematicUniform(uint64_t seed, uint64_t step) {
+  return RandomStream(seed, step, kResampleParticle, StreamPurpose::kResample).NextUniform();
+}
+
+void SystematicSlots(std::span<const double> weights, size_t first_block,
+                     std::span<const double> block_sums, size_t n_out, double u,
+                     WorkerPool& workers, std::span<uint64_t> slots) {
+  const size_t n = weights.size();
+  std::vector<double> prefix = BlockPrefix(block_sums);
+  if (n == 0) return;
+  const size_t blocks = (n + kSumBlock - 1) / kSumBlock;
+  workers.ParallelFor(blocks, 1, [&](int, size_t b0, size_t b1) {
+    for (size_t b = b0; b < b1; ++b) {
+      size_t begin = b * kSumBlock;
+      size_t end = std::min(n, begin + kSumBlock);
+      SystematicBlock(weights, prefix, first_block + b, begin, end, n_out, u,
+                      [&](size_t i, size_t k, size_t e) {
+                        slots[i] = k;
+                        if (i + 1 == n) slots[n] = e;
+                      });
+    }
+  });
+}
 
 const char* ResamplingSchemeName(ResamplingScheme scheme) {
   switch (scheme) {
@@ -95,12 +138,12 @@ bool ParseResamplingScheme(std::string_view name, ResamplingScheme* scheme) {
 
 void Resample(ResamplingScheme scheme, std::span<const double> weights, uint64_t seed,
               uint64_t step, WorkerPool& workers, std::span<uint32_t> parents) {
-  RandomStream stream(seed, step, kResampleParticle, StreamPurpose::kResample);
-  const size_t n = parents.size();
   if (scheme == ResamplingScheme::kSystematic) {
-    SystematicResample(weights, stream.NextUniform(), workers, parents);
+    SystematicResample(weights, SystematicUniform(seed, step), workers, parents);
     return;
   }
+  RandomStream stream(seed, step, kResampleParticle, StreamPurpose::kResample);
+  const size_t n = parents.size();
   double total = 0;
   for (double w : weights) total += w;
   std::vector<uint32_t> counts(weights.size(), 0);

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <span>
 #include <string_view>
+#include <vector>
 
 #include "concurrency/worker_pool.h"
 #include "grove/resampling.h"
@@ -25,6 +26,22 @@ void Resample(ResamplingScheme scheme, std::span<const double> weights, uint64_t
 
 // Fixed block size for sums over particles: results are independent of the thread count.
 inline constexpr size_t kSumBlock = 4096;
+
+// The sums of weights over the fixed blocks of kSumBlock, in block order.
+std::vector<double> BlockSums(std::span<const double> weights, WorkerPool& workers);
+
+// The uniform of systematic resampling at `step`: the same on every rank.
+double SystematicUniform(uint64_t seed, uint64_t step);
+
+// Systematic resampling of one share of the particles (a rank of a filter across ranks), bit for
+// bit as Resample(kSystematic) over all of them: `weights` are the share's, starting at block
+// `first_block`; `block_sums` holds every block's BlockSums, all ranks' in block order; n_out is
+// the next generation's size and u the SystematicUniform. Sets slots[i] to the first slot of the
+// next generation that copies share particle i and slots[n] past the last particle's last copy:
+// particle i has slots[i + 1] - slots[i] copies. REQUIRES: slots.size() == weights.size() + 1.
+void SystematicSlots(std::span<const double> weights, size_t first_block,
+                     std::span<const double> block_sums, size_t n_out, double u,
+                     WorkerPool& workers, std::span<uint64_t> slots);
 
 }  // namespace grove
 

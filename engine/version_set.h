@@ -62,7 +62,8 @@ class VersionSet {
   }
 
   // The next generation: version k becomes a reference to parents[k]'s; the old versions are
-  // kept as the dead generation until ReleaseDead(). REQUIRES: parents nondecreasing.
+  // kept as the dead generation until ReleaseDead(). REQUIRES: the copies of a parent are
+  // adjacent in `parents` (as in any nondecreasing list).
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     GROVE_DCHECK(dead_.empty());
     GatherShared(parents, &roots_, workers, &Store::Share, &spare_);
@@ -86,6 +87,21 @@ class VersionSet {
     GROVE_CHECK(loaded.size() == roots_.size());
     for (Root r : roots_) store_->Release(r, 0);
     roots_.swap(loaded);
+  }
+
+  // The versions of particles `which`, for a store's Save() (the set keeps its references).
+  std::vector<Root> Pick(std::span<const uint32_t> which) const {
+    std::vector<Root> picked;
+    picked.reserve(which.size());
+    for (uint32_t i : which) picked.push_back(roots_[i]);
+    return picked;
+  }
+
+  // Appends versions (one reference each, as a store's Load() gives them): particles that came
+  // from elsewhere, for the next Gather() to name. REQUIRES: no dead generation.
+  void Append(const std::vector<Root>& loaded) {
+    GROVE_DCHECK(dead_.empty());
+    roots_.insert(roots_.end(), loaded.begin(), loaded.end());
   }
 
   // Every root reference the set holds, the dead generation's included: what a store's

@@ -157,18 +157,26 @@ class AlphabetHTreeMap {
   }
 
   Status Load(ByteReader* r, uint64_t /*key_limit: every trie key is a grid hexagon*/) {
-    const int symbol_count = alphabet_->symbol_count();
     std::vector<typename SymbolTrie::Root> symbols;
     std::vector<typename FullTrie::Root> full;
-    GROVE_RETURN_IF_ERROR(symbols_.Load(
-        r, symbol_roots_.size(), 0, [&](uint16_t s) { return s == kEscaped || s < symbol_count; },
-        &symbols));
-    if (Status s = full_.Load(r, full_roots_.size(), 0, &PlausibleHtc, &full); !s.ok()) {
-      for (auto* root : symbols) symbols_.Release(root, 0);
-      return s;
-    }
+    GROVE_RETURN_IF_ERROR(LoadRoots(r, symbol_roots_.size(), &symbols, &full));
     symbol_roots_.Replace(std::move(symbols));
     full_roots_.Replace(std::move(full));
+    return Status::Ok();
+  }
+
+  // Particles `which` as Save() writes them (shared nodes once); LoadMore() appends `count`
+  // particles so written.
+  void SaveSome(std::span<const uint32_t> which, ByteWriter* w) const {
+    symbols_.Save(symbol_roots_.Pick(which), w);
+    full_.Save(full_roots_.Pick(which), w);
+  }
+  Status LoadMore(ByteReader* r, size_t count, uint64_t /*key_limit*/) {
+    std::vector<typename SymbolTrie::Root> symbols;
+    std::vector<typename FullTrie::Root> full;
+    GROVE_RETURN_IF_ERROR(LoadRoots(r, count, &symbols, &full));
+    symbol_roots_.Append(symbols);
+    full_roots_.Append(full);
     return Status::Ok();
   }
 
@@ -187,6 +195,18 @@ class AlphabetHTreeMap {
   }
 
  private:
+  Status LoadRoots(ByteReader* r, size_t count, std::vector<typename SymbolTrie::Root>* symbols,
+                   std::vector<typename FullTrie::Root>* full) {
+    const int symbol_count = alphabet_->symbol_count();
+    GROVE_RETURN_IF_ERROR(symbols_.Load(
+        r, count, 0, [&](uint16_t s) { return s == kEscaped || s < symbol_count; }, symbols));
+    if (Status s = full_.Load(r, count, 0, &PlausibleHtc, full); !s.ok()) {
+      for (auto* root : *symbols) symbols_.Release(root, 0);
+      return s;
+    }
+    return Status::Ok();
+  }
+
   const Alphabet* alphabet_;
   SymbolTrie symbols_;
   FullTrie full_;

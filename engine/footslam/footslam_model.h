@@ -25,6 +25,7 @@
 #include "concurrency/worker_pool.h"
 #include "engine/ancestry.h"
 #include "engine/checkpoint_io.h"
+#include "engine/collective.h"
 #include "engine/footslam/hex_grid.h"
 #include "engine/footslam/hex_table.h"
 #include "engine/footslam/htc.h"
@@ -64,15 +65,20 @@ using PriorMap = HexTable<PriorHex>;
 template <typename Map>
 class FootSlamModel {
  public:
-  // REQUIRES: config.Validate() is ok. Call Init() before the first step.
+  // REQUIRES: config.Validate() is ok. Call Init() before the first step. `share`: the
+  // particles this model holds, of config.particles (a rank of a filter across ranks; default
+  // all); particle i here is particle share.first + i of the filter, whose random streams it
+  // draws. The map must hold share.count particles.
   FootSlamModel(const FootSlamConfig& config, const HexGrid* grid, const HTreeLayout* layout,
-                Map* map, int slots)
+                Map* map, int slots, ParticleShare share = {})
       : config_(config),
         grid_(grid),
         layout_(layout),
         map_(map),
         history_(slots),
-        n_(static_cast<size_t>(config.particles)),
+        first_(share.first),
+        n_(share.count != 0 || share.first != 0 ? static_cast<size_t>(share.count)
+                                                : static_cast<size_t>(config.particles)),
         max_step_crossings_(8 * int64_t{config.grid_size}),
         history_roots_(&history_, n_) {
     x_.assign(n_, config.start_x_m);
@@ -90,7 +96,7 @@ class FootSlamModel {
     KeyOf(start, &start_key);  // the grid is centred on the start: always on it
     key_.assign(n_, start_key);
     for (size_t i = 0; i < n_; ++i) {
-      RandomStream rs(config.seed, 0, static_cast<uint32_t>(i), StreamPurpose::kInit);
+      RandomStream rs(config.seed, 0, static_cast<uint32_t>(first_ + i), StreamPurpose::kInit);
       heading_error_[i] = config.initial_heading_sigma_rad * rs.NextNormal();
       scale_[i] = 1.0 + config.scale_sigma * rs.NextNormal();
     }
@@ -152,8 +158,8 @@ class FootSlamModel {
       if (at == 0) {
         const size_t block_end = std::min(end, i + kNoiseBlock);
         if (motion_draws_ > 0) {
-          DrawNormals(config_.seed, step + 1, StreamPurpose::kMotion, static_cast<uint32_t>(i),
-                      static_cast<uint32_t>(block_end),
+          DrawNormals(config_.seed, step + 1, StreamPurpose::kMotion,
+                      static_cast<uint32_t>(first_ + i), static_cast<uint32_t>(first_ + block_end),
                       std::span<double* const>(noise, static_cast<size_t>(motion_draws_)));
         }
         for (size_t k = i; k < block_end; ++k) {
@@ -184,8 +190,8 @@ class FootSlamModel {
       }
       if (!std::isfinite(nx) || !std::isfinite(ny) || !std::isfinite(heading)) {
         return FailedPreconditionError(fmt::format(
-            "particle {}'s pose ({}, {}, {}) is not finite: the motion noise is too large", i, nx,
-            ny, heading));
+            "particle {}'s pose ({}, {}, {}) is not finite: the motion noise is too large",
+            first_ + i, nx, ny, heading));
       }
       double lw = 0;
       bool outside = false, too_long = false, no_memory = false;
@@ -219,26 +225,26 @@ class FootSlamModel {
         }
         return true;
       });
-      if (no_memory) return NoMemory(i, "map");
+      if (no_memory) return NoMemory(first_ + i, "map");
       if (too_long) {
         return OutOfRangeError(fmt::format(
             "particle {}'s step from ({:.7g}, {:.7g}) to ({:.7g}, {:.7g}) m crosses more than {} "
             "hexagons, 8 x grid_size: the odometry or the motion noise is wrong",
-            i, x_[i], y_[i], nx, ny, max_step_crossings_));
+            first_ + i, x_[i], y_[i], nx, ny, max_step_crossings_));
       }
       uint64_t end_key;
       if (outside || !KeyOf(end_hex, &end_key)) {
         const bool fixed = config_.grid == FootSlamGrid::kFixed;
         return OutOfRangeError(fmt::format(
-            "particle {} at ({:.7g}, {:.7g}) m left the {} x {} hexagon grid {}; {}", i, nx, ny,
-            layout_->max_grid_size(), layout_->max_grid_size(),
+            "particle {} at ({:.7g}, {:.7g}) m left the {} x {} hexagon grid {}; {}", first_ + i,
+            nx, ny, layout_->max_grid_size(), layout_->max_grid_size(),
             fixed ? "centred on the start" : "around the start, the largest a grid grows to",
             fixed ? "raise grid_size or let the grid grow (grid = growing)"
                   : "the motion noise is too large or the odometry wrong"));
       }
       PoseHistory::Node* pose = history_.Append(history_roots_[i], static_cast<uint32_t>(step + 1),
                                                 PathPoseOf(nx, ny, heading), slot);
-      if (pose == nullptr) return NoMemory(i, "path");
+      if (pose == nullptr) return NoMemory(first_ + i, "path");
       history_roots_[i] = pose;
       log_w[i] += lw;
       x_[i] = nx;
@@ -252,6 +258,7 @@ class FootSlamModel {
   }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
+    n_ = parents.size();
     for (std::vector<double>* v : {&x_, &y_, &heading_, &heading_error_, &scale_}) {
       GatherValues(parents, workers, v, &spare_.doubles);
     }
@@ -304,51 +311,48 @@ class FootSlamModel {
   // Replaces the state of a new model with a saved one taken after step `steps`.
   Status Load(ByteReader* r, uint64_t steps) {
     GROVE_RETURN_IF_ERROR(ReadParticleCount(r, n_));
-    const char* names[] = {"x", "y", "heading", "heading error", "scale"};
-    std::vector<double>* vectors[] = {&x_, &y_, &heading_, &heading_error_, &scale_};
-    for (int k = 0; k < 5; ++k) {
-      GROVE_RETURN_IF_ERROR(r->GetBytes(names[k], vectors[k]->data(), n_ * sizeof(double)));
-      for (double v : *vectors[k]) {
-        if (!std::isfinite(v)) return r->Error(names[k], "a value is not finite");
-      }
-    }
-    // Derived state: the same calls on the same values as in Advance(), so bit-identical.
-    for (size_t i = 0; i < n_; ++i) {
-      double c, s;
-      SinCosReference(&heading_[i], 1, &s, &c);
-      heading_unit_[i] = {c, s};
-    }
-    GROVE_RETURN_IF_ERROR(r->GetBytes("hexagon", hex_.data(), n_ * sizeof(Hex)));
-    // Every hexagon of the grid lies within this distance of the start on each axis.
-    const double extent = (layout_->max_grid_size() + 2.0) * 2.0 * grid_->radius_m();
-    for (size_t i = 0; i < n_; ++i) {
-      if (std::abs(x_[i] - config_.start_x_m) > extent ||
-          std::abs(y_[i] - config_.start_y_m) > extent) {
-        return r->Error("x", "particle " + std::to_string(i) + " is far outside the grid");
-      }
-      // The hexagon is where the particle stands (or a neighbour, for a point on an edge), on
-      // the grid.
-      Hex at = grid_->HexAt(x_[i], y_[i]);
-      int64_t dq = int64_t{hex_[i].q} - at.q, dr = int64_t{hex_[i].r} - at.r;
-      uint64_t key;
-      if (std::max({std::abs(dq), std::abs(dr), std::abs(dq + dr)}) > 1 || !KeyOf(hex_[i], &key)) {
-        return r->Error("hexagon", "particle " + std::to_string(i) +
-                                       " is not on the grid or not in the hexagon of its position");
-      }
-      key_[i] = key;
-    }
+    GROVE_RETURN_IF_ERROR(ReadValues(r, 0, n_));
     if (steps >= UINT32_MAX) return r->Error("step", "too many steps");
     std::vector<PoseHistory::Node*> heads;
-    GROVE_RETURN_IF_ERROR(
-        history_.Load(r, n_, static_cast<uint32_t>(steps), 0, &FinitePathPose, &heads));
-    for (size_t i = 0; i < n_; ++i) {
-      if (heads[i] == nullptr || heads[i]->step != steps) {
-        for (auto* h : heads) history_.Release(h, 0);
-        return r->Error("path head", "particle " + std::to_string(i) +
-                                         "'s path does not end at the checkpoint's step");
-      }
-    }
+    GROVE_RETURN_IF_ERROR(ReadPaths(r, n_, steps, &heads));
     history_roots_.Replace(std::move(heads));
+    return Status::Ok();
+  }
+
+  // Particles `which` (increasing) for another rank: their values, their paths and their maps,
+  // each shared entry and node written once.
+  void Export(std::span<const uint32_t> which, ByteWriter* w) const {
+    for (const std::vector<double>* v : {&x_, &y_, &heading_, &heading_error_, &scale_}) {
+      for (uint32_t i : which) w->Put((*v)[i]);
+    }
+    for (uint32_t i : which) w->Put(hex_[i]);
+    PoseHistory::Save(history_roots_.Pick(which), w);
+    map_->SaveSome(which, w);
+  }
+
+  // Appends `count` particles written by Export() after step `steps`: size() grows by count
+  // until the next Gather(). On error the model must not step again.
+  Status Import(ByteReader* r, size_t count, uint64_t steps) {
+    if (count > r->remaining() / (5 * sizeof(double) + sizeof(Hex))) {
+      return r->Error("particle count", "larger than the message");
+    }
+    const size_t at = n_;
+    for (std::vector<double>* v : {&x_, &y_, &heading_, &heading_error_, &scale_}) {
+      v->resize(at + count);
+    }
+    heading_unit_.resize(at + count);
+    hex_.resize(at + count);
+    key_.resize(at + count);
+    GROVE_RETURN_IF_ERROR(ReadValues(r, at, at + count));
+    if (steps >= UINT32_MAX) return r->Error("step", "too many steps");
+    std::vector<PoseHistory::Node*> heads;
+    GROVE_RETURN_IF_ERROR(ReadPaths(r, count, steps, &heads));
+    if (Status s = map_->LoadMore(r, count, layout_->key_count()); !s.ok()) {
+      for (auto* h : heads) history_.Release(h, 0);
+      return s;
+    }
+    history_roots_.Append(heads);
+    n_ = at + count;
     return Status::Ok();
   }
 
@@ -374,6 +378,64 @@ class FootSlamModel {
     return PathPose{static_cast<float>(x - config_.start_x_m),
                     static_cast<float>(y - config_.start_y_m), static_cast<float>(heading)};
   }
+  // Reads particles [begin, end)'s values as Save() writes them (each array in turn) and checks
+  // them; derives their sines, cosines and keys.
+  Status ReadValues(ByteReader* r, size_t begin, size_t end) {
+    const size_t count = end - begin;
+    const char* names[] = {"x", "y", "heading", "heading error", "scale"};
+    std::vector<double>* vectors[] = {&x_, &y_, &heading_, &heading_error_, &scale_};
+    for (int k = 0; k < 5; ++k) {
+      GROVE_RETURN_IF_ERROR(
+          r->GetBytes(names[k], vectors[k]->data() + begin, count * sizeof(double)));
+      for (size_t i = begin; i < end; ++i) {
+        if (!std::isfinite((*vectors[k])[i])) return r->Error(names[k], "a value is not finite");
+      }
+    }
+    // Derived state: the same calls on the same values as in Advance(), so bit-identical.
+    for (size_t i = begin; i < end; ++i) {
+      double c, s;
+      SinCosReference(&heading_[i], 1, &s, &c);
+      heading_unit_[i] = {c, s};
+    }
+    GROVE_RETURN_IF_ERROR(r->GetBytes("hexagon", hex_.data() + begin, count * sizeof(Hex)));
+    // Every hexagon of the grid lies within this distance of the start on each axis.
+    const double extent = (layout_->max_grid_size() + 2.0) * 2.0 * grid_->radius_m();
+    for (size_t i = begin; i < end; ++i) {
+      const size_t id = i - begin;  // the particle's place in what is read
+      if (std::abs(x_[i] - config_.start_x_m) > extent ||
+          std::abs(y_[i] - config_.start_y_m) > extent) {
+        return r->Error("x", "particle " + std::to_string(id) + " is far outside the grid");
+      }
+      // The hexagon is where the particle stands (or a neighbour, for a point on an edge), on
+      // the grid.
+      Hex at = grid_->HexAt(x_[i], y_[i]);
+      int64_t dq = int64_t{hex_[i].q} - at.q, dr = int64_t{hex_[i].r} - at.r;
+      uint64_t key;
+      if (std::max({std::abs(dq), std::abs(dr), std::abs(dq + dr)}) > 1 || !KeyOf(hex_[i], &key)) {
+        return r->Error("hexagon", "particle " + std::to_string(id) +
+                                       " is not on the grid or not in the hexagon of its position");
+      }
+      key_[i] = key;
+    }
+    return Status::Ok();
+  }
+
+  // Reads `count` paths as PoseHistory::Save() writes them, each ending at step `steps`.
+  Status ReadPaths(ByteReader* r, size_t count, uint64_t steps,
+                   std::vector<PoseHistory::Node*>* heads) {
+    GROVE_RETURN_IF_ERROR(
+        history_.Load(r, count, static_cast<uint32_t>(steps), 0, &FinitePathPose, heads));
+    for (size_t i = 0; i < count; ++i) {
+      if ((*heads)[i] == nullptr || (*heads)[i]->step != steps) {
+        for (auto* h : *heads) history_.Release(h, 0);
+        heads->clear();
+        return r->Error("path head", "particle " + std::to_string(i) +
+                                         "'s path does not end at the checkpoint's step");
+      }
+    }
+    return Status::Ok();
+  }
+
   static Status NoMemory(size_t i, const char* what) {
     return ResourceExhaustedError(fmt::format("out of memory for particle {}'s {}", i, what));
   }
@@ -384,6 +446,7 @@ class FootSlamModel {
   Map* map_;
   const PriorMap* prior_ = nullptr;
   PoseHistory history_;
+  uint64_t first_;  // the filter's index of particle 0 here
   size_t n_;
   static constexpr size_t kPrefetchAhead = 4;
   static constexpr size_t kPathGap = 2;

@@ -91,6 +91,18 @@ class HTreeMap {
     return Status::Ok();
   }
 
+  // Particles `which` as Save() writes them (shared nodes once); LoadMore() appends `count`
+  // particles so written.
+  void SaveSome(std::span<const uint32_t> which, ByteWriter* w) const {
+    trie_.Save(roots_.Pick(which), w);
+  }
+  Status LoadMore(ByteReader* r, size_t count, uint64_t /*key_limit*/) {
+    std::vector<typename Trie::Root> loaded;
+    GROVE_RETURN_IF_ERROR(trie_.Load(r, count, 0, &PlausibleHtc, &loaded));
+    roots_.Append(loaded);
+    return Status::Ok();
+  }
+
   Status CheckCounts() const { return trie_.CheckCounts(roots_.AllReferences()); }
 
   MemoryUse memory() const {

@@ -88,33 +88,24 @@ class NaiveMap {
 
   // Each particle's table whole: u64 hexagon count, then (u64 key, counters) per hexagon.
   void Save(ByteWriter* w) const {
-    for (const HexTable<Htc>& t : tables_) {
-      w->Put<uint64_t>(t.size());
-      t.ForEach([&](uint64_t key, const Htc& h) {
-        w->Put(key);
-        w->Put(h);
-      });
-    }
+    for (const HexTable<Htc>& t : tables_) SaveTable(t, w);
   }
 
   Status Load(ByteReader* r, uint64_t key_limit) {
     std::vector<HexTable<Htc>> loaded(tables_.size());
-    for (HexTable<Htc>& t : loaded) {
-      uint64_t count = 0;
-      GROVE_RETURN_IF_ERROR(r->GetCount("hexagon count", sizeof(uint64_t) + sizeof(Htc), &count));
-      for (uint64_t k = 0; k < count; ++k) {
-        uint64_t key = 0;
-        Htc h;
-        GROVE_RETURN_IF_ERROR(r->Get("hexagon key", &key));
-        if (key_limit != 0 && key >= key_limit) {
-          return r->Error("hexagon key", std::to_string(key) + " is outside the grid");
-        }
-        GROVE_RETURN_IF_ERROR(r->Get("hexagon counters", &h));
-        if (!PlausibleHtc(h)) return r->Error("hexagon counters", "impossible value");
-        if (!t.Insert(key, h)) return r->Error("hexagon key", std::to_string(key) + " repeated");
-      }
-    }
+    for (HexTable<Htc>& t : loaded) GROVE_RETURN_IF_ERROR(LoadTable(r, key_limit, &t));
     tables_.swap(loaded);
+    return Status::Ok();
+  }
+
+  // Particles `which` as Save() writes them; LoadMore() appends `count` particles so written.
+  void SaveSome(std::span<const uint32_t> which, ByteWriter* w) const {
+    for (uint32_t i : which) SaveTable(tables_[i], w);
+  }
+  Status LoadMore(ByteReader* r, size_t count, uint64_t key_limit) {
+    std::vector<HexTable<Htc>> loaded(count);
+    for (HexTable<Htc>& t : loaded) GROVE_RETURN_IF_ERROR(LoadTable(r, key_limit, &t));
+    for (HexTable<Htc>& t : loaded) tables_.push_back(std::move(t));
     return Status::Ok();
   }
 
@@ -133,6 +124,31 @@ class NaiveMap {
   }
 
  private:
+  static void SaveTable(const HexTable<Htc>& t, ByteWriter* w) {
+    w->Put<uint64_t>(t.size());
+    t.ForEach([&](uint64_t key, const Htc& h) {
+      w->Put(key);
+      w->Put(h);
+    });
+  }
+
+  static Status LoadTable(ByteReader* r, uint64_t key_limit, HexTable<Htc>* t) {
+    uint64_t count = 0;
+    GROVE_RETURN_IF_ERROR(r->GetCount("hexagon count", sizeof(uint64_t) + sizeof(Htc), &count));
+    for (uint64_t k = 0; k < count; ++k) {
+      uint64_t key = 0;
+      Htc h;
+      GROVE_RETURN_IF_ERROR(r->Get("hexagon key", &key));
+      if (key_limit != 0 && key >= key_limit) {
+        return r->Error("hexagon key", std::to_string(key) + " is outside the grid");
+      }
+      GROVE_RETURN_IF_ERROR(r->Get("hexagon counters", &h));
+      if (!PlausibleHtc(h)) return r->Error("hexagon counters", "impossible value");
+      if (!t->Insert(key, h)) return r->Error("hexagon key", std::to_string(key) + " repeated");
+    }
+    return Status::Ok();
+  }
+
   const HTreeLayout* layout_;
   std::vector<HexTable<Htc>> tables_;
   std::vector<HexTable<Htc>> dead_;

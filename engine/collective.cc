@@ -1,0 +1,77 @@
+#include "engine/collective.h"
+
+#include <barrier>
+
+#include "engine/checkpoint_io.h"
+
+namespace grove {
+
+Status AgreeStatus(Collective& c, const Status& mine) {
+  ByteWriter w;
+  w.Put<uint32_t>(static_cast<uint32_t>(mine.code()));
+  w.PutString(mine.message());
+  std::vector<std::string> all;
+  GROVE_RETURN_IF_ERROR(c.AllGather(w.Take(), &all));
+  for (size_t q = 0; q < all.size(); ++q) {
+    ByteReader r(all[q], "rank " + std::to_string(q) + "'s status");
+    uint32_t code = 0;
+    std::string message;
+    GROVE_RETURN_IF_ERROR(r.Get("code", &code));
+    GROVE_RETURN_IF_ERROR(r.GetString("message", &message));
+    if (code > static_cast<uint32_t>(StatusCode::kInternal)) {
+      return r.Error("code", "not a status code");
+    }
+    if (code != 0) {
+      if (static_cast<int>(q) == c.rank() || c.size() == 1) return mine;
+      return Status(static_cast<StatusCode>(code), "rank " + std::to_string(q) + ": " + message);
+    }
+  }
+  return Status::Ok();
+}
+
+struct InProcessCollective::Shared {
+  explicit Shared(int ranks)
+      : size(ranks),
+        sync(ranks),
+        gather(static_cast<size_t>(ranks)),
+        exchange(static_cast<size_t>(ranks) * static_cast<size_t>(ranks)) {}
+  int size;
+  std::barrier<> sync;
+  std::vector<const std::string*> gather;    // rank q's part
+  std::vector<const std::string*> exchange;  // [from * size + to]
+};
+
+std::vector<std::unique_ptr<Collective>> InProcessCollective::Create(int ranks) {
+  auto shared = std::make_shared<Shared>(ranks);
+  std::vector<std::unique_ptr<Collective>> out;
+  for (int r = 0; r < ranks; ++r) out.emplace_back(new InProcessCollective(shared, r));
+  return out;
+}
+
+int InProcessCollective::size() const { return shared_->size; }
+
+Status InProcessCollective::AllGather(const std::string& mine, std::vector<std::string>* all) {
+  Shared& s = *shared_;
+  s.gather[static_cast<size_t>(rank_)] = &mine;
+  s.sync.arrive_and_wait();
+  all->resize(static_cast<size_t>(s.size));
+  for (size_t q = 0; q < all->size(); ++q) (*all)[q] = *s.gather[q];
+  // Every rank has copied before any part is overwritten or goes away.
+  s.sync.arrive_and_wait();
+  return Status::Ok();
+}
+
+Status InProcessCollective::AllToAll(const std::vector<std::string>& to,
+                                     std::vector<std::string>* from) {
+  Shared& s = *shared_;
+  const size_t k = static_cast<size_t>(s.size);
+  if (to.size() != k) return InternalError("collective: one message per rank expected");
+  for (size_t q = 0; q < k; ++q) s.exchange[static_cast<size_t>(rank_) * k + q] = &to[q];
+  s.sync.arrive_and_wait();
+  from->resize(k);
+  for (size_t q = 0; q < k; ++q) (*from)[q] = *s.exchange[q * k + static_cast<size_t>(rank_)];
+  s.sync.arrive_and_wait();
+  return Status::Ok();
+}
+
+}  // namespace grove

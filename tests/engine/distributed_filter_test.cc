@@ -1,0 +1,239 @@
+// One FootSLAM filter across K ranks (threads of this process, joined by InProcessCollective)
+// gives, bit for bit, what one filter holding every particle gives: weights, poses, paths and
+// maps of every particle, the heaviest particle and the resampling count.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "concurrency/worker_pool.h"
+#include "engine/checkpoint_io.h"
+#include "engine/collective.h"
+#include "engine/footslam/alphabet.h"
+#include "engine/footslam/alphabet_htree_map.h"
+#include "engine/footslam/footslam_model.h"
+#include "engine/footslam/hex_grid.h"
+#include "engine/footslam/htree_layout.h"
+#include "engine/footslam/htree_map.h"
+#include "engine/footslam/naive_map.h"
+#include "engine/particle_filter.h"
+#include "engine/resampler.h"
+#include "grove/footslam.h"
+
+namespace grove::footslam {
+namespace {
+
+// Laps of a 12 m x 6 m corridor loop in 0.7 m steps: enough revisits that weights differ and
+// the filter resamples often.
+std::vector<StepInput> Loop(int steps) {
+  std::vector<StepInput> out;
+  const double legs[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
+  const int leg_steps[4] = {17, 9, 17, 9};
+  for (int k = 0, leg = 0, done = 0; k < steps; ++k) {
+    out.push_back({0.7 * legs[leg][0], 0.7 * legs[leg][1]});
+    if (++done == leg_steps[leg]) {
+      done = 0;
+      leg = (leg + 1) % 4;
+    }
+  }
+  return out;
+}
+
+// What one rank ends with: its particles' state written out in order, one record each, and
+// the filter's counters.
+struct RankResult {
+  Status status;
+  std::vector<double> log_w;
+  std::vector<std::string> particles;  // pose, errors, path, map
+  uint64_t heaviest = 0;
+  uint64_t resamplings = 0;
+  double mean_ess = 0;
+  uint64_t sent_bytes = 0;
+  Status counts;  // CheckCounts() after the run
+};
+
+template <typename Map>
+RankResult RunRank(const FootSlamConfig& config, const std::vector<StepInput>& steps,
+                   Collective* collective, int threads) {
+  RankResult out;
+  const int ranks = collective == nullptr ? 1 : collective->size();
+  const int rank = collective == nullptr ? 0 : collective->rank();
+  const ParticleShare share =
+      RankShare(static_cast<uint64_t>(config.particles), ranks, rank, kSumBlock);
+  HexGrid grid(config.hex_radius_m);
+  HTreeLayout layout = *HTreeLayout::Create(config.grid_size, config.degree);
+  Alphabet alphabet = *Alphabet::Create(config.alphabet);
+  WorkerPool workers(threads);
+  Map map(layout, threads, share.count, &alphabet);
+  FootSlamModel<Map> model(config, &grid, &layout, &map, threads, share);
+  EXPECT_TRUE(model.Init());
+  FilterOptions options;
+  options.seed = config.seed;
+  options.batch = 512;
+  options.collective = collective;
+  options.total_particles = static_cast<uint64_t>(config.particles);
+  ParticleFilter<FootSlamModel<Map>> filter(&model, &workers, options);
+  for (const StepInput& in : steps) {
+    out.status = filter.Update(in);
+    if (!out.status.ok()) return out;
+  }
+  out.log_w.assign(filter.log_weights().begin(), filter.log_weights().end());
+  for (size_t i = 0; i < model.size(); ++i) {
+    ByteWriter w;
+    w.Put(model.x(i));
+    w.Put(model.y(i));
+    w.Put(model.heading(i));
+    w.Put(model.heading_error(i));
+    w.Put(model.scale(i));
+    for (const auto* n : PoseHistory::Path(model.history(i))) {
+      w.Put(n->step);
+      w.Put(n->value);
+    }
+    model.map().ForEachHex(i, [&](uint64_t key, const Htc& h) {
+      w.Put(key);
+      w.Put(h);
+    });
+    out.particles.push_back(w.Take());
+  }
+  out.heaviest = filter.heaviest();
+  out.resamplings = filter.resamplings();
+  out.mean_ess = filter.mean_ess();
+  out.sent_bytes = filter.sent_bytes();
+  out.counts = model.CheckCounts();
+  return out;
+}
+
+template <typename Map>
+std::vector<RankResult> RunRanks(const FootSlamConfig& config,
+                                 const std::vector<StepInput>& steps, int ranks, int threads) {
+  std::vector<RankResult> results(static_cast<size_t>(ranks));
+  std::vector<std::unique_ptr<Collective>> endpoints = InProcessCollective::Create(ranks);
+  std::vector<std::thread> pool;
+  for (int r = 0; r < ranks; ++r) {
+    pool.emplace_back([&, r] {
+      results[static_cast<size_t>(r)] =
+          RunRank<Map>(config, steps, endpoints[static_cast<size_t>(r)].get(), threads);
+    });
+  }
+  for (std::thread& t : pool) t.join();
+  return results;
+}
+
+FootSlamConfig TestConfig() {
+  FootSlamConfig config;
+  // Three whole blocks and part of a fourth: the last rank's share ends mid-block.
+  config.particles = 3 * static_cast<int64_t>(kSumBlock) + 517;
+  config.grid_size = 64;
+  config.seed = 7;
+  return config;
+}
+
+template <typename Map>
+void ExpectSameAsOneProcess(int ranks, int threads) {
+  SCOPED_TRACE(std::to_string(ranks) + " ranks, " + std::to_string(threads) + " threads each");
+  const FootSlamConfig config = TestConfig();
+  const std::vector<StepInput> steps = Loop(120);
+  RankResult one = RunRank<Map>(config, steps, nullptr, 1);
+  ASSERT_TRUE(one.status.ok()) << one.status.message();
+  ASSERT_TRUE(one.counts.ok()) << one.counts.message();
+  ASSERT_GT(one.resamplings, 10u);  // the exchange is exercised
+  std::vector<RankResult> parts = RunRanks<Map>(config, steps, ranks, threads);
+  std::vector<double> log_w;
+  std::vector<std::string> particles;
+  uint64_t sent = 0;
+  for (const RankResult& p : parts) {
+    ASSERT_TRUE(p.status.ok()) << p.status.message();
+    ASSERT_TRUE(p.counts.ok()) << p.counts.message();
+    EXPECT_EQ(p.heaviest, one.heaviest);
+    EXPECT_EQ(p.resamplings, one.resamplings);
+    EXPECT_EQ(std::memcmp(&p.mean_ess, &one.mean_ess, sizeof(double)), 0);
+    log_w.insert(log_w.end(), p.log_w.begin(), p.log_w.end());
+    particles.insert(particles.end(), p.particles.begin(), p.particles.end());
+    sent += p.sent_bytes;
+  }
+  ASSERT_EQ(log_w.size(), one.log_w.size());
+  EXPECT_EQ(std::memcmp(log_w.data(), one.log_w.data(), log_w.size() * sizeof(double)), 0);
+  ASSERT_EQ(particles.size(), one.particles.size());
+  size_t differ = 0;
+  for (size_t i = 0; i < particles.size(); ++i) differ += particles[i] != one.particles[i];
+  EXPECT_EQ(differ, 0u);
+  if (ranks > 1) {
+    EXPECT_GT(sent, 0u);  // particles did move
+  }
+}
+
+TEST(DistributedFilterTest, HTreeAcrossRanksIsBitIdentical) {
+  ExpectSameAsOneProcess<HTreeMap<4>>(2, 1);
+  ExpectSameAsOneProcess<HTreeMap<4>>(3, 2);
+}
+
+TEST(DistributedFilterTest, AlphabetHTreeAcrossRanksIsBitIdentical) {
+  ExpectSameAsOneProcess<AlphabetHTreeMap<4>>(2, 2);
+  ExpectSameAsOneProcess<AlphabetHTreeMap<4>>(4, 1);
+}
+
+TEST(DistributedFilterTest, NaiveAcrossRanksIsBitIdentical) {
+  ExpectSameAsOneProcess<NaiveMap>(3, 1);
+}
+
+TEST(DistributedFilterTest, RankSharesAreWholeBlocksInOrder) {
+  for (uint64_t total : {uint64_t{1}, uint64_t{4096}, uint64_t{12805}, uint64_t{1000000}}) {
+    for (int ranks : {1, 2, 3, 4, 7}) {
+      uint64_t next = 0;
+      for (int r = 0; r < ranks; ++r) {
+        ParticleShare s = RankShare(total, ranks, r, kSumBlock);
+        EXPECT_EQ(s.first, next);
+        if (s.first + s.count < total) {
+          EXPECT_EQ(s.count % kSumBlock, 0u);
+        }
+        next = s.first + s.count;
+      }
+      EXPECT_EQ(next, total);
+    }
+  }
+}
+
+// A failure on one rank reaches every rank as the same error, and no rank is left waiting.
+TEST(DistributedFilterTest, AFailureOnOneRankStopsEveryRank) {
+  FootSlamConfig config = TestConfig();
+  config.grid = FootSlamGrid::kFixed;
+  config.grid_size = 16;  // about 14 m across, centred on the start: the loop leaves it
+  std::vector<RankResult> parts = RunRanks<HTreeMap<4>>(config, Loop(40), 3, 1);
+  RankResult one = RunRank<HTreeMap<4>>(config, Loop(40), nullptr, 1);
+  ASSERT_FALSE(one.status.ok());
+  ASSERT_NE(one.status.message().find("left the"), std::string::npos) << one.status.message();
+  for (size_t r = 0; r < parts.size(); ++r) {
+    // Rank 0 holds the lowest failing particle, the one a single process names.
+    const Status& s = parts[r].status;
+    EXPECT_EQ(s.code(), one.status.code());
+    EXPECT_EQ(s.message(), (r == 0 ? "" : "rank 0: ") + one.status.message());
+  }
+}
+
+// Stratified, residual and multinomial resampling run in one process only.
+TEST(DistributedFilterTest, OnlySystematicResamplingRunsAcrossRanks) {
+  std::vector<std::unique_ptr<Collective>> endpoints = InProcessCollective::Create(1);
+  FootSlamConfig config = TestConfig();
+  HexGrid grid(config.hex_radius_m);
+  HTreeLayout layout = *HTreeLayout::Create(config.grid_size, config.degree);
+  WorkerPool workers(1);
+  HTreeMap<4> map(layout, 1, static_cast<size_t>(config.particles), nullptr);
+  FootSlamModel<HTreeMap<4>> model(config, &grid, &layout, &map, 1);
+  ASSERT_TRUE(model.Init());
+  FilterOptions options;
+  options.resampling = ResamplingScheme::kMultinomial;
+  options.resample_threshold = 1.0;
+  options.collective = endpoints[0].get();
+  options.total_particles = static_cast<uint64_t>(config.particles);
+  ParticleFilter<FootSlamModel<HTreeMap<4>>> filter(&model, &workers, options);
+  Status s = filter.Update(StepInput{0.7, 0});
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("systematic"), std::string::npos) << s.message();
+}
+
+}  // namespace
+}  // namespace grove::footslam
