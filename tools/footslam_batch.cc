@@ -2,7 +2,6 @@
 #include "tools/footslam_batch.h"
 
 #include <fmt/format.h>
-#include <sched.h>
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -44,15 +43,6 @@ struct WalkResult {
   double wall_time_s = 0;
   std::string line;  // ResultJson's, once the walk is done
 };
-
-// The CPUs this process may run on (its affinity mask: a scheduler's or taskset's CPU set), at
-// least 1.
-int UsableCpus() {
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  if (sched_getaffinity(0, sizeof(set), &set) == 0) return std::max(1, CPU_COUNT(&set));
-  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-}
 
 bool FileExists(const std::string& path) {
   struct stat st;

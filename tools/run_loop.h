@@ -44,6 +44,9 @@ int Fail(int code, std::string_view message);
 int ExitCodeOf(const Status& s);
 // Peak resident memory of this process, bytes.
 int64_t PeakRssBytes();
+// The CPUs this process may run on (its affinity mask: a scheduler's, mpirun's binding or
+// taskset's CPU set), at least 1.
+int UsableCpus();
 
 // Parses a memory size: a number of bytes with an optional binary suffix K, M, G or T
 // ("512M", "1.5G", "1073741824"). InvalidArgument naming the text otherwise.

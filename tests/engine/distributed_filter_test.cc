@@ -108,8 +108,8 @@ RankResult RunRank(const FootSlamConfig& config, const std::vector<StepInput>& s
 }
 
 template <typename Map>
-std::vector<RankResult> RunRanks(const FootSlamConfig& config,
-                                 const std::vector<StepInput>& steps, int ranks, int threads) {
+std::vector<RankResult> RunRanks(const FootSlamConfig& config, const std::vector<StepInput>& steps,
+                                 int ranks, int threads) {
   std::vector<RankResult> results(static_cast<size_t>(ranks));
   std::vector<std::unique_ptr<Collective>> endpoints = InProcessCollective::Create(ranks);
   std::vector<std::thread> pool;

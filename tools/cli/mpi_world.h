@@ -9,22 +9,29 @@
 #include <string>
 #include <vector>
 
+#include "engine/collective.h"
+
 namespace grove::tools {
 
-class MpiWorld {
+// Also the Collective of one filter across ranks (MPI_COMM_WORLD); alone, a world of one rank.
+class MpiWorld : public Collective {
  public:
   MpiWorld();
   ~MpiWorld();  // MPI_Finalize, when it initialised MPI
   MpiWorld(const MpiWorld&) = delete;
   MpiWorld& operator=(const MpiWorld&) = delete;
 
-  int rank() const { return rank_; }
-  int size() const { return size_; }
+  int rank() const override { return rank_; }
+  int size() const override { return size_; }
   // Whether this build has MPI and the process was started by an MPI launcher.
   bool active() const { return active_; }
 
   // Every rank's string, in rank order, on every rank (collective: every rank must call it).
   std::vector<std::string> AllGather(const std::string& mine) const;
+
+  // Collective: MPI_Allgatherv and MPI_Alltoallv of bytes (a part above 2 GiB is an error).
+  Status AllGather(const std::string& mine, std::vector<std::string>* all) override;
+  Status AllToAll(const std::vector<std::string>& to, std::vector<std::string>* from) override;
 
  private:
   int rank_ = 0;
