@@ -56,9 +56,8 @@ template <typename T>
 Status AllGatherValues(Collective& c, std::span<const T> mine, std::vector<T>* all) {
   static_assert(std::is_trivially_copyable_v<T>);
   std::vector<std::string> parts;
-  GROVE_RETURN_IF_ERROR(
-      c.AllGather(std::string(reinterpret_cast<const char*>(mine.data()), mine.size_bytes()),
-                  &parts));
+  GROVE_RETURN_IF_ERROR(c.AllGather(
+      std::string(reinterpret_cast<const char*>(mine.data()), mine.size_bytes()), &parts));
   all->clear();
   for (const std::string& p : parts) {
     if (p.size() % sizeof(T) != 0) return InternalError("collective: a part is not whole values");
