@@ -169,6 +169,13 @@ class ParticleFilter {
   requires WeightingModel<Model, Input> Status Update(const Input& input) {
     using Clock = std::chrono::steady_clock;
     auto t0 = Clock::now();
+    if (options_.collective != nullptr &&
+        log_w_.size() !=
+            RankShare(total_, options_.collective->size(), options_.collective->rank(), kSumBlock)
+                .count) {
+      return InvalidArgumentError("the model holds " + std::to_string(log_w_.size()) +
+                                  " particles, not this rank's share of " + std::to_string(total_));
+    }
     Status status = ForBatches([&](int slot, size_t begin, size_t end) {
       return model_->Advance(input, step_, begin, end, slot, log_w_.data());
     });
@@ -308,6 +315,8 @@ class ParticleFilter {
   // Across ranks: the bytes of particles this rank has sent to others, and how many particles.
   uint64_t sent_bytes() const { return sent_bytes_; }
   uint64_t sent_particles() const { return sent_particles_; }
+  // Across ranks: seconds spent writing and reading the particles that move (not sending them).
+  double migrate_seconds() const { return migrate_s_; }
 
  private:
   template <typename D>
@@ -463,6 +472,7 @@ class ParticleFilter {
         uint64_t lo = std::max(slots_[i], s.first), hi = std::min(slots_[i + 1], s.first + s.count);
         return hi > lo ? hi - lo : 0;
       };
+      auto m0 = Clock::now();
       std::vector<std::string> to(static_cast<size_t>(ranks));
       std::vector<uint32_t> which, copies;
       for (int q = 0; q < ranks; ++q) {
@@ -485,8 +495,10 @@ class ParticleFilter {
         sent_bytes_ += to[static_cast<size_t>(q)].size();
         sent_particles_ += which.size();
       }
+      migrate_s_ += Seconds(Clock::now() - m0);
       std::vector<std::string> from;
       GROVE_RETURN_IF_ERROR(c.AllToAll(to, &from));
+      auto m1 = Clock::now();
       parents_.clear();
       const ParticleShare own{first_, n};
       Status s;
@@ -520,6 +532,7 @@ class ParticleFilter {
         s = InternalError("resampling across ranks: " + std::to_string(parents_.size()) +
                           " copies for " + std::to_string(n) + " particles");
       }
+      migrate_s_ += Seconds(Clock::now() - m1);
       GROVE_RETURN_IF_ERROR(AgreeStatus(c, s));
       model_->Gather(parents_, *workers_);
       auto t1 = Clock::now();
@@ -544,6 +557,7 @@ class ParticleFilter {
   std::vector<uint64_t> slots_;  // across ranks: each particle's first copy
   uint64_t sent_bytes_ = 0;
   uint64_t sent_particles_ = 0;
+  double migrate_s_ = 0;
   std::vector<Status> batch_status_;
   size_t heaviest_ = 0;
   uint64_t step_ = 0;

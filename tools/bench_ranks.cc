@@ -76,8 +76,8 @@ std::vector<uint32_t> ParticleDigests(const Model& model, std::span<const double
   for (size_t i = 0; i < model.size(); ++i) {
     ByteWriter w;
     w.Put(log_w[i]);
-    for (double v : {model.x(i), model.y(i), model.heading(i), model.heading_error(i),
-                     model.scale(i)}) {
+    for (double v :
+         {model.x(i), model.y(i), model.heading(i), model.heading_error(i), model.scale(i)}) {
       w.Put(v);
     }
     for (const auto* n = model.history(i); n != nullptr; n = n->parent) {
@@ -103,6 +103,7 @@ struct RankReport {
   uint64_t collective_bytes;
   uint64_t sent_particles;
   uint64_t sent_particle_bytes;
+  double migrate_s;
   PhaseTimes phases;
 };
 
@@ -160,8 +161,8 @@ int RanksBenchCommand(const RanksBenchOptions& options, Collective& world) {
   const double run_s = Seconds(Clock::now() - t0);
 
   std::vector<uint32_t> digests;
-  Status s = AllGatherValues<uint32_t>(world, ParticleDigests(model, filter.log_weights()),
-                                       &digests);
+  Status s =
+      AllGatherValues<uint32_t>(world, ParticleDigests(model, filter.log_weights()), &digests);
   RankReport mine{share.count,
                   config.threads,
                   run_s,
@@ -170,6 +171,7 @@ int RanksBenchCommand(const RanksBenchOptions& options, Collective& world) {
                   timed.bytes(),
                   filter.sent_particles(),
                   filter.sent_bytes(),
+                  filter.migrate_seconds(),
                   filter.phase_times()};
   std::vector<RankReport> reports;
   if (s.ok()) s = AllGatherValues<RankReport>(world, std::span(&mine, 1), &reports);
@@ -194,6 +196,7 @@ int RanksBenchCommand(const RanksBenchOptions& options, Collective& world) {
                         {"collective_bytes", r.collective_bytes},
                         {"sent_particles", r.sent_particles},
                         {"sent_particle_bytes", r.sent_particle_bytes},
+                        {"migrate_s", r.migrate_s},
                         {"phases_s",
                          {{"advance", r.phases.advance_s},
                           {"normalize", r.phases.normalize_s},
@@ -219,11 +222,12 @@ int RanksBenchCommand(const RanksBenchOptions& options, Collective& world) {
   if (Status w = WriteFileAtomically(options.out_dir + "/ranks.json", j.dump(2) + "\n"); !w.ok()) {
     return Fail(kExitOutput, w.message());
   }
-  std::printf("ranks %d, %lld particles, %zu steps: %.3f s, %.1f ns per particle-step, %.0f bytes "
-              "sent per resampling, digest %08x\n",
-              ranks, static_cast<long long>(options.particles), walk->size(), slowest,
-              slowest * 1e9 / (steps * static_cast<double>(total)),
-              resamplings > 0 ? sent_bytes / resamplings : 0.0, digest);
+  std::printf(
+      "ranks %d, %lld particles, %zu steps: %.3f s, %.1f ns per particle-step, %.0f bytes "
+      "sent per resampling, digest %08x\n",
+      ranks, static_cast<long long>(options.particles), walk->size(), slowest,
+      slowest * 1e9 / (steps * static_cast<double>(total)),
+      resamplings > 0 ? sent_bytes / resamplings : 0.0, digest);
   return kExitOk;
 }
 

@@ -1,7 +1,8 @@
 // `grove bench ranks`: one FootSLAM filter across the ranks of a Collective (the MPI ranks under
 // mpirun, or this process alone) on the paper walk (H-tree s = 16, T = 5, the fixed 256 x 256
 // grid). Reports the run time, each rank's time in collectives (waiting for the others and
-// moving bytes) against its own work, the bytes of particles sent per resampling, and a digest
+// moving bytes) against its own work, its time writing and reading the particles that move, the
+// bytes of particles sent per resampling, and a digest
 // of every particle's final state (weight, pose, error states, path, map) that must be the same
 // at any rank and thread count.
 #ifndef GROVE_TOOLS_BENCH_RANKS_H_
