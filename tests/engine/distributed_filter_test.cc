@@ -214,6 +214,63 @@ TEST(DistributedFilterTest, AFailureOnOneRankStopsEveryRank) {
   }
 }
 
+// Particles written by one rank are read back whole by another; any truncation of the message is
+// an error naming the field, and leaks nothing (the sanitizer build checks).
+TEST(DistributedFilterTest, ATruncatedParticleMessageIsAnErrorNotACrash) {
+  FootSlamConfig config = TestConfig();
+  config.particles = 64;
+  HexGrid grid(config.hex_radius_m);
+  HTreeLayout layout = *HTreeLayout::Create(config.grid_size, config.degree);
+  Alphabet alphabet = *Alphabet::Create(config.alphabet);
+  WorkerPool workers(1);
+  AlphabetHTreeMap<4> map(layout, 1, 64, &alphabet);
+  FootSlamModel<AlphabetHTreeMap<4>> model(config, &grid, &layout, &map, 1);
+  ASSERT_TRUE(model.Init());
+  FilterOptions options;
+  options.seed = config.seed;
+  ParticleFilter<FootSlamModel<AlphabetHTreeMap<4>>> filter(&model, &workers, options);
+  for (const StepInput& in : Loop(30)) ASSERT_TRUE(filter.Update(in).ok());
+  const std::vector<uint32_t> which = {0, 5, 6, 40, 63};
+  ByteWriter w;
+  model.Export(which, &w);
+  const std::string message = w.Take();
+  auto receiver = [&](AlphabetHTreeMap<4>* m) {
+    return FootSlamModel<AlphabetHTreeMap<4>>(config, &grid, &layout, m, 1, {64, 64});
+  };
+  {
+    AlphabetHTreeMap<4> m(layout, 1, 64, &alphabet);
+    auto other = receiver(&m);
+    ASSERT_TRUE(other.Init());
+    ByteReader r(message, "message");
+    Status s = other.Import(&r, which.size(), 30);
+    ASSERT_TRUE(s.ok()) << s.message();
+    EXPECT_TRUE(r.at_end());
+    ASSERT_EQ(other.size(), 64 + which.size());
+    for (size_t k = 0; k < which.size(); ++k) {
+      EXPECT_EQ(other.x(64 + k), model.x(which[k]));
+      EXPECT_EQ(other.heading(64 + k), model.heading(which[k]));
+      EXPECT_EQ(PoseHistory::Path(other.history(64 + k)).size(),
+                PoseHistory::Path(model.history(which[k])).size());
+    }
+    // Steps newer than the receiver's step are refused.
+    ByteReader early(message, "message");
+    AlphabetHTreeMap<4> m2(layout, 1, 64, &alphabet);
+    auto again = receiver(&m2);
+    ASSERT_TRUE(again.Init());
+    EXPECT_FALSE(again.Import(&early, which.size(), 29).ok());
+  }
+  for (size_t cut = 0; cut < message.size(); cut += 1 + message.size() / 97) {
+    AlphabetHTreeMap<4> m(layout, 1, 64, &alphabet);
+    auto other = receiver(&m);
+    ASSERT_TRUE(other.Init());
+    ByteReader r(std::string_view(message).substr(0, cut), "message");
+    Status s = other.Import(&r, which.size(), 30);
+    ASSERT_FALSE(s.ok()) << "cut at " << cut;
+    EXPECT_EQ(s.code(), StatusCode::kDataLoss) << s.message();
+    EXPECT_NE(s.message().find("message: byte"), std::string::npos) << s.message();
+  }
+}
+
 // Stratified, residual and multinomial resampling run in one process only.
 TEST(DistributedFilterTest, OnlySystematicResamplingRunsAcrossRanks) {
   std::vector<std::unique_ptr<Collective>> endpoints = InProcessCollective::Create(1);
