@@ -169,12 +169,9 @@ class ParticleFilter {
   requires WeightingModel<Model, Input> Status Update(const Input& input) {
     using Clock = std::chrono::steady_clock;
     auto t0 = Clock::now();
-    if (options_.collective != nullptr &&
-        log_w_.size() !=
-            RankShare(total_, options_.collective->size(), options_.collective->rank(), kSumBlock)
-                .count) {
-      return InvalidArgumentError("the model holds " + std::to_string(log_w_.size()) +
-                                  " particles, not this rank's share of " + std::to_string(total_));
+    if (options_.collective != nullptr && !ranks_checked_) {
+      ranks_checked_ = true;
+      GROVE_RETURN_IF_ERROR(CheckRanksAgree());
     }
     Status status = ForBatches([&](int slot, size_t begin, size_t end) {
       return model_->Advance(input, step_, begin, end, slot, log_w_.data());
@@ -231,6 +228,7 @@ class ParticleFilter {
     Status status = ForBatches([&](int slot, size_t begin, size_t end) {
       return model_->Predict(input, step_, begin, end, slot);
     });
+    if (options_.collective != nullptr) status = AgreeStatus(*options_.collective, status);
     times_.advance_s += Seconds(std::chrono::steady_clock::now() - t0);
     ++step_;
     return status;
@@ -403,6 +401,36 @@ class ParticleFilter {
     return Status::Ok();
   }
 
+  // Across ranks, before the first weighting step: every rank's model holds its share, and the
+  // ranks agree on what changes results (the same error on every rank otherwise).
+  Status CheckRanksAgree() {
+    Collective& c = *options_.collective;
+    Status mine;
+    if (log_w_.size() != RankShare(total_, c.size(), c.rank(), kSumBlock).count) {
+      mine = InvalidArgumentError("the model holds " + std::to_string(log_w_.size()) +
+                                  " particles, not this rank's share of " + std::to_string(total_));
+    }
+    GROVE_RETURN_IF_ERROR(AgreeStatus(c, mine));
+    struct Key {
+      uint64_t total, seed;
+      double threshold;
+      int64_t scheme;
+    };
+    Key key{total_, options_.seed, options_.resample_threshold,
+            static_cast<int64_t>(options_.resampling)};
+    std::vector<Key> all;
+    GROVE_RETURN_IF_ERROR(AllGatherValues<Key>(c, std::span(&key, 1), &all));
+    for (size_t q = 1; q < all.size(); ++q) {
+      if (all[q].total != all[0].total || all[q].seed != all[0].seed ||
+          all[q].threshold != all[0].threshold || all[q].scheme != all[0].scheme) {
+        return InvalidArgumentError(
+            "rank " + std::to_string(q) +
+            "'s filter (particles, seed, resampling, threshold) differs from rank 0's");
+      }
+    }
+    return Status::Ok();
+  }
+
   // Across ranks, every rank's per-block values in block order (ranks hold whole blocks in
   // order); alone, nothing to do.
   Status GatherBlocks(std::vector<double>* blocks) {
@@ -558,6 +586,7 @@ class ParticleFilter {
   uint64_t sent_bytes_ = 0;
   uint64_t sent_particles_ = 0;
   double migrate_s_ = 0;
+  bool ranks_checked_ = false;
   std::vector<Status> batch_status_;
   size_t heaviest_ = 0;
   uint64_t step_ = 0;

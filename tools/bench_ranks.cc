@@ -129,6 +129,19 @@ int RanksBenchCommand(const RanksBenchOptions& options, Collective& world) {
                 fmt::format("--particles {}: {} block(s) of {} for {} ranks; each rank needs one",
                             options.particles, blocks, kSumBlock, ranks));
   }
+  // The ranks must run the same walk and filter (an MPMD launch could give them other options).
+  std::vector<std::string> all_options;
+  const std::string given = fmt::format("--particles {} --minutes {} --seed {}", options.particles,
+                                        options.minutes, options.seed);
+  if (Status s = world.AllGather(given, &all_options); !s.ok()) {
+    return Fail(kExitInternal, s.message());
+  }
+  for (size_t q = 1; q < all_options.size(); ++q) {
+    if (all_options[q] != all_options[0]) {
+      return Fail(kExitUsage, fmt::format("rank {} was given {}, rank 0 {}", q, all_options[q],
+                                          all_options[0]));
+    }
+  }
   StatusOr<std::vector<StepRecord>> walk = PaperWalk(options.minutes);
   if (!walk.ok()) return Fail(kExitUsage, walk.status().message());
   Status dir = rank == 0 ? EnsureDirectory(options.out_dir) : Status::Ok();

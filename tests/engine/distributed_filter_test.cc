@@ -57,8 +57,11 @@ struct RankResult {
 };
 
 template <typename Map>
-RankResult RunRank(const FootSlamConfig& config, const std::vector<StepInput>& steps,
-                   Collective* collective, int threads) {
+RankResult RunRank(FootSlamConfig config, const std::vector<StepInput>& steps,
+                   Collective* collective, int threads, uint64_t seed_on_rank_1 = 0) {
+  if (seed_on_rank_1 != 0 && collective != nullptr && collective->rank() == 1) {
+    config.seed = seed_on_rank_1;
+  }
   RankResult out;
   const int ranks = collective == nullptr ? 1 : collective->size();
   const int rank = collective == nullptr ? 0 : collective->rank();
@@ -109,14 +112,14 @@ RankResult RunRank(const FootSlamConfig& config, const std::vector<StepInput>& s
 
 template <typename Map>
 std::vector<RankResult> RunRanks(const FootSlamConfig& config, const std::vector<StepInput>& steps,
-                                 int ranks, int threads) {
+                                 int ranks, int threads, uint64_t seed_on_rank_1 = 0) {
   std::vector<RankResult> results(static_cast<size_t>(ranks));
   std::vector<std::unique_ptr<Collective>> endpoints = InProcessCollective::Create(ranks);
   std::vector<std::thread> pool;
   for (int r = 0; r < ranks; ++r) {
     pool.emplace_back([&, r] {
-      results[static_cast<size_t>(r)] =
-          RunRank<Map>(config, steps, endpoints[static_cast<size_t>(r)].get(), threads);
+      results[static_cast<size_t>(r)] = RunRank<Map>(
+          config, steps, endpoints[static_cast<size_t>(r)].get(), threads, seed_on_rank_1);
     });
   }
   for (std::thread& t : pool) t.join();
@@ -268,6 +271,15 @@ TEST(DistributedFilterTest, ATruncatedParticleMessageIsAnErrorNotACrash) {
     ASSERT_FALSE(s.ok()) << "cut at " << cut;
     EXPECT_EQ(s.code(), StatusCode::kDataLoss) << s.message();
     EXPECT_NE(s.message().find("message: byte"), std::string::npos) << s.message();
+  }
+}
+
+// Ranks that disagree on what changes results all stop before the first step, with one error.
+TEST(DistributedFilterTest, RanksThatDisagreeAllStop) {
+  std::vector<RankResult> parts = RunRanks<HTreeMap<4>>(TestConfig(), Loop(5), 3, 1, 8);
+  for (const RankResult& p : parts) {
+    EXPECT_EQ(p.status.code(), StatusCode::kInvalidArgument);
+    EXPECT_NE(p.status.message().find("rank 1's filter"), std::string::npos) << p.status.message();
   }
 }
 

@@ -2,7 +2,7 @@
 # One FootSLAM filter across MPI ranks (grove bench ranks): the digest of every particle's final
 # state (weight, pose, error states, path, map) is the same for one process and for 2 and 4
 # ranks (oversubscribed on any machine), at 1 and 2 threads per rank; too few particles for the
-# ranks is refused on every rank with exit code 2.
+# ranks, or ranks given other options, is refused on every rank with exit code 2.
 # Usage: mpi_filter_test.sh GROVE_BINARY MPIEXEC
 set -eu
 grove=$1
@@ -36,4 +36,12 @@ status=0
 [ "$status" -eq 2 ] || { echo "FAIL: too few particles exited $status"; fail=1; }
 n=$(grep -c 'each rank needs one' "$work/few.err" || true)
 [ "$n" = 2 ] || { echo "FAIL: $n of 2 ranks explained the refusal"; cat "$work/few.err"; fail=1; }
+# Ranks given other options (an MPMD launch): every rank refuses with exit 2.
+status=0
+"$mpiexec" --oversubscribe --bind-to none -np 1 "$grove" bench ranks $args --out "$work/mpmd" : \
+  -np 1 "$grove" bench ranks --particles 16500 --minutes 0.6 --out "$work/mpmd" \
+  >/dev/null 2>"$work/mpmd.err" || status=$?
+[ "$status" -eq 2 ] || { echo "FAIL: ranks with other options exited $status"; fail=1; }
+n=$(grep -c 'rank 1 was given' "$work/mpmd.err" || true)
+[ "$n" = 2 ] || { echo "FAIL: $n of 2 ranks named the difference"; cat "$work/mpmd.err"; fail=1; }
 exit $fail
