@@ -401,12 +401,17 @@ class ParticleFilter {
     return Status::Ok();
   }
 
-  // Across ranks, before the first weighting step: every rank's model holds its share, and the
-  // ranks agree on what changes results (the same error on every rank otherwise).
+  // Across ranks, before the first weighting step: the scheme is systematic, every rank's model
+  // holds its share, and the ranks agree on what changes results (the same error on every rank
+  // otherwise).
   Status CheckRanksAgree() {
     Collective& c = *options_.collective;
     Status mine;
-    if (log_w_.size() != RankShare(total_, c.size(), c.rank(), kSumBlock).count) {
+    if (options_.resampling != ResamplingScheme::kSystematic) {
+      mine = InvalidArgumentError(
+          std::string("resampling: a filter across ranks resamples systematically, not ") +
+          ResamplingSchemeName(options_.resampling));
+    } else if (log_w_.size() != RankShare(total_, c.size(), c.rank(), kSumBlock).count) {
       mine = InvalidArgumentError("the model holds " + std::to_string(log_w_.size()) +
                                   " particles, not this rank's share of " + std::to_string(total_));
     }
@@ -472,11 +477,6 @@ class ParticleFilter {
   Status ResampleAcross() {
     using Clock = std::chrono::steady_clock;
     auto t0 = Clock::now();
-    if (options_.resampling != ResamplingScheme::kSystematic) {
-      return InvalidArgumentError(
-          std::string("resampling: a filter across ranks resamples systematically, not ") +
-          ResamplingSchemeName(options_.resampling));
-    }
     if constexpr (!MigratingModel<Model>) {
       return InvalidArgumentError("the model's particles cannot move between ranks");
     } else {
