@@ -25,6 +25,8 @@ class RefCount {
   // object. acq_rel: release so this thread's reads and writes of the object happen before its
   // destruction by another thread; acquire so the destroying thread sees every other owner's.
   bool Release() const { return count_.fetch_sub(1, std::memory_order_acq_rel) == 1; }
+  // Drops `n` references at once (n >= 1, at most the count); true as Release().
+  bool Release(uint32_t n) const { return count_.fetch_sub(n, std::memory_order_acq_rel) == n; }
 
   // True when the caller holds the only reference and may mutate in place. Acquire pairs with
   // the release in other owners' Release(), so their last reads of the object happen before the

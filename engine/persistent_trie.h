@@ -276,46 +276,71 @@ class PersistentTrie {
   // Release() of every version in `roots` (nullptr entries skipped), with the cache misses of
   // many nodes overlapped: a node's count is dropped kInFlight drops after it was queued and
   // prefetched, and a dead inner node's links are read kInFlight dead nodes after its lines
-  // were prefetched. Frees the same nodes as Release() one by one; only the order differs. If
-  // its queues cannot grow (out of memory) it finishes the work with Release()'s stack.
+  // were prefetched. With more than one worker slot, drops of one node close together are
+  // summed first in a small direct-mapped table and applied as one subtraction: the children of
+  // a dead path's nodes are shared by most particles, and on more than one core each separate
+  // drop moves the count's line between the cores. Frees the same nodes as Release() one by one;
+  // only the order differs. If its queues cannot grow (out of memory) it finishes the work with
+  // Release()'s stack.
   void ReleaseMany(std::span<Node* const> roots, int slot) {
     constexpr size_t kInFlight = 16;
-    // FIFOs: nodes whose count is to be dropped, and dead inner nodes to expand and free.
-    std::vector<Node*>& drop = release_scratch_[slot].drop;
+    constexpr int kTableBits = 8;
+    // FIFOs: drops of counts to apply, and dead inner nodes to expand and free.
+    std::vector<Drop>& drop = release_scratch_[slot].drop;
     std::vector<Node*>& dead = release_scratch_[slot].dead;
     drop.clear();
     dead.clear();
-    size_t drop_head = 0, dead_head = 0, next = 0;
-    auto queue = [&](Node* n) {
-      __builtin_prefetch(n, 1);
+    std::array<Drop, size_t{1} << kTableBits> table{};
+    size_t drop_head = 0, dead_head = 0, next = 0, held = 0;
+    auto push = [&](Drop d) {
+      __builtin_prefetch(d.node, 1);
       try {
-        drop.push_back(n);
+        drop.push_back(d);
       } catch (const std::bad_alloc&) {
-        Release(n, slot);
+        DropRefs(d, slot);
       }
+    };
+    // One core has no lines to share: there the table costs more than the atomics it saves.
+    const bool coalesce = release_scratch_.size() > 1;
+    auto queue = [&](Node* n) {
+      if (!coalesce) {
+        push(Drop{n, 1});
+        return;
+      }
+      Drop& e = table[(reinterpret_cast<uintptr_t>(n) >> 6) & ((size_t{1} << kTableBits) - 1)];
+      if (e.node == n) {
+        ++e.count;
+        return;
+      }
+      if (e.node != nullptr) {
+        push(e);
+      } else {
+        ++held;
+      }
+      e = Drop{n, 1};
     };
     for (;;) {
       while (drop.size() - drop_head < kInFlight && next < roots.size()) {
-        if (roots[next] != nullptr) queue(roots[next]);
+        if (roots[next] != nullptr) push(Drop{roots[next], 1});
         ++next;
       }
       if (drop_head < drop.size()) {
-        Node* node = drop[drop_head++];
+        const Drop d = drop[drop_head++];
         if (drop_head == drop.size()) {
           drop.clear();
           drop_head = 0;
         }
-        if (node->rc.Release()) {
-          if (node->level > 0) {
-            const char* p = reinterpret_cast<const char*>(node);
+        if (d.node->rc.Release(d.count)) {
+          if (d.node->level > 0) {
+            const char* p = reinterpret_cast<const char*>(d.node);
             for (size_t off = 0; off < sizeof(Inner); off += 64) __builtin_prefetch(p + off);
             try {
-              dead.push_back(node);
+              dead.push_back(d.node);
             } catch (const std::bad_alloc&) {
-              FreeDead(node, slot);
+              FreeDead(d.node, slot);
             }
           } else {
-            FreeNode(node, slot);
+            FreeNode(d.node, slot);
           }
         }
       }
@@ -331,7 +356,14 @@ class PersistentTrie {
         }
         FreeNode(n, slot);
       }
-      if (drop_head == drop.size() && dead_head == dead.size() && next == roots.size()) break;
+      if (drop_head == drop.size() && dead_head == dead.size() && next == roots.size()) {
+        if (held == 0) break;
+        for (Drop& e : table) {  // the summed drops left in the table
+          if (e.node != nullptr) push(e);
+          e = Drop{};
+        }
+        held = 0;
+      }
     }
     inner_pool_.Flush(slot);
     bottom_pool_.Flush(slot);
@@ -783,6 +815,16 @@ class PersistentTrie {
   }
   // Frees `dead` (its count has reached zero) and every node only it reached. Iterative, with a
   // fixed stack: allocates nothing.
+  // A count of references to one node, to be dropped together.
+  struct Drop {
+    Node* node = nullptr;
+    uint32_t count = 0;
+  };
+  // Drops d.count references to d.node, freeing what dies (out of memory in ReleaseMany).
+  void DropRefs(Drop d, int slot) {
+    if (d.node->rc.Release(d.count)) FreeDead(d.node, slot);
+  }
+
   void FreeDead(Node* dead, int slot) {
     std::array<Node*, (kDegree - 1) * kMaxHeight + 1> stack;
     int top = 0;
@@ -939,7 +981,7 @@ class PersistentTrie {
   NodePool bottom_pool_;
   // ReleaseMany's queues, per worker slot (reused: no allocation per call once grown).
   struct alignas(kFalseSharingBytes) ReleaseScratch {
-    std::vector<Node*> drop;
+    std::vector<Drop> drop;
     std::vector<Node*> dead;
   };
   std::vector<ReleaseScratch> release_scratch_;
