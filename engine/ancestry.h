@@ -119,13 +119,14 @@ class Ancestry {
   // once per step it stands for (once in all when every step has its entry, as in FootSLAM),
   // not once per history. The order of the calls and of every sum of weights depends only on
   // the ancestry's shape and the histories' order, never on addresses: the same bits at any
-  // thread count. REQUIRES: weights.size() == heads.size(); no head is newer than last_step.
-  template <typename Add>
-  static void Smooth(std::span<const Node* const> heads, std::span<const double> weights,
+  // thread count. W: double, or an integer type whose sums are exact in any order.
+  // REQUIRES: weights.size() == heads.size(); no head is newer than last_step.
+  template <typename W, typename Add>
+  static void Smooth(std::span<const Node* const> heads, std::span<const W> weights,
                      uint32_t last_step, Add&& add) {
-    std::vector<std::pair<const Node*, double>> level, next;
+    std::vector<std::pair<const Node*, W>> level, next;
     std::unordered_map<const Node*, size_t> index;
-    auto merge = [&](const Node* n, double w) {
+    auto merge = [&](const Node* n, W w) {
       auto [it, added] = index.try_emplace(n, next.size());
       if (added) {
         next.emplace_back(n, w);

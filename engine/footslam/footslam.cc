@@ -6,12 +6,14 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <map>
 #include <thread>
+#include <tuple>
 #include <unordered_map>
 
 #include "concurrency/worker_pool.h"
@@ -62,6 +64,37 @@ constexpr int64_t kStoreEverySteps = 50;
 double MeanOf(unsigned __int128 sum, unsigned __int128 total) {
   return static_cast<double>(sum / total) +
          static_cast<double>(sum % total) / static_cast<double>(total);
+}
+
+// A pose of the smoothed path with the sum of the weights (fixed point) of the particles whose
+// ancestry holds it at that step.
+struct SmoothedPart {
+  uint32_t step;
+  footslam::PathPose pose;
+  unsigned __int128 weight;
+};
+static_assert(sizeof(SmoothedPart) == 32, "no padding: parts are compared and sent as bytes");
+
+// Sorts parts by step, then by the bits of the pose, merging equal ones (weights added, exactly):
+// the same list whichever paths share which nodes, so the smoothed path's sums are taken in an
+// order that depends on the poses alone.
+void MergeParts(std::vector<SmoothedPart>* parts) {
+  auto key = [](const SmoothedPart& p) {
+    return std::make_tuple(p.step, std::bit_cast<uint32_t>(p.pose.dx_m),
+                           std::bit_cast<uint32_t>(p.pose.dy_m),
+                           std::bit_cast<uint32_t>(p.pose.heading_rad));
+  };
+  std::sort(parts->begin(), parts->end(),
+            [&](const SmoothedPart& a, const SmoothedPart& b) { return key(a) < key(b); });
+  size_t out = 0;
+  for (size_t i = 0; i < parts->size(); ++i) {
+    if (out > 0 && key((*parts)[out - 1]) == key((*parts)[i])) {
+      (*parts)[out - 1].weight += (*parts)[i].weight;
+    } else {
+      (*parts)[out++] = (*parts)[i];
+    }
+  }
+  parts->resize(out);
 }
 
 }  // namespace
@@ -201,12 +234,11 @@ class Engine final : public FootSlam::Impl {
   StatusOr<std::vector<StampedPose>> SmoothedTrajectory() const override {
     const size_t n = model_.size();
     std::vector<const footslam::PoseHistory::Node*> heads(n);
-    std::vector<double> weights(n);
-    const std::span<const double> lw = driver_.filter().log_weights();
+    const std::vector<uint64_t> fixed = FixedWeights();
+    const std::vector<unsigned __int128> weights(fixed.begin(), fixed.end());
     uint32_t last = 0;
     for (size_t i = 0; i < n; ++i) {
       heads[i] = model_.history(i);
-      weights[i] = std::exp(lw[i]);
       if (heads[i] != nullptr) last = std::max(last, heads[i]->step);
     }
     const std::vector<double>& times = driver_.times();
@@ -214,20 +246,34 @@ class Engine final : public FootSlam::Impl {
       return InternalError(fmt::format("smoothed path: a path entry of step {} but {} step times",
                                        last, times.size()));
     }
+    // Smooth() visits the steps from the last back to the first; each step's distinct poses
+    // are summed in their sorted order once the step is complete.
     struct Sum {
       double w = 0, x = 0, y = 0, c = 0, s = 0;
     };
     std::vector<Sum> sums(last + 1);
-    footslam::PoseHistory::Smooth(heads, weights, last,
-                                  [&](uint32_t k, double w, const footslam::PathPose& p) {
-                                    const Pose2 pose = model_.PoseOf(p);
-                                    Sum& s = sums[k];
-                                    s.w += w;
-                                    s.x += w * pose.x_m;
-                                    s.y += w * pose.y_m;
-                                    s.c += w * std::cos(pose.heading_rad);
-                                    s.s += w * std::sin(pose.heading_rad);
-                                  });
+    std::vector<SmoothedPart> level;
+    auto sum_level = [&] {
+      if (level.empty()) return;
+      MergeParts(&level);
+      Sum& s = sums[level.front().step];
+      for (const SmoothedPart& part : level) {
+        const Pose2 pose = model_.PoseOf(part.pose);
+        const double w = static_cast<double>(part.weight);
+        s.w += w;
+        s.x += w * pose.x_m;
+        s.y += w * pose.y_m;
+        s.c += w * std::cos(pose.heading_rad);
+        s.s += w * std::sin(pose.heading_rad);
+      }
+      level.clear();
+    };
+    footslam::PoseHistory::Smooth<unsigned __int128>(
+        heads, weights, last, [&](uint32_t k, unsigned __int128 w, const footslam::PathPose& p) {
+          if (!level.empty() && level.front().step != k) sum_level();
+          level.push_back({k, p, w});
+        });
+    sum_level();
     std::vector<StampedPose> out(last + 1);
     for (uint32_t k = 0; k <= last; ++k) {
       const Sum& s = sums[k];
@@ -270,16 +316,9 @@ class Engine final : public FootSlam::Impl {
   FootSlamSummary Summary() const override {
     FootSlamSummary s;
     static_cast<FilterSummary&>(s) = driver_.Summary();
-    auto lw = driver_.filter().log_weights();
-    double w_sum = 0, scale_sum = 0, heading_sum = 0;
-    for (size_t i = 0; i < model_.size(); ++i) {
-      double w = std::exp(lw[i]);
-      w_sum += w;
-      scale_sum += w * model_.scale(i);
-      heading_sum += w * model_.heading_error(i);
-    }
-    s.mean_scale = scale_sum / w_sum;
-    s.mean_heading_error_rad = heading_sum / w_sum;
+    const ErrorSums e = SumErrors();
+    s.mean_scale = e.scale / e.w;
+    s.mean_heading_error_rad = e.heading / e.w;
     s.map_memory = map_.memory();
     s.grid_size = int64_t{1} << (layout_.log2_degree() / 2 * map_.grown_height());
     s.prior_hexagons = static_cast<int64_t>(user_prior_.size());
@@ -412,6 +451,28 @@ class Engine final : public FootSlam::Impl {
     ++stored_blocks_;
     stored_blocks_exact_ += exact ? 1 : 0;
     return Status::Ok();
+  }
+
+  // The weighted sums of the error states, block by block (kSumBlock) and the blocks in order.
+  struct ErrorSums {
+    double w = 0, scale = 0, heading = 0;
+  };
+  ErrorSums SumErrors() const {
+    auto lw = driver_.filter().log_weights();
+    ErrorSums total;
+    for (size_t b = 0; b < model_.size(); b += kSumBlock) {
+      ErrorSums block;
+      for (size_t i = b; i < std::min(model_.size(), b + kSumBlock); ++i) {
+        const double w = std::exp(lw[i]);
+        block.w += w;
+        block.scale += w * model_.scale(i);
+        block.heading += w * model_.heading_error(i);
+      }
+      total.w += block.w;
+      total.scale += block.scale;
+      total.heading += block.heading;
+    }
+    return total;
   }
 
   // The particles' weights in fixed point (kWeightScale).

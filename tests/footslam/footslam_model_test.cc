@@ -248,7 +248,7 @@ TEST(AncestryTest, SmoothEqualsBruteForceOverEveryPath) {
   std::vector<double> fast(kSteps + 1, 0), fast_w(kSteps + 1, 0);
   std::vector<int> visits(kSteps + 1, 0);
   const std::vector<const PoseHistory::Node*> heads(paths.begin(), paths.end());
-  PoseHistory::Smooth(heads, weights, kSteps, [&](uint32_t k, double w, const PathPose& p) {
+  PoseHistory::Smooth<double>(heads, weights, kSteps, [&](uint32_t k, double w, const PathPose& p) {
     fast[k] += w * p.dx_m;
     fast_w[k] += w;
     ++visits[k];
@@ -293,8 +293,9 @@ TEST(AncestryTest, SmoothDoesNotDependOnAddresses) {
     for (size_t i = 0; i < weights.size(); ++i) weights[i] = 1.0 / (3.0 + static_cast<double>(i));
     std::vector<double> sums(21, 0);
     const std::vector<const PoseHistory::Node*> heads(paths.begin(), paths.end());
-    PoseHistory::Smooth(heads, weights, 20,
-                        [&](uint32_t k, double w, const PathPose& p) { sums[k] += w * p.dx_m; });
+    PoseHistory::Smooth<double>(heads, weights, 20, [&](uint32_t k, double w, const PathPose& p) {
+      sums[k] += w * p.dx_m;
+    });
     for (PoseHistory::Node* n : paths) history.Release(n, 0);
     for (PoseHistory::Node* n : pad) history.Release(n, 0);
     return sums;
