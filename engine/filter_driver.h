@@ -153,7 +153,7 @@ class FilterDriver {
 
   FilterSummary Summary() const {
     FilterSummary s;
-    s.particles = static_cast<int64_t>(model_->size());
+    s.particles = static_cast<int64_t>(filter_.total_particles());
     s.threads_requested = threads_requested_;
     // oneTBB never runs more threads than the process may use, whatever the arena asks for.
     s.threads_used = std::min(workers_->num_threads(), tbb::info::default_concurrency());
@@ -272,15 +272,21 @@ class FilterDriver {
       }
 #endif
       auto t0 = std::chrono::steady_clock::now();
-      mean_.push_back({t_s, ComputeMeanPose()});
+      StatusOr<Pose2> mean = ComputeMeanPose();
+      if (!mean.ok()) {
+        failed_ = true;
+        return mean.status();
+      }
+      mean_.push_back({t_s, *mean});
       bookkeeping_s_ +=
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       return Status::Ok();
     });
   }
 
-  // Weighted mean pose over fixed blocks (circular mean for the heading).
-  Pose2 ComputeMeanPose() {
+  // Weighted mean pose over fixed blocks (circular mean for the heading); across ranks, every
+  // rank's blocks in rank order, which is block order.
+  StatusOr<Pose2> ComputeMeanPose() {
     auto lw = filter_.log_weights();
     struct Sum {
       double w = 0, x = 0, y = 0, c = 0, s = 0;
@@ -303,6 +309,11 @@ class FilterDriver {
                                                                 }
                                                                 return s;
                                                               });
+    if (Collective* ranks = filter_.options().collective; ranks != nullptr) {
+      std::vector<Sum> all;
+      GROVE_RETURN_IF_ERROR(AllGatherValues<Sum>(*ranks, sums, &all));
+      sums.swap(all);
+    }
     Sum total;
     for (const Sum& s : sums) {
       total.w += s.w;

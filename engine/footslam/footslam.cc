@@ -18,6 +18,7 @@
 
 #include "concurrency/worker_pool.h"
 #include "engine/checkpoint_io.h"
+#include "engine/collective.h"
 #include "engine/filter_driver.h"
 #include "engine/footslam/alphabet.h"
 #include "engine/footslam/alphabet_htree_map.h"
@@ -110,11 +111,11 @@ class FootSlam::Impl {
   virtual int64_t steps() const = 0;
   virtual Pose2 HeaviestPose() const = 0;
   virtual Pose2 MeanPose() const = 0;
-  virtual std::vector<StampedPose> HeaviestTrajectory() const = 0;
+  virtual StatusOr<std::vector<StampedPose>> HeaviestTrajectory() const = 0;
   virtual StatusOr<std::vector<StampedPose>> SmoothedTrajectory() const = 0;
   virtual const std::vector<StampedPose>& MeanTrajectory() const = 0;
-  virtual std::vector<HexCounts> CumulativeMap() const = 0;
-  virtual std::vector<HexCounts> HeaviestMap() const = 0;
+  virtual StatusOr<std::vector<HexCounts>> CumulativeMap() const = 0;
+  virtual StatusOr<std::vector<HexCounts>> HeaviestMap() const = 0;
   virtual std::vector<HexCounts> StoredMap() const = 0;
   virtual FootSlamSummary Summary() const = 0;
   virtual StatusOr<std::string> Save(std::string_view user_data) const = 0;
@@ -129,15 +130,19 @@ template <typename Map>
 class Engine final : public FootSlam::Impl {
  public:
   Engine(const FootSlamConfig& config, int threads, HTreeLayout layout,
-         std::unique_ptr<const Alphabet> alphabet)
+         std::unique_ptr<const Alphabet> alphabet, Collective* ranks)
       : config_(config),
+        ranks_(ranks),
+        share_(ranks == nullptr ? ParticleShare{0, static_cast<uint64_t>(config.particles)}
+                                : RankShare(static_cast<uint64_t>(config.particles), ranks->size(),
+                                            ranks->rank(), kSumBlock)),
         workers_(threads),
         grid_(config.hex_radius_m),
         layout_(std::move(layout)),
         alphabet_(std::move(alphabet)),
-        map_(layout_, workers_.num_slots(), static_cast<size_t>(config.particles), alphabet_.get()),
-        model_(config, &grid_, &layout_, &map_, workers_.num_slots()),
-        driver_(&model_, &workers_, FilterOptionsOf(config), config.threads,
+        map_(layout_, workers_.num_slots(), static_cast<size_t>(share_.count), alphabet_.get()),
+        model_(config, &grid_, &layout_, &map_, workers_.num_slots(), share_),
+        driver_(&model_, &workers_, OptionsAcross(config, ranks), config.threads,
                 Pose2{config.start_x_m, config.start_y_m, config.start_heading_rad},
                 TimeOrder::kIncreasing) {
     // Blocks: the largest subtrees no wider than the store distance, below the first grid's
@@ -214,18 +219,27 @@ class Engine final : public FootSlam::Impl {
   int64_t steps() const override { return driver_.steps(); }
 
   Pose2 HeaviestPose() const override {
-    size_t i = driver_.filter().heaviest();
-    return Pose2{model_.x(i), model_.y(i), model_.heading(i)};
+    std::vector<Pose2> mine;
+    size_t i;
+    if (Holds(driver_.filter().heaviest(), &i)) {
+      mine.push_back(Pose2{model_.x(i), model_.y(i), model_.heading(i)});
+    }
+    // Across ranks, from the rank that holds it (the mean pose if that fails).
+    StatusOr<std::vector<Pose2>> all = Gathered(std::move(mine));
+    return all.ok() && all->size() == 1 ? all->front() : MeanPose();
   }
   Pose2 MeanPose() const override { return driver_.mean_trajectory().back().pose; }
 
-  std::vector<StampedPose> HeaviestTrajectory() const override {
+  StatusOr<std::vector<StampedPose>> HeaviestTrajectory() const override {
     std::vector<StampedPose> out;
     const std::vector<double>& times = driver_.times();
-    for (const auto* n : footslam::PoseHistory::Path(model_.history(driver_.filter().heaviest()))) {
-      out.push_back({times[n->step], model_.PoseOf(n->value)});
+    size_t i;
+    if (Holds(driver_.filter().heaviest(), &i)) {
+      for (const auto* n : footslam::PoseHistory::Path(model_.history(i))) {
+        out.push_back({times[n->step], model_.PoseOf(n->value)});
+      }
     }
-    return out;
+    return Gathered(std::move(out));
   }
   const std::vector<StampedPose>& MeanTrajectory() const override {
     return driver_.mean_trajectory();
@@ -236,27 +250,42 @@ class Engine final : public FootSlam::Impl {
     std::vector<const footslam::PoseHistory::Node*> heads(n);
     const std::vector<uint64_t> fixed = FixedWeights();
     const std::vector<unsigned __int128> weights(fixed.begin(), fixed.end());
-    uint32_t last = 0;
+    uint32_t newest = 0;
     for (size_t i = 0; i < n; ++i) {
       heads[i] = model_.history(i);
-      if (heads[i] != nullptr) last = std::max(last, heads[i]->step);
+      if (heads[i] != nullptr) newest = std::max(newest, heads[i]->step);
     }
+    StatusOr<std::vector<uint32_t>> newest_all = Gathered(std::vector<uint32_t>{newest});
+    if (!newest_all.ok()) return newest_all.status();
+    const uint32_t last = *std::max_element(newest_all->begin(), newest_all->end());
     const std::vector<double>& times = driver_.times();
     if (last >= times.size()) {
       return InternalError(fmt::format("smoothed path: a path entry of step {} but {} step times",
                                        last, times.size()));
     }
     // Smooth() visits the steps from the last back to the first; each step's distinct poses
-    // are summed in their sorted order once the step is complete.
+    // (across ranks, every rank's, merged) are summed in their sorted order once the step is
+    // complete. Every rank has a pose at every step, so every rank gathers once per step.
     struct Sum {
       double w = 0, x = 0, y = 0, c = 0, s = 0;
     };
     std::vector<Sum> sums(last + 1);
     std::vector<SmoothedPart> level;
+    Status status;
     auto sum_level = [&] {
-      if (level.empty()) return;
+      if (level.empty() || !status.ok()) return;
+      const uint32_t k = level.front().step;
       MergeParts(&level);
-      Sum& s = sums[level.front().step];
+      if (ranks_ != nullptr) {
+        StatusOr<std::vector<SmoothedPart>> all = Gathered(std::move(level));
+        if (!all.ok()) {
+          status = all.status();
+          return;
+        }
+        level = std::move(all).value();
+        MergeParts(&level);
+      }
+      Sum& s = sums[k];
       for (const SmoothedPart& part : level) {
         const Pose2 pose = model_.PoseOf(part.pose);
         const double w = static_cast<double>(part.weight);
@@ -274,6 +303,7 @@ class Engine final : public FootSlam::Impl {
           level.push_back({k, p, w});
         });
     sum_level();
+    GROVE_RETURN_IF_ERROR(status);
     std::vector<StampedPose> out(last + 1);
     for (uint32_t k = 0; k <= last; ++k) {
       const Sum& s = sums[k];
@@ -282,32 +312,68 @@ class Engine final : public FootSlam::Impl {
     return out;
   }
 
-  std::vector<HexCounts> CumulativeMap() const override {
+  StatusOr<std::vector<HexCounts>> CumulativeMap() const override {
     const std::vector<uint64_t> fixed = FixedWeights();
     std::unordered_map<uint64_t, std::array<unsigned __int128, 6>> sums;
     map_.Cumulative(fixed, [&](uint64_t key, const Htc& h, uint64_t w) {
       auto& s = sums[key];
       for (int e = 0; e < 6; ++e) s[e] += static_cast<unsigned __int128>(h.c[e]) * w;
     });
-    std::vector<std::pair<uint64_t, HexCounts>> hexes;
-    hexes.reserve(sums.size());
+    // Integer sums: every rank's, added in any order, give one process's bits.
+    struct KeyedSums {
+      unsigned __int128 sum[6];
+      uint64_t key;
+      uint64_t zero;  // no padding: the parts are sent as bytes
+    };
+    std::vector<KeyedSums> mine;
+    mine.reserve(sums.size());
     for (const auto& [key, sum] : sums) {
+      KeyedSums k{{}, key, 0};
+      std::copy(sum.begin(), sum.end(), k.sum);
+      mine.push_back(k);
+    }
+    StatusOr<std::vector<KeyedSums>> all = Gathered(std::move(mine));
+    if (!all.ok()) return all.status();
+    std::sort(all->begin(), all->end(),
+              [](const KeyedSums& a, const KeyedSums& b) { return a.key < b.key; });
+    std::vector<std::pair<uint64_t, HexCounts>> hexes;
+    hexes.reserve(all->size());
+    for (size_t i = 0; i < all->size();) {
+      unsigned __int128 sum[6] = {};
+      const uint64_t key = (*all)[i].key;
+      for (; i < all->size() && (*all)[i].key == key; ++i) {
+        for (int e = 0; e < 6; ++e) sum[e] += (*all)[i].sum[e];
+      }
       HexCounts hc;
       for (int e = 0; e < 6; ++e) hc.counts[e] = static_cast<double>(sum[e]) / kWeightScale;
       hexes.push_back({key, hc});
     }
-    std::sort(hexes.begin(), hexes.end(),
-              [](const auto& a, const auto& b) { return a.first < b.first; });
     return WithStored(std::move(hexes));
   }
 
-  std::vector<HexCounts> HeaviestMap() const override {
+  StatusOr<std::vector<HexCounts>> HeaviestMap() const override {
+    struct KeyedCounts {
+      uint64_t key;
+      double counts[6];
+    };
+    std::vector<KeyedCounts> mine;
+    size_t i;
+    if (Holds(driver_.filter().heaviest(), &i)) {
+      map_.ForEachHex(i, [&](uint64_t key, const Htc& h) {
+        KeyedCounts k{key, {}};
+        for (int e = 0; e < 6; ++e) k.counts[e] = h.c[e];
+        mine.push_back(k);
+      });
+    }
+    StatusOr<std::vector<KeyedCounts>> all = Gathered(std::move(mine));
+    if (!all.ok()) return all.status();
     std::vector<std::pair<uint64_t, HexCounts>> hexes;
-    map_.ForEachHex(driver_.filter().heaviest(), [&](uint64_t key, const Htc& h) {
+    hexes.reserve(all->size());
+    for (const KeyedCounts& k : *all) {
       HexCounts hc;
-      for (int e = 0; e < 6; ++e) hc.counts[e] = h.c[e];
-      hexes.push_back({key, hc});
-    });
+      std::copy(k.counts, k.counts + 6, hc.counts);
+      hexes.push_back({k.key, hc});
+    }
     return WithStored(std::move(hexes));
   }
 
@@ -316,9 +382,9 @@ class Engine final : public FootSlam::Impl {
   FootSlamSummary Summary() const override {
     FootSlamSummary s;
     static_cast<FilterSummary&>(s) = driver_.Summary();
-    const ErrorSums e = SumErrors();
-    s.mean_scale = e.scale / e.w;
-    s.mean_heading_error_rad = e.heading / e.w;
+    StatusOr<ErrorSums> e = SumErrors();
+    s.mean_scale = e.ok() ? e->scale / e->w : std::nan("");
+    s.mean_heading_error_rad = e.ok() ? e->heading / e->w : std::nan("");
     s.map_memory = map_.memory();
     s.grid_size = int64_t{1} << (layout_.log2_degree() / 2 * map_.grown_height());
     s.prior_hexagons = static_cast<int64_t>(user_prior_.size());
@@ -333,6 +399,9 @@ class Engine final : public FootSlam::Impl {
 
   StatusOr<std::string> Save(std::string_view user_data) const override {
     GROVE_RETURN_IF_ERROR(driver_.CheckNotFailed("there is no state to save"));
+    if (ranks_ != nullptr) {
+      return FailedPreconditionError("a filter across ranks cannot write a checkpoint yet");
+    }
     ByteWriter w;
     WriteCheckpointHead(&w, kCheckpointKind, CheckpointFieldsOf(FootSlamConfigFields(), config_),
                         user_data);
@@ -457,9 +526,9 @@ class Engine final : public FootSlam::Impl {
   struct ErrorSums {
     double w = 0, scale = 0, heading = 0;
   };
-  ErrorSums SumErrors() const {
+  StatusOr<ErrorSums> SumErrors() const {
     auto lw = driver_.filter().log_weights();
-    ErrorSums total;
+    std::vector<ErrorSums> blocks;
     for (size_t b = 0; b < model_.size(); b += kSumBlock) {
       ErrorSums block;
       for (size_t i = b; i < std::min(model_.size(), b + kSumBlock); ++i) {
@@ -468,11 +537,40 @@ class Engine final : public FootSlam::Impl {
         block.scale += w * model_.scale(i);
         block.heading += w * model_.heading_error(i);
       }
+      blocks.push_back(block);
+    }
+    StatusOr<std::vector<ErrorSums>> all = Gathered(std::move(blocks));
+    if (!all.ok()) return all.status();
+    ErrorSums total;
+    for (const ErrorSums& block : *all) {
       total.w += block.w;
       total.scale += block.scale;
       total.heading += block.heading;
     }
     return total;
+  }
+
+  static FilterOptions OptionsAcross(const FootSlamConfig& config, Collective* ranks) {
+    FilterOptions o = FilterOptionsOf(config);
+    o.collective = ranks;
+    o.total_particles = static_cast<uint64_t>(config.particles);
+    return o;
+  }
+
+  // Whether this rank holds particle `global` (a global index), and its index here.
+  bool Holds(size_t global, size_t* local) const {
+    if (global < share_.first || global - share_.first >= model_.size()) return false;
+    *local = global - share_.first;
+    return true;
+  }
+
+  // Every rank's `mine`, concatenated in rank order (on one process, `mine`).
+  template <typename T>
+  StatusOr<std::vector<T>> Gathered(std::vector<T> mine) const {
+    if (ranks_ == nullptr) return mine;
+    std::vector<T> all;
+    GROVE_RETURN_IF_ERROR(AllGatherValues<T>(*ranks_, mine, &all));
+    return all;
   }
 
   // The particles' weights in fixed point (kWeightScale).
@@ -639,6 +737,8 @@ class Engine final : public FootSlam::Impl {
   }
 
   FootSlamConfig config_;
+  Collective* ranks_;    // null: one process
+  ParticleShare share_;  // the particles this rank holds
   WorkerPool workers_;
   HexGrid grid_;
   HTreeLayout layout_;
@@ -663,14 +763,14 @@ class Engine final : public FootSlam::Impl {
 
 template <int kLog2Degree>
 std::unique_ptr<FootSlam::Impl> MakeHTreeEngine(const FootSlamConfig& config, int threads,
-                                                HTreeLayout layout) {
+                                                HTreeLayout layout, Collective* ranks) {
   if (config.alphabet > 0) {
     auto alphabet = std::make_unique<const Alphabet>(*Alphabet::Create(config.alphabet));
     return std::make_unique<Engine<AlphabetHTreeMap<kLog2Degree>>>(
-        config, threads, std::move(layout), std::move(alphabet));
+        config, threads, std::move(layout), std::move(alphabet), ranks);
   }
   return std::make_unique<Engine<HTreeMap<kLog2Degree>>>(config, threads, std::move(layout),
-                                                         nullptr);
+                                                         nullptr, ranks);
 }
 
 // Bytes one particle's own copy of a path costs: the inner nodes above the bottom one plus the
@@ -739,7 +839,29 @@ FootSlam::FootSlam(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 FootSlam::~FootSlam() = default;
 
 StatusOr<std::unique_ptr<FootSlam>> FootSlam::Create(const FootSlamConfig& config) {
+  return Create(config, nullptr);
+}
+
+StatusOr<std::unique_ptr<FootSlam>> FootSlam::Create(const FootSlamConfig& config,
+                                                     Collective* ranks) {
   GROVE_RETURN_IF_ERROR(config.Validate());
+  if (ranks != nullptr && ranks->size() > 1) {
+    if (config.store_distance_m > 0) {
+      return InvalidArgumentError(fmt::format(
+          "store_distance_m = {}: storage of diversity does not run across ranks yet; set it to "
+          "0, or run on one rank",
+          config.store_distance_m));
+    }
+    const uint64_t blocks = (static_cast<uint64_t>(config.particles) + kSumBlock - 1) / kSumBlock;
+    if (blocks < static_cast<uint64_t>(ranks->size())) {
+      return InvalidArgumentError(fmt::format(
+          "particles = {}: across {} ranks every rank needs a block of {} particles (at least "
+          "{} particles)",
+          config.particles, ranks->size(), kSumBlock, (ranks->size() - 1) * kSumBlock + 1));
+    }
+  } else {
+    ranks = nullptr;
+  }
   return NoThrow([&]() -> StatusOr<std::unique_ptr<FootSlam>> {
     int threads = config.threads > 0
                       ? config.threads
@@ -749,20 +871,21 @@ StatusOr<std::unique_ptr<FootSlam>> FootSlam::Create(const FootSlamConfig& confi
     if (!layout.ok()) return layout.status();
     std::unique_ptr<Impl> impl;
     if (config.map == FootSlamMapKind::kNaive) {
-      impl = std::make_unique<Engine<NaiveMap>>(config, threads, std::move(*layout), nullptr);
+      impl =
+          std::make_unique<Engine<NaiveMap>>(config, threads, std::move(*layout), nullptr, ranks);
     } else {
       switch (config.degree) {
         case 4:
-          impl = MakeHTreeEngine<2>(config, threads, std::move(*layout));
+          impl = MakeHTreeEngine<2>(config, threads, std::move(*layout), ranks);
           break;
         case 16:
-          impl = MakeHTreeEngine<4>(config, threads, std::move(*layout));
+          impl = MakeHTreeEngine<4>(config, threads, std::move(*layout), ranks);
           break;
         case 64:
-          impl = MakeHTreeEngine<6>(config, threads, std::move(*layout));
+          impl = MakeHTreeEngine<6>(config, threads, std::move(*layout), ranks);
           break;
         default:
-          impl = MakeHTreeEngine<8>(config, threads, std::move(*layout));
+          impl = MakeHTreeEngine<8>(config, threads, std::move(*layout), ranks);
           break;
       }
     }
@@ -781,8 +904,7 @@ int64_t FootSlam::steps() const { return impl_->steps(); }
 Pose2 FootSlam::HeaviestPose() const { return impl_->HeaviestPose(); }
 Pose2 FootSlam::MeanPose() const { return impl_->MeanPose(); }
 StatusOr<std::vector<StampedPose>> FootSlam::HeaviestTrajectory() const {
-  return NoThrow(
-      [&]() -> StatusOr<std::vector<StampedPose>> { return impl_->HeaviestTrajectory(); });
+  return NoThrow([&]() { return impl_->HeaviestTrajectory(); });
 }
 
 StatusOr<std::vector<StampedPose>> FootSlam::SmoothedTrajectory() const {
@@ -790,10 +912,10 @@ StatusOr<std::vector<StampedPose>> FootSlam::SmoothedTrajectory() const {
 }
 const std::vector<StampedPose>& FootSlam::MeanTrajectory() const { return impl_->MeanTrajectory(); }
 StatusOr<std::vector<HexCounts>> FootSlam::CumulativeMap() const {
-  return NoThrow([&]() -> StatusOr<std::vector<HexCounts>> { return impl_->CumulativeMap(); });
+  return NoThrow([&]() { return impl_->CumulativeMap(); });
 }
 StatusOr<std::vector<HexCounts>> FootSlam::HeaviestMap() const {
-  return NoThrow([&]() -> StatusOr<std::vector<HexCounts>> { return impl_->HeaviestMap(); });
+  return NoThrow([&]() { return impl_->HeaviestMap(); });
 }
 StatusOr<std::vector<HexCounts>> FootSlam::StoredMap() const {
   return NoThrow([&]() -> StatusOr<std::vector<HexCounts>> { return impl_->StoredMap(); });

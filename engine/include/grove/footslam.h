@@ -193,10 +193,21 @@ struct GROVE_EXPORT FootSlamSummary : FilterSummary {
 // the checkpoint's field block come from this table.
 GROVE_EXPORT const std::vector<ConfigField<FootSlamConfig>>& FootSlamConfigFields();
 
+class Collective;
+
 class GROVE_EXPORT FootSlam {
  public:
   // Validates `config` and builds the engine; nothing is built when the config is invalid.
   static StatusOr<std::unique_ptr<FootSlam>> Create(const FootSlamConfig& config);
+  // One rank's engine of a filter whose config.particles are split over the ranks of `ranks`
+  // (engine/collective.h; null: one process, as Create(config)). Every rank creates its engine
+  // with the same configuration and makes the same calls in the same order: Step, and every
+  // read-out, is collective, and gives every rank the whole filter's result, the same bits as
+  // one process. Storage of diversity (store_distance_m > 0) and checkpoints do not run across
+  // ranks yet (InvalidArgument, FailedPrecondition); every rank needs at least one block of
+  // 4,096 particles (InvalidArgument). Summary()'s memory and phase figures are this rank's.
+  static StatusOr<std::unique_ptr<FootSlam>> Create(const FootSlamConfig& config,
+                                                    Collective* ranks);
 
   // A prediction of the peak memory, in bytes, of a run of `steps` steps: particle state, two
   // generations of maps and path histories, and a fixed overhead. Calibrated on the runs in
