@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "engine/config_json.h"
+#include "engine/resampler.h"
 #include "tools/footslam_outputs.h"
 #include "tools/map_render.h"
 #include "tools/output_readers.h"
@@ -58,7 +59,9 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   }
 
   Status Create() override {
-    GROVE_RETURN_IF_ERROR(FacadeRunJob::Create());
+    StatusOr<std::unique_ptr<FootSlam>> engine = FootSlam::Create(config_, options_.run.ranks);
+    if (!engine.ok()) return engine.status();
+    engine_ = std::move(engine).value();
     if (options_.prior_map_path.empty()) return Status::Ok();
     Status s = engine_->SetPriorMap(prior_);
     if (!s.ok()) return Status(s.code(), options_.prior_map_path + ": " + s.message());
@@ -80,7 +83,14 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   const char* RecordsName() const override { return "steps"; }
   int64_t ExpectedRecords() const override { return records_; }
   int64_t PredictPeakBytes(int64_t records) const override {
-    return FootSlam::EstimatePeakBytes(config_, records) + records * kCommandBytesPerStep;
+    FootSlamConfig share = config_;  // across ranks, this rank's particles
+    if (options_.run.ranks != nullptr) {
+      share.particles = static_cast<int64_t>(RankShare(static_cast<uint64_t>(config_.particles),
+                                                       options_.run.ranks->size(),
+                                                       options_.run.ranks->rank(), kSumBlock)
+                                                 .count);
+    }
+    return FootSlam::EstimatePeakBytes(share, records) + records * kCommandBytesPerStep;
   }
   std::string DescribePrediction(int64_t records) const override {
     return fmt::format("{} particles, {} map, {} steps{}", config_.particles,
@@ -110,24 +120,27 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   }
 
   Status WriteOutputs(OutputSet* out, nlohmann::json* summary) override {
+    // Every read-out first: across ranks they are collective, and every rank takes them.
     StatusOr<std::vector<HexCounts>> cumulative = engine_->CumulativeMap();
     if (!cumulative.ok()) return cumulative.status();
-    GROVE_RETURN_IF_ERROR(out->Add("map.csv", MapCsv(*cumulative, false)));
     StatusOr<std::vector<HexCounts>> best = engine_->HeaviestMap();
     if (!best.ok()) return best.status();
-    GROVE_RETURN_IF_ERROR(out->Add("map_best.csv", MapCsv(*best, true)));
-    if (config_.store_distance_m > 0) {
-      StatusOr<std::vector<HexCounts>> stored = engine_->StoredMap();
-      if (!stored.ok()) return stored.status();
-      GROVE_RETURN_IF_ERROR(out->Add("stored_map.csv", MapCsv(*stored, false)));
-    }
+    StatusOr<std::vector<HexCounts>> stored = engine_->StoredMap();
+    if (!stored.ok()) return stored.status();
     StatusOr<std::vector<StampedPose>> trajectory = engine_->HeaviestTrajectory();
     if (!trajectory.ok()) return trajectory.status();
+    StatusOr<std::vector<StampedPose>> smoothed = engine_->SmoothedTrajectory();
+    if (!smoothed.ok()) return smoothed.status();
+    const FootSlamSummary s = engine_->Summary();
+    if (out == nullptr) return Status::Ok();  // another rank writes them
+    GROVE_RETURN_IF_ERROR(out->Add("map.csv", MapCsv(*cumulative, false)));
+    GROVE_RETURN_IF_ERROR(out->Add("map_best.csv", MapCsv(*best, true)));
+    if (config_.store_distance_m > 0) {
+      GROVE_RETURN_IF_ERROR(out->Add("stored_map.csv", MapCsv(*stored, false)));
+    }
     GROVE_RETURN_IF_ERROR(out->Add("trajectory.csv", TrajectoryCsv(*trajectory)));
     GROVE_RETURN_IF_ERROR(
         out->Add("mean_trajectory.csv", TrajectoryCsv(engine_->MeanTrajectory())));
-    StatusOr<std::vector<StampedPose>> smoothed = engine_->SmoothedTrajectory();
-    if (!smoothed.ok()) return smoothed.status();
     GROVE_RETURN_IF_ERROR(out->Add("smoothed_trajectory.csv", TrajectoryCsv(*smoothed)));
     if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
     // The smoothed path: the best of the three paths on the simulator's walks (README).
@@ -139,7 +152,6 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
     image.path_label = "smoothed path";
     GROVE_RETURN_IF_ERROR(AddMapImages(out, image));
     if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
-    const FootSlamSummary s = engine_->Summary();
     summary->update(FootSlamSummaryJson(s));
     (*summary)["inputs"] = {{"steps", steps_name_}, {"steps_read", engine_->steps()}};
     (*summary)["hexagons"] = {{"cumulative", cumulative->size()}, {"heaviest", best->size()}};

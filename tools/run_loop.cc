@@ -295,8 +295,64 @@ bool StopRequested() { return g_stop_signal.load(std::memory_order_relaxed) != 0
 int StopSignal() { return g_stop_signal.load(std::memory_order_relaxed); }
 bool HangupSeen() { return g_hangup.load(std::memory_order_relaxed); }
 
+// Across ranks, before a record is stepped: the lowest rank's stop signal (0: none), or an error
+// when a rank failed to read, or the ranks read different records or not the same number.
+StatusOr<int> AgreeOnRecord(Collective& ranks, const StatusOr<bool>& more,
+                            const std::string& record, int64_t number,
+                            const std::string& input_name, const char* records_name) {
+  struct Mark {
+    int32_t signal;
+    int32_t state;  // 0: the input ended, 1: a record, 2: a read error
+    uint32_t crc;
+    uint32_t zero;
+  };
+  const Mark mine{StopSignal(), more.ok() ? (*more ? 1 : 0) : 2, Crc32(record), 0};
+  std::vector<Mark> all;
+  GROVE_RETURN_IF_ERROR(AllGatherValues<Mark>(ranks, std::span(&mine, 1), &all));
+  for (const Mark& m : all) {
+    if (m.signal != 0) return m.signal;
+  }
+  bool failed = false;
+  for (const Mark& m : all) failed = failed || m.state == 2;
+  if (failed) {
+    GROVE_RETURN_IF_ERROR(AgreeStatus(ranks, more.ok() ? Status::Ok() : more.status()));
+  }
+  for (size_t q = 1; q < all.size(); ++q) {
+    if (all[q].state != all[0].state) {
+      return InvalidArgumentError(fmt::format(
+          "{}: rank {} and rank 0 disagree on whether {} {} exists: every rank must read the "
+          "same input",
+          input_name, q, records_name, number));
+    }
+    if (all[q].crc != all[0].crc) {
+      return InvalidArgumentError(
+          fmt::format("{}: rank {} read other values than rank 0 in {} {}: every rank must read "
+                      "the same input",
+                      input_name, q, records_name, number));
+    }
+  }
+  return 0;
+}
+
+// Across ranks: the lowest rank's stop signal (0: none).
+StatusOr<int> AgreeOnSignal(Collective& ranks) {
+  const int32_t mine = StopSignal();
+  std::vector<int32_t> all;
+  GROVE_RETURN_IF_ERROR(AllGatherValues<int32_t>(ranks, std::span(&mine, 1), &all));
+  for (int32_t s : all) {
+    if (s != 0) return s;
+  }
+  return 0;
+}
+
 int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& config) {
   auto wall_start = std::chrono::steady_clock::now();
+  // Across ranks rank 0 (the lead) checks and writes the outputs and reports; every rank takes
+  // the same steps, agrees on every error, and exits with the same code.
+  Collective* ranks = options.ranks;
+  const bool lead = ranks == nullptr || ranks->rank() == 0;
+  auto agree = [&](const Status& s) { return ranks == nullptr ? s : AgreeStatus(*ranks, s); };
+  auto fail = [&](int code, std::string_view message) { return lead ? Fail(code, message) : code; };
   std::optional<SignalHandlers> signals;
   if (options.handle_signals) signals.emplace();
   const std::string checkpoint_path = options.checkpoint_path.empty()
@@ -304,13 +360,19 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
                                           : options.checkpoint_path;
 
   // Every output path is checked, and the output directory locked, before any work.
-  StatusOr<OutputDirectory> out_dir = OutputDirectory::Open(options.out_dir);
-  if (!out_dir.ok()) {
-    const Status& s = out_dir.status();
-    return Fail(s.code() == StatusCode::kInvalidArgument ? kExitUsage : kExitOutput, s.message());
+  std::optional<OutputDirectory> out_dir;
+  Status paths_ok;
+  if (lead) {
+    StatusOr<OutputDirectory> opened = OutputDirectory::Open(options.out_dir);
+    if (opened.ok()) {
+      out_dir.emplace(std::move(opened).value());
+      paths_ok = CheckOutputPaths(*job, options.out_dir, checkpoint_path);
+    } else {
+      paths_ok = opened.status();
+    }
   }
-  if (Status s = CheckOutputPaths(*job, options.out_dir, checkpoint_path); !s.ok()) {
-    return Fail(s.code() == StatusCode::kInvalidArgument ? kExitUsage : kExitOutput, s.message());
+  if (Status s = agree(paths_ok); !s.ok()) {
+    return fail(s.code() == StatusCode::kInvalidArgument ? kExitUsage : kExitOutput, s.message());
   }
 
   // Refuse a run that would not fit before building anything.
@@ -319,35 +381,37 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
   const int64_t budget = options.memory_budget_bytes > 0 ? options.memory_budget_bytes
                                                          : AvailableMemoryBytes(&budget_source);
   const int64_t predicted = job->PredictPeakBytes(records);
+  Status fits;
   if (budget > 0 && predicted > budget) {
-    return Fail(kExitMemory,
-                fmt::format("the run is predicted to need {:.1f} MiB ({}), more than the {} of "
-                            "{:.1f} MiB; use fewer particles or raise --memory-budget",
-                            predicted / 1048576.0, job->DescribePrediction(records), budget_source,
-                            budget / 1048576.0));
+    fits = ResourceExhaustedError(
+        fmt::format("the run is predicted to need {:.1f} MiB ({}), more than the {} of "
+                    "{:.1f} MiB; use fewer particles or raise --memory-budget",
+                    predicted / 1048576.0, job->DescribePrediction(records), budget_source,
+                    budget / 1048576.0));
   }
+  if (Status s = agree(fits); !s.ok()) return fail(kExitMemory, s.message());
 
   // A new engine, or one continuing from a checkpoint.
   InputPosition resumed_at;
   if (options.resume_path.empty()) {
-    if (Status s = job->Create(); !s.ok()) {
-      return Fail(s.code() == StatusCode::kResourceExhausted ? kExitMemory : ExitCodeOf(s),
+    if (Status s = agree(job->Create()); !s.ok()) {
+      return fail(s.code() == StatusCode::kResourceExhausted ? kExitMemory : ExitCodeOf(s),
                   s.message());
     }
   } else {
     StatusOr<std::string> bytes = ReadCheckpointFile(options.resume_path);
-    if (!bytes.ok()) return Fail(kExitInput, bytes.status().message());
+    if (!bytes.ok()) return fail(kExitInput, bytes.status().message());
     std::string user;
     Status s = job->Resume(*bytes, options.resume_path, &user);
     if (!s.ok()) {
       // Another configuration or format is a usage error; a corrupt file a bad input.
-      return Fail(s.code() == StatusCode::kFailedPrecondition  ? kExitUsage
+      return fail(s.code() == StatusCode::kFailedPrecondition  ? kExitUsage
                   : s.code() == StatusCode::kResourceExhausted ? kExitMemory
                                                                : kExitInput,
                   s.message());
     }
     StatusOr<InputPosition> at = InputPosition::FromJson(user, options.resume_path);
-    if (!at.ok()) return Fail(kExitInput, at.status().message());
+    if (!at.ok()) return fail(kExitInput, at.status().message());
     resumed_at = *at;
   }
 
@@ -357,6 +421,9 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
   double checkpoint_s = 0;
   auto write_checkpoint = [&]() -> Status {
     auto t0 = std::chrono::steady_clock::now();
+    if (ranks != nullptr) {
+      return FailedPreconditionError("a run across ranks cannot write a checkpoint yet");
+    }
     StatusOr<std::string> bytes = job->Checkpoint(position.ToJson());
     if (!bytes.ok()) return bytes.status();
     GROVE_RETURN_IF_ERROR(WriteFileAtomically(checkpoint_path, *bytes));
@@ -367,13 +434,22 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
     return Status::Ok();
   };
   auto stop_with_checkpoint = [&](int signal) {
+    if (ranks != nullptr) {
+      if (lead) {
+        std::fprintf(stderr,
+                     "\ngrove: stopped by %s after step %lld; a run across ranks writes no "
+                     "checkpoint yet: nothing was written\n",
+                     strsignal(signal), static_cast<long long>(job->steps()));
+      }
+      return kExitSignalBase + signal;
+    }
     if (position.records < resumed_at.records) {  // still re-reading: nothing new to save
       std::fprintf(stderr, "\ngrove: stopped by %s before any new step; %s is unchanged\n",
                    strsignal(signal), options.resume_path.c_str());
       return kExitSignalBase + signal;
     }
     Status s = write_checkpoint();
-    if (!s.ok()) return Fail(kExitOutput, s.message());
+    if (!s.ok()) return fail(kExitOutput, s.message());
     std::fprintf(stderr,
                  "\ngrove: stopped by %s after step %lld: wrote %s; continue with the same "
                  "command and --resume %s\n",
@@ -384,19 +460,30 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
 
   const bool terminal = isatty(fileno(stderr)) != 0;
   ProgressReporter progress(records, job->particles(), stderr, terminal);
+  const bool show_progress = options.progress && lead;
   std::string digest_bytes;
   while (true) {
-    if (int signal = StopSignal(); signal != 0) return stop_with_checkpoint(signal);
+    if (ranks == nullptr) {
+      if (int signal = StopSignal(); signal != 0) return stop_with_checkpoint(signal);
+    }
     digest_bytes.clear();
     StatusOr<bool> more = job->Read(&digest_bytes);
-    if (!more.ok()) return Fail(kExitInput, more.status().message());
+    if (ranks != nullptr) {
+      // Every rank reads the input itself: the ranks agree on a stop signal, on the read's
+      // outcome and on the record's bytes before any of them steps.
+      StatusOr<int> signal = AgreeOnRecord(*ranks, more, digest_bytes, position.records + 1,
+                                           job->InputName(), job->RecordsName());
+      if (!signal.ok()) return fail(kExitInput, signal.status().message());
+      if (*signal != 0) return stop_with_checkpoint(*signal);
+    }
+    if (!more.ok()) return fail(kExitInput, more.status().message());
     if (!*more) break;
     // The records a resumed run has taken already: re-read to check them, not stepped again.
     const bool replay = position.records < resumed_at.records;
     position.Add(digest_bytes);
     if (replay) {
       if (position.records == resumed_at.records && position.digest != resumed_at.digest) {
-        return Fail(kExitInput,
+        return fail(kExitInput,
                     fmt::format("{}: the first {} {} differ from those of {} (made from {}): "
                                 "resume with the same input",
                                 job->InputName(), resumed_at.records, job->RecordsName(),
@@ -407,31 +494,47 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
     }
     if (Status s = job->Step(); !s.ok()) {
       // Out of memory in a step is the memory's fault, not the disk's.
-      return Fail(s.code() == StatusCode::kResourceExhausted ? kExitMemory : ExitCodeOf(s),
+      return fail(s.code() == StatusCode::kResourceExhausted ? kExitMemory : ExitCodeOf(s),
                   s.message());
     }
-    if (options.progress && !HangupSeen()) progress.Update(position.records);
+    if (show_progress && !HangupSeen()) progress.Update(position.records);
     if (options.checkpoint_every > 0 && job->steps() % options.checkpoint_every == 0) {
-      if (Status s = write_checkpoint(); !s.ok()) return Fail(ExitCodeOf(s), s.message());
+      if (Status s = write_checkpoint(); !s.ok()) return fail(ExitCodeOf(s), s.message());
     }
   }
   if (position.records < resumed_at.records) {
-    return Fail(kExitInput, fmt::format("{}: has {} {}, but {} was made after {}: resume with "
+    return fail(kExitInput, fmt::format("{}: has {} {}, but {} was made after {}: resume with "
                                         "the same input",
                                         job->InputName(), position.records, job->RecordsName(),
                                         options.resume_path, resumed_at.records));
   }
-  if (job->steps() == 0) return Fail(kExitInput, fmt::format("{}: no steps", job->InputName()));
-  if (options.progress && !HangupSeen()) progress.Finish();
+  if (job->steps() == 0) return fail(kExitInput, fmt::format("{}: no steps", job->InputName()));
+  if (show_progress && !HangupSeen()) progress.Finish();
 
-  // The outputs as a set: staged, then renamed into place, summary.json last.
-  StatusOr<OutputSet> out = OutputSet::Begin(options.out_dir);
-  if (!out.ok()) return Fail(kExitOutput, out.status().message());
-  nlohmann::json summary = {{"config", config}};
-  if (Status s = job->WriteOutputs(&*out, &summary); !s.ok()) {
-    return Fail(ExitCodeOf(s), s.message());
+  // The outputs as a set: staged, then renamed into place, summary.json last. Across ranks
+  // every rank computes them (the read-outs are collective); the lead writes them.
+  std::optional<OutputSet> out;
+  Status staged;
+  if (lead) {
+    StatusOr<OutputSet> begun = OutputSet::Begin(options.out_dir);
+    if (begun.ok()) {
+      out.emplace(std::move(begun).value());
+    } else {
+      staged = begun.status();
+    }
   }
-  if (int signal = StopSignal(); signal != 0) return stop_with_checkpoint(signal);
+  if (Status s = agree(staged); !s.ok()) return fail(kExitOutput, s.message());
+  nlohmann::json summary = {{"config", config}};
+  if (Status s = agree(job->WriteOutputs(out ? &*out : nullptr, &summary)); !s.ok()) {
+    return fail(ExitCodeOf(s), s.message());
+  }
+  if (ranks != nullptr) {
+    StatusOr<int> signal = AgreeOnSignal(*ranks);
+    if (!signal.ok()) return fail(kExitInternal, signal.status().message());
+    if (*signal != 0) return stop_with_checkpoint(*signal);
+  } else if (int signal = StopSignal(); signal != 0) {
+    return stop_with_checkpoint(signal);
+  }
   summary["wall_time_s"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   summary["peak_rss_bytes"] = PeakRssBytes();
@@ -442,12 +545,17 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
                             {"last_bytes", checkpoint_bytes},
                             {"resumed_from", options.resume_path},
                             {"resumed_at_record", resumed_at.records}};
-  if (Status s = out->Commit(summary); !s.ok()) return Fail(kExitOutput, s.message());
+  if (ranks != nullptr) summary["ranks"] = ranks->size();
+  if (Status s = agree(lead ? out->Commit(summary) : Status::Ok()); !s.ok()) {
+    return fail(kExitOutput, s.message());
+  }
+  const std::string brief = job->BriefReport();  // collective across ranks: every rank
+  if (!lead) return kExitOk;
   out_dir->Keep();
   std::string names;
   for (const std::string& n : out->names()) names += n + ", ";
-  std::fprintf(stderr, "%s\nwrote %s/{%ssummary.json}\n", job->BriefReport().c_str(),
-               options.out_dir.c_str(), names.c_str());
+  std::fprintf(stderr, "%s\nwrote %s/{%ssummary.json}\n", brief.c_str(), options.out_dir.c_str(),
+               names.c_str());
   return kExitOk;
 }
 

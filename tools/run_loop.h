@@ -18,6 +18,7 @@
 #include <string_view>
 #include <vector>
 
+#include "engine/collective.h"
 #include "grove/status.h"
 #include "tools/map_render.h"
 #include "tools/output_set.h"
@@ -67,6 +68,10 @@ struct RunOptions {
   std::string resume_path;          // continue from this checkpoint
   // Install SignalHandlers for the run; false when the caller has (runs side by side).
   bool handle_signals = true;
+  // One filter across these ranks (null: one process). Rank 0 checks the output paths, writes
+  // the outputs and reports; the ranks agree on every record read, every error and every stop
+  // signal, and all exit with the same code. No checkpoints yet.
+  Collective* ranks = nullptr;
 };
 
 // The run loop's handling of SIGINT, SIGTERM (stop: StopSignal()), SIGHUP (HangupSeen()) and
@@ -123,7 +128,8 @@ class RunJob {
   virtual int64_t steps() const = 0;
 
   // Adds the model's outputs to `out` and its fields to `summary`; StopRequested() is true
-  // when a signal asked the run to stop (check it between long pieces of work).
+  // when a signal asked the run to stop (check it between long pieces of work). Across ranks
+  // every rank calls it (the read-outs are collective) and `out` is null except on rank 0.
   virtual Status WriteOutputs(OutputSet* out, nlohmann::json* summary) = 0;
   // One paragraph for the terminal after a run.
   virtual std::string BriefReport() const = 0;

@@ -10,6 +10,7 @@
 #include <utility>
 #include <variant>
 
+#include "engine/resampler.h"
 #include "grove/fastslam.h"
 #include "grove/footslam.h"
 #include "grove/version.h"
@@ -309,6 +310,34 @@ int Main(int argc, char** argv) {
     const int code = run_flags.Prepare(&config, &run_options.run,
                                        {{steps_option, "--steps"}, {prior_option, "--prior-map"}});
     if (code >= 0) return code;
+    gt::MpiWorld world;  // one rank unless started by mpirun
+    if (world.active() && world.size() > 1) {
+      // One filter across the ranks; threads per rank from the rank's CPU set unless given.
+      if (run_options.run.checkpoint_every > 0 || !run_options.run.resume_path.empty()) {
+        return world.rank() == 0
+                   ? gt::Fail(gt::kExitUsage,
+                              "--checkpoint-every and --resume: a run across MPI ranks cannot "
+                              "checkpoint yet; run without them, or on one rank")
+                   : gt::kExitUsage;
+      }
+      const int64_t blocks =
+          (config.particles + int64_t{grove::kSumBlock} - 1) / int64_t{grove::kSumBlock};
+      if (blocks < world.size() || config.store_distance_m > 0) {
+        return world.rank() == 0
+                   ? gt::Fail(gt::kExitUsage,
+                              config.store_distance_m > 0
+                                  ? fmt::format("store_distance_m = {}: storage of diversity does "
+                                                "not run across MPI ranks yet; set it to 0",
+                                                config.store_distance_m)
+                                  : fmt::format("--particles {}: across {} MPI ranks every rank "
+                                                "needs a block of {} particles (at least {})",
+                                                config.particles, world.size(), grove::kSumBlock,
+                                                (world.size() - 1) * grove::kSumBlock + 1))
+                   : gt::kExitUsage;
+      }
+      if (config.threads == 0) config.threads = gt::UsableCpus();
+      run_options.run.ranks = &world;
+    }
     return gt::RunFootSlamCommand(config, run_options);
   }
   if (*batch) {

@@ -1,0 +1,52 @@
+#!/bin/sh
+# `grove footslam run` as one filter across MPI ranks: the outputs rank 0 writes (maps, the
+# heaviest, mean and smoothed paths, the images) are byte-identical to one process's for 2 ranks
+# at 1 and 2 threads and for 4 ranks (oversubscribed on any machine). Ranks that read different
+# steps, checkpoints, and too few particles for the ranks are refused on every rank.
+# Usage: mpi_run_test.sh GROVE_BINARY MPIEXEC BUNDLED_STEPS_CSV
+set -eu
+grove=$1
+mpiexec=$2
+steps=$3
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+# Open MPI refuses root unless told; the tests may run as root in a container.
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+mpi() { "$mpiexec" --oversubscribe --bind-to none "$@"; }
+head -n 301 "$steps" >"$work/steps.csv"  # the bundled walk's first 300 steps
+common="--steps $work/steps.csv --no-progress"
+args="$common --particles 12805"
+outputs="map.csv map_best.csv trajectory.csv mean_trajectory.csv smoothed_trajectory.csv map.png map.svg"
+"$grove" footslam run $args --threads 2 --out "$work/one" 2>/dev/null
+fail=0
+for run in "2 1" "2 2" "4 1"; do
+  set -- $run
+  dir="$work/np$1t$2"
+  mpi -np "$1" "$grove" footslam run $args --threads "$2" --out "$dir" 2>"$work/err" ||
+    { echo "FAIL: -np $1: exit $?"; cat "$work/err"; fail=1; continue; }
+  for f in $outputs; do
+    cmp -s "$work/one/$f" "$dir/$f" || { echo "FAIL: -np $1, $2 threads: $f differs"; fail=1; }
+  done
+  grep -q "\"ranks\": $1" "$dir/summary.json" || { echo "FAIL: -np $1: no ranks in summary"; fail=1; }
+  echo "ok: -np $1, $2 threads per rank: the outputs of one process"
+done
+# Every rank must read the same steps: rank 1 reads a walk with one value changed.
+sed '100s/^\([0-9.]*\),[-0-9.e]*,/\1,0.5,/' "$work/steps.csv" >"$work/other.csv"
+cmp -s "$work/steps.csv" "$work/other.csv" && { echo "FAIL: the other walk is the same"; fail=1; }
+status=0
+mpi -np 1 "$grove" footslam run $args --out "$work/mpmd" : \
+  -np 1 "$grove" footslam run --steps "$work/other.csv" --particles 12805 --no-progress \
+  --out "$work/mpmd" >/dev/null 2>"$work/mpmd.err" || status=$?
+[ "$status" -eq 3 ] || { echo "FAIL: ranks reading other steps exited $status"; fail=1; }
+grep -q 'rank 1 read other values than rank 0 in steps 99' "$work/mpmd.err" ||
+  { echo "FAIL: the refusal does not name the step"; cat "$work/mpmd.err"; fail=1; }
+[ ! -e "$work/mpmd/map.csv" ] || { echo "FAIL: a refused run wrote outputs"; fail=1; }
+for bad in "--particles 12805 --checkpoint-every 10" "--particles 4096"; do
+  status=0
+  mpi -np 2 "$grove" footslam run $common $bad --out "$work/bad" >/dev/null 2>"$work/bad.err" ||
+    status=$?
+  [ "$status" -eq 2 ] || { echo "FAIL: $bad across ranks exited $status"; fail=1; }
+  n=$(grep -c 'error' "$work/bad.err" || true)
+  [ "$n" = 1 ] || { echo "FAIL: $bad: $n error lines, want rank 0's alone"; cat "$work/bad.err"; fail=1; }
+done
+exit $fail
