@@ -1,10 +1,21 @@
 #include "engine/collective.h"
 
+#include <fmt/format.h>
+
 #include <barrier>
 
 #include "engine/checkpoint_io.h"
 
 namespace grove {
+
+Status CheckRankShares(uint64_t total, int ranks, uint64_t block) {
+  const uint64_t k = static_cast<uint64_t>(ranks);
+  if (ranks < 1 || (total + block - 1) / block >= k) return Status::Ok();
+  return InvalidArgumentError(
+      fmt::format("particles = {}: across {} ranks every rank needs a block of {} particles (at "
+                  "least {})",
+                  total, ranks, block, block * (k - 1) + 1));
+}
 
 Status AgreeStatus(Collective& c, const Status& mine) {
   ByteWriter w;

@@ -51,6 +51,10 @@ inline ParticleShare RankShare(uint64_t total, int ranks, int rank, uint64_t blo
   return ParticleShare{first, end - first};
 }
 
+// InvalidArgument unless each of `ranks` ranks gets at least one block of `block` particles of
+// `total` (more than block * (ranks - 1) particles).
+Status CheckRankShares(uint64_t total, int ranks, uint64_t block);
+
 // Every rank's values of a trivially copyable type, concatenated in rank order.
 template <typename T>
 Status AllGatherValues(Collective& c, std::span<const T> mine, std::vector<T>* all) {

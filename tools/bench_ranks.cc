@@ -123,11 +123,8 @@ int RanksBenchCommand(const RanksBenchOptions& options, Collective& world) {
   config.seed = options.seed;
   if (Status s = config.Validate(); !s.ok()) return Fail(kExitUsage, s.message());
   const uint64_t total = static_cast<uint64_t>(options.particles);
-  const uint64_t blocks = (total + kSumBlock - 1) / kSumBlock;
-  if (blocks < static_cast<uint64_t>(ranks)) {
-    return Fail(kExitUsage,
-                fmt::format("--particles {}: {} block(s) of {} for {} ranks; each rank needs one",
-                            options.particles, blocks, kSumBlock, ranks));
+  if (Status s = CheckRankShares(total, ranks, kSumBlock); !s.ok()) {
+    return Fail(kExitUsage, s.message());
   }
   // The ranks must run the same walk and filter (an MPMD launch could give them other options).
   std::vector<std::string> all_options;

@@ -838,6 +838,16 @@ int64_t FootSlam::EstimatePeakBytes(const FootSlamConfig& config, int64_t steps)
 FootSlam::FootSlam(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 FootSlam::~FootSlam() = default;
 
+Status FootSlam::CheckAcrossRanks(const FootSlamConfig& config, int ranks) {
+  if (ranks > 1 && config.store_distance_m > 0) {
+    return InvalidArgumentError(fmt::format(
+        "store_distance_m = {}: storage of diversity does not run across ranks yet; set it to 0, "
+        "or run on one rank",
+        config.store_distance_m));
+  }
+  return CheckRankShares(static_cast<uint64_t>(config.particles), ranks, kSumBlock);
+}
+
 StatusOr<std::unique_ptr<FootSlam>> FootSlam::Create(const FootSlamConfig& config) {
   return Create(config, nullptr);
 }
@@ -846,19 +856,7 @@ StatusOr<std::unique_ptr<FootSlam>> FootSlam::Create(const FootSlamConfig& confi
                                                      Collective* ranks) {
   GROVE_RETURN_IF_ERROR(config.Validate());
   if (ranks != nullptr && ranks->size() > 1) {
-    if (config.store_distance_m > 0) {
-      return InvalidArgumentError(fmt::format(
-          "store_distance_m = {}: storage of diversity does not run across ranks yet; set it to "
-          "0, or run on one rank",
-          config.store_distance_m));
-    }
-    const uint64_t blocks = (static_cast<uint64_t>(config.particles) + kSumBlock - 1) / kSumBlock;
-    if (blocks < static_cast<uint64_t>(ranks->size())) {
-      return InvalidArgumentError(fmt::format(
-          "particles = {}: across {} ranks every rank needs a block of {} particles (at least "
-          "{} particles)",
-          config.particles, ranks->size(), kSumBlock, (ranks->size() - 1) * kSumBlock + 1));
-    }
+    GROVE_RETURN_IF_ERROR(CheckAcrossRanks(config, ranks->size()));
   } else {
     ranks = nullptr;
   }

@@ -34,7 +34,7 @@ status=0
 "$mpiexec" --oversubscribe --bind-to none -np 2 "$grove" bench ranks --particles 4096 \
   --minutes 0.5 --out "$work/few" >/dev/null 2>"$work/few.err" || status=$?
 [ "$status" -eq 2 ] || { echo "FAIL: too few particles exited $status"; fail=1; }
-n=$(grep -c 'each rank needs one' "$work/few.err" || true)
+n=$(grep -c 'every rank needs a block' "$work/few.err" || true)
 [ "$n" = 2 ] || { echo "FAIL: $n of 2 ranks explained the refusal"; cat "$work/few.err"; fail=1; }
 # Ranks given other options (an MPMD launch): every rank refuses with exit 2.
 status=0

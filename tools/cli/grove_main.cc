@@ -10,7 +10,6 @@
 #include <utility>
 #include <variant>
 
-#include "engine/resampler.h"
 #include "grove/fastslam.h"
 #include "grove/footslam.h"
 #include "grove/version.h"
@@ -320,20 +319,8 @@ int Main(int argc, char** argv) {
                               "checkpoint yet; run without them, or on one rank")
                    : gt::kExitUsage;
       }
-      const int64_t blocks =
-          (config.particles + int64_t{grove::kSumBlock} - 1) / int64_t{grove::kSumBlock};
-      if (blocks < world.size() || config.store_distance_m > 0) {
-        return world.rank() == 0
-                   ? gt::Fail(gt::kExitUsage,
-                              config.store_distance_m > 0
-                                  ? fmt::format("store_distance_m = {}: storage of diversity does "
-                                                "not run across MPI ranks yet; set it to 0",
-                                                config.store_distance_m)
-                                  : fmt::format("--particles {}: across {} MPI ranks every rank "
-                                                "needs a block of {} particles (at least {})",
-                                                config.particles, world.size(), grove::kSumBlock,
-                                                (world.size() - 1) * grove::kSumBlock + 1))
-                   : gt::kExitUsage;
+      if (grove::Status s = grove::FootSlam::CheckAcrossRanks(config, world.size()); !s.ok()) {
+        return world.rank() == 0 ? gt::Fail(gt::kExitUsage, s.message()) : gt::kExitUsage;
       }
       if (config.threads == 0) config.threads = gt::UsableCpus();
       run_options.run.ranks = &world;

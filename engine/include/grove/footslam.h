@@ -208,6 +208,9 @@ class GROVE_EXPORT FootSlam {
   // 4,096 particles (InvalidArgument). Summary()'s memory and phase figures are this rank's.
   static StatusOr<std::unique_ptr<FootSlam>> Create(const FootSlamConfig& config,
                                                     Collective* ranks);
+  // What Create(config, ranks) checks of a configuration for `ranks` ranks beyond Validate():
+  // InvalidArgument naming the field when it cannot run across that many.
+  static Status CheckAcrossRanks(const FootSlamConfig& config, int ranks);
 
   // A prediction of the peak memory, in bytes, of a run of `steps` steps: particle state, two
   // generations of maps and path histories, and a fixed overhead. Calibrated on the runs in
@@ -253,8 +256,9 @@ class GROVE_EXPORT FootSlam {
   // weighted mean, under the weights after the last step, of the surviving particles' ancestral
   // poses there: fixed-interval smoothing by the ancestry, which the filtered mean (the mean of
   // each step's own particles, most of which later die) is not. At the last step it is the mean
-  // pose (to the history's single precision). Visits each distinct path entry once; the same
-  // bits at any thread count.
+  // pose (to the history's single precision). Visits each distinct path entry once; each step's
+  // distinct poses are weighted in fixed point and summed in the order of their bits, so the
+  // same bits at any thread or rank count.
   StatusOr<std::vector<StampedPose>> SmoothedTrajectory() const;
   // Eq. 5-6 of the paper: sum over particles of w_i * C_i, hexagons in key order, plus the
   // stored map (storage of diversity). Visits each distinct map node once.
