@@ -55,6 +55,9 @@ enum StreamPurpose : uint32_t {
   // kDifferentialEvolution + 256 g (g < 256; the low byte keeps them apart from the others).
   kDifferentialEvolution = 4,
   kResample = 0x5E5A,  // the resampling draws of a step
+  // Island mode's draws of a step: particle = 2 * island + d, d = 0 for the island's own next
+  // generation and 1 for the particles it sends its neighbour.
+  kIslandResample = 0x5E5B,
 };
 
 class RandomStream {

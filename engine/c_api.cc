@@ -254,6 +254,9 @@ FootSlamConfig ToCpp(const grove_footslam_config& c) {
   o.prior_map_confidence = c.prior_map_confidence;
   o.alphabet = c.alphabet;
   o.store_distance_m = c.store_distance_m;
+  o.islands = c.islands;
+  o.island_exchange_steps = c.island_exchange_steps;
+  o.island_exchange_fraction = c.island_exchange_fraction;
   o.threads = c.threads;
   o.batch = c.batch;
   return o;
@@ -285,6 +288,9 @@ grove_footslam_config ToC(const FootSlamConfig& c) {
   o.prior_map_confidence = c.prior_map_confidence;
   o.alphabet = c.alphabet;
   o.store_distance_m = c.store_distance_m;
+  o.islands = c.islands;
+  o.island_exchange_steps = c.island_exchange_steps;
+  o.island_exchange_fraction = c.island_exchange_fraction;
   o.threads = c.threads;
   o.batch = c.batch;
   return o;

@@ -61,6 +61,11 @@ FilterOptions FilterOptionsOf(const Config& c) {
   o.resample_threshold = c.resample_threshold;
   o.batch = static_cast<size_t>(c.batch);
   o.seed = c.seed;
+  if constexpr (requires { c.islands; }) {
+    o.islands = c.islands;
+    o.exchange_steps = static_cast<uint64_t>(c.island_exchange_steps);
+    o.exchange_fraction = c.island_exchange_fraction;
+  }
   return o;
 }
 

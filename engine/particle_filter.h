@@ -61,6 +61,18 @@ struct FilterOptions {
   Collective* collective = nullptr;
   // The whole filter's particle count, with a collective.
   uint64_t total_particles = 0;
+  // Island mode when above 1: the particles form this many islands of whole blocks (island j
+  // holds RankShare(total, islands, j, kSumBlock)), each resampled from its own weights alone,
+  // after which every particle weighs 1 / N again: an island's share of the total weight is
+  // dropped, the price of never moving particles at a resampling. Every `exchange_steps` steps
+  // the filter resamples whatever the ESS, and island j then draws a systematic sample of
+  // `exchange_fraction` of the smallest island's count from its weights and sends it to island
+  // (j + 1) mod islands, where it takes the place of as many of the island's own draws. Results
+  // depend on the islands, not on the ranks or threads. Across ranks, islands must be a multiple
+  // of the ranks (rank q holds whole islands). Needs a MigratingModel. Default: 1 (off).
+  int islands = 1;
+  uint64_t exchange_steps = 10;
+  double exchange_fraction = 0.1;
 };
 
 // Wall time spent in each phase, summed over steps (seconds).
@@ -169,9 +181,9 @@ class ParticleFilter {
   requires WeightingModel<Model, Input> Status Update(const Input& input) {
     using Clock = std::chrono::steady_clock;
     auto t0 = Clock::now();
-    if (options_.collective != nullptr && !ranks_checked_) {
-      ranks_checked_ = true;
-      GROVE_RETURN_IF_ERROR(CheckRanksAgree());
+    if (!options_checked_) {
+      options_checked_ = true;
+      GROVE_RETURN_IF_ERROR(CheckOptions());
     }
     Status status = ForBatches([&](int slot, size_t begin, size_t end) {
       return model_->Advance(input, step_, begin, end, slot, log_w_.data());
@@ -196,15 +208,19 @@ class ParticleFilter {
     }
     ess_sum_ += ess_;
     const double n = static_cast<double>(total_);
-    if (options_.resample_threshold >= 1.0 || ess_ < options_.resample_threshold * n) {
-      if (options_.collective == nullptr) {
+    const bool exchange =
+        options_.islands > 1 && (step_ + 1) % std::max<uint64_t>(options_.exchange_steps, 1) == 0;
+    if (exchange || options_.resample_threshold >= 1.0 || ess_ < options_.resample_threshold * n) {
+      if (options_.islands > 1) {
+        status = ResampleIslands(exchange);
+      } else if (options_.collective == nullptr) {
         Resample();
       } else {
         status = ResampleAcross();
-        if (!status.ok()) {
-          ++step_;
-          return status;
-        }
+      }
+      if (!status.ok()) {
+        ++step_;
+        return status;
       }
     }
     if constexpr (CompletingModel<Model, Input>) {
@@ -401,16 +417,24 @@ class ParticleFilter {
     return Status::Ok();
   }
 
-  // Across ranks, before the first weighting step: the scheme is systematic, every rank's model
-  // holds its share, and the ranks agree on what changes results (the same error on every rank
-  // otherwise).
-  Status CheckRanksAgree() {
-    Collective& c = *options_.collective;
+  // Before the first weighting step: the islands fit the particles and ranks; across ranks,
+  // also the scheme is systematic, every rank's model holds its share, and the ranks agree on
+  // what changes results (the same error on every rank otherwise).
+  Status CheckOptions() {
     Status mine;
-    if (options_.resampling != ResamplingScheme::kSystematic) {
+    if (options_.resampling != ResamplingScheme::kSystematic &&
+        (options_.collective != nullptr || options_.islands > 1)) {
       mine = InvalidArgumentError(
-          std::string("resampling: a filter across ranks resamples systematically, not ") +
+          std::string("resampling: a filter across ranks or islands resamples systematically, "
+                      "not ") +
           ResamplingSchemeName(options_.resampling));
+    } else {
+      mine = CheckIslands();
+    }
+    if (options_.collective == nullptr) return mine;
+    Collective& c = *options_.collective;
+    if (!mine.ok()) {
+      // Agreed below.
     } else if (log_w_.size() != RankShare(total_, c.size(), c.rank(), kSumBlock).count) {
       mine = InvalidArgumentError("the model holds " + std::to_string(log_w_.size()) +
                                   " particles, not this rank's share of " + std::to_string(total_));
@@ -419,20 +443,68 @@ class ParticleFilter {
     struct Key {
       uint64_t total, seed;
       double threshold;
-      int64_t scheme;
+      int64_t scheme, islands;
+      uint64_t exchange_steps;
+      double exchange_fraction;
+      bool operator==(const Key&) const = default;
     };
-    Key key{total_, options_.seed, options_.resample_threshold,
-            static_cast<int64_t>(options_.resampling)};
+    Key key{total_,
+            options_.seed,
+            options_.resample_threshold,
+            static_cast<int64_t>(options_.resampling),
+            options_.islands,
+            options_.exchange_steps,
+            options_.exchange_fraction};
     std::vector<Key> all;
     GROVE_RETURN_IF_ERROR(AllGatherValues<Key>(c, std::span(&key, 1), &all));
     for (size_t q = 1; q < all.size(); ++q) {
-      if (all[q].total != all[0].total || all[q].seed != all[0].seed ||
-          all[q].threshold != all[0].threshold || all[q].scheme != all[0].scheme) {
-        return InvalidArgumentError(
-            "rank " + std::to_string(q) +
-            "'s filter (particles, seed, resampling, threshold) differs from rank 0's");
+      if (!(all[q] == all[0])) {
+        return InvalidArgumentError("rank " + std::to_string(q) +
+                                    "'s filter (particles, seed, resampling, threshold, islands, "
+                                    "exchange) differs from rank 0's");
       }
     }
+    return Status::Ok();
+  }
+
+  // Island mode's rules (OK when it is off); sets the islands this rank holds.
+  Status CheckIslands() {
+    const int islands = options_.islands;
+    if (islands <= 1) return Status::Ok();
+    const int ranks = options_.collective == nullptr ? 1 : options_.collective->size();
+    const uint64_t blocks = (total_ + kSumBlock - 1) / kSumBlock;
+    if (static_cast<uint64_t>(islands) > blocks) {
+      return InvalidArgumentError("islands = " + std::to_string(islands) +
+                                  ": an island needs a block of " + std::to_string(kSumBlock) +
+                                  " particles, and " + std::to_string(total_) + " make " +
+                                  std::to_string(blocks));
+    }
+    if (islands % ranks != 0) {
+      return InvalidArgumentError("islands = " + std::to_string(islands) +
+                                  ": must be a multiple of the ranks (" + std::to_string(ranks) +
+                                  ")");
+    }
+    if (!(options_.exchange_fraction >= 0 && options_.exchange_fraction <= 0.5)) {
+      return InvalidArgumentError(
+          "exchange_fraction = " + std::to_string(options_.exchange_fraction) +
+          ": must be in [0, 0.5]");
+    }
+    if (options_.exchange_steps == 0) {
+      return InvalidArgumentError("exchange_steps = 0: must be at least 1");
+    }
+    if constexpr (!MigratingModel<Model>) {
+      return InvalidArgumentError("islands = " + std::to_string(islands) +
+                                  ": the model's particles cannot move between islands");
+    }
+    const int me = options_.collective == nullptr ? 0 : options_.collective->rank();
+    island_lo_ = me * (islands / ranks);
+    island_hi_ = island_lo_ + islands / ranks;
+    uint64_t smallest = total_;
+    for (int j = 0; j < islands; ++j) {
+      smallest = std::min(smallest, RankShare(total_, islands, j, kSumBlock).count);
+    }
+    migrants_ = static_cast<uint64_t>(
+        std::floor(options_.exchange_fraction * static_cast<double>(smallest)));
     return Status::Ok();
   }
 
@@ -452,19 +524,24 @@ class ParticleFilter {
   void Resample() {
     using Clock = std::chrono::steady_clock;
     auto t0 = Clock::now();
-    const size_t n = log_w_.size();
     grove::Resample(options_.resampling, weights_, options_.seed, step_, *workers_, parents_);
-    model_->Gather(parents_, *workers_);
     // Systematic and residual resampling always copy it (its weight is at least 1/N); the
     // other schemes may not, and then its successor in index order stands in.
     heaviest_ = static_cast<size_t>(
         std::lower_bound(parents_.begin(), parents_.end(), static_cast<uint32_t>(heaviest_)) -
         parents_.begin());
+    TakeGeneration(t0);
+  }
+
+  // The model gathers parents_ as its next generation and frees the dead one; every weight
+  // becomes 1 / N. The resample phase is timed from t0.
+  void TakeGeneration(std::chrono::steady_clock::time_point t0) {
+    using Clock = std::chrono::steady_clock;
+    model_->Gather(parents_, *workers_);
     auto t1 = Clock::now();
     model_->ReleaseDead(*workers_);
     auto t2 = Clock::now();
-    const double uniform = -std::log(static_cast<double>(n));
-    std::fill(log_w_.begin(), log_w_.end(), uniform);
+    std::fill(log_w_.begin(), log_w_.end(), -std::log(static_cast<double>(total_)));
     ++resamplings_;
     times_.resample_s += Seconds(t1 - t0);
     times_.release_s += Seconds(t2 - t1);
@@ -515,11 +592,7 @@ class ParticleFilter {
           }
         }
         if (which.empty()) continue;
-        ByteWriter w;
-        w.Put<uint64_t>(which.size());
-        w.PutBytes(copies.data(), copies.size() * sizeof(uint32_t));
-        model_->Export(which, &w);
-        to[static_cast<size_t>(q)] = w.Take();
+        to[static_cast<size_t>(q)] = WriteParticles(which, copies);
         sent_bytes_ += to[static_cast<size_t>(q)].size();
         sent_particles_ += which.size();
       }
@@ -538,23 +611,9 @@ class ParticleFilter {
           continue;
         }
         if (from[static_cast<size_t>(q)].empty()) continue;
-        ByteReader r(from[static_cast<size_t>(q)], "particles from rank " + std::to_string(q));
-        uint64_t m = 0;
-        s = r.GetCount("particle count", sizeof(uint32_t), &m);
-        if (s.ok()) {
-          copies.resize(m);
-          s = r.GetBytes("copies", copies.data(), m * sizeof(uint32_t));
-        }
-        const size_t base = model_->size();
-        if (s.ok()) s = model_->Import(&r, m, step_ + 1);
-        if (s.ok() && !r.at_end()) s = r.Error("end", "bytes after the particles");
-        for (size_t j = 0; s.ok() && j < m; ++j) {
-          if (copies[j] == 0 || copies[j] > n - std::min(n, parents_.size())) {
-            s = r.Error("copies", "more copies than the rank's particles");
-          } else {
-            parents_.insert(parents_.end(), copies[j], static_cast<uint32_t>(base + j));
-          }
-        }
+        uint64_t read = 0;
+        s = ReadParticles(from[static_cast<size_t>(q)], "particles from rank " + std::to_string(q),
+                          n - std::min(n, parents_.size()), &read);
       }
       if (s.ok() && parents_.size() != n) {
         s = InternalError("resampling across ranks: " + std::to_string(parents_.size()) +
@@ -562,14 +621,158 @@ class ParticleFilter {
       }
       migrate_s_ += Seconds(Clock::now() - m1);
       GROVE_RETURN_IF_ERROR(AgreeStatus(c, s));
-      model_->Gather(parents_, *workers_);
-      auto t1 = Clock::now();
-      model_->ReleaseDead(*workers_);
-      auto t2 = Clock::now();
-      std::fill(log_w_.begin(), log_w_.end(), -std::log(static_cast<double>(total_)));
-      ++resamplings_;
-      times_.resample_s += Seconds(t1 - t0);
-      times_.release_s += Seconds(t2 - t1);
+      TakeGeneration(t0);
+      return Status::Ok();
+    }
+  }
+
+  // A message of particles that move: `which` (local indices) with their copy counts, then
+  // the particles as the model exports them.
+  std::string WriteParticles(std::span<const uint32_t> which, std::span<const uint32_t> copies) {
+    ByteWriter w;
+    w.Put<uint64_t>(which.size());
+    w.PutBytes(copies.data(), copies.size_bytes());
+    model_->Export(which, &w);
+    return w.Take();
+  }
+
+  // Imports the particles of a WriteParticles() message named `name` and appends their copies
+  // to parents_ (at most `limit` in all, each particle at least one); *copies_read is their sum.
+  Status ReadParticles(std::string_view bytes, const std::string& name, uint64_t limit,
+                       uint64_t* copies_read) {
+    ByteReader r(bytes, name);
+    uint64_t count = 0;
+    GROVE_RETURN_IF_ERROR(r.GetCount("particle count", sizeof(uint32_t), &count));
+    std::vector<uint32_t> copies(count);
+    GROVE_RETURN_IF_ERROR(r.GetBytes("copies", copies.data(), count * sizeof(uint32_t)));
+    const size_t base = model_->size();
+    GROVE_RETURN_IF_ERROR(model_->Import(&r, count, step_ + 1));
+    if (!r.at_end()) return r.Error("end", "bytes after the particles");
+    uint64_t total = 0;
+    for (size_t k = 0; k < count; ++k) {
+      total += copies[k];
+      if (copies[k] == 0 || total > limit) {
+        return r.Error("copies", "more copies than the slots they fill");
+      }
+      parents_.insert(parents_.end(), copies[k], static_cast<uint32_t>(base + k));
+    }
+    *copies_read = total;
+    return Status::Ok();
+  }
+
+  // Island mode: each of this rank's islands draws its next generation from its own weights;
+  // with `exchange`, island j also draws migrants_ particles and sends them to island j + 1
+  // (written and read back as between ranks, whichever rank holds the neighbour), where they
+  // follow the island's own migrants_ fewer draws.
+  Status ResampleIslands(bool exchange) {
+    using Clock = std::chrono::steady_clock;
+    auto t0 = Clock::now();
+    if constexpr (!MigratingModel<Model>) {
+      return InvalidArgumentError("the model's particles cannot move between islands");
+    } else {
+      const int islands = options_.islands;
+      const uint64_t m = exchange ? migrants_ : 0;
+      const int ranks = options_.collective == nullptr ? 1 : options_.collective->size();
+      const int me = options_.collective == nullptr ? 0 : options_.collective->rank();
+      const int local = island_hi_ - island_lo_;
+      std::vector<std::vector<uint32_t>> own(static_cast<size_t>(local));
+      std::vector<std::string> sent(static_cast<size_t>(local));
+      std::vector<uint32_t> drawn, which, copies;
+      Status s;
+      uint64_t heaviest = UINT64_MAX;
+      size_t last_sent = 0;  // distinct particles the last island sends
+      for (int j = island_lo_; j < island_hi_ && s.ok(); ++j) {
+        const ParticleShare island = RankShare(total_, islands, j, kSumBlock);
+        const size_t begin = island.first - first_, n = island.count;
+        // Weights relative to the island's heaviest: an island far behind the others may have
+        // every normalised weight underflow.
+        std::span<const double> log_w(log_w_.data() + begin, n);
+        const double max = *std::max_element(log_w.begin(), log_w.end());
+        if (!std::isfinite(max)) {
+          s = Degenerate(
+              ("island " + std::to_string(j) + "'s every particle weight is zero").c_str());
+          break;
+        }
+        island_w_.resize(n);
+        for (size_t i = 0; i < n; ++i) island_w_[i] = std::exp(log_w[i] - max);
+        std::vector<uint32_t>& kept = own[static_cast<size_t>(j - island_lo_)];
+        kept.resize(n - m);
+        SystematicResample(island_w_, IslandUniform(options_.seed, step_, j, 0), *workers_, kept);
+        for (uint32_t& p : kept) p += static_cast<uint32_t>(begin);
+        if (heaviest_ >= island.first && heaviest_ - island.first < n) {
+          // The heaviest particle's first copy, or the next one's (as Resample()).
+          heaviest = island.first + (std::lower_bound(kept.begin(), kept.end(),
+                                                      static_cast<uint32_t>(heaviest_ - first_)) -
+                                     kept.begin());
+        }
+        if (m == 0) continue;
+        auto m0 = Clock::now();
+        drawn.resize(m);
+        SystematicResample(island_w_, IslandUniform(options_.seed, step_, j, 1), *workers_, drawn);
+        which.clear();
+        copies.clear();
+        for (uint32_t p : drawn) {
+          if (which.empty() || which.back() != begin + p) {
+            which.push_back(static_cast<uint32_t>(begin + p));
+            copies.push_back(0);
+          }
+          ++copies.back();
+        }
+        sent[static_cast<size_t>(j - island_lo_)] = WriteParticles(which, copies);
+        last_sent = which.size();
+        migrate_s_ += Seconds(Clock::now() - m0);
+      }
+      if (options_.collective != nullptr) {
+        GROVE_RETURN_IF_ERROR(AgreeStatus(*options_.collective, s));
+      } else {
+        GROVE_RETURN_IF_ERROR(s);
+      }
+      // What each of this rank's islands receives: from the island before it, here or on the
+      // rank before.
+      std::vector<std::string> from_rank;
+      if (m > 0 && ranks > 1) {
+        std::vector<std::string> to(static_cast<size_t>(ranks));
+        const int next = (me + 1) % ranks;
+        to[static_cast<size_t>(next)] = sent.back();
+        sent_bytes_ += sent.back().size();
+        sent_particles_ += last_sent;
+        GROVE_RETURN_IF_ERROR(options_.collective->AllToAll(to, &from_rank));
+      }
+      auto m1 = Clock::now();
+      parents_.clear();
+      for (int j = island_lo_; j < island_hi_ && s.ok(); ++j) {
+        const size_t at = static_cast<size_t>(j - island_lo_);
+        parents_.insert(parents_.end(), own[at].begin(), own[at].end());
+        if (m == 0) continue;
+        const int before = (j + islands - 1) % islands;
+        const std::string& bytes = at > 0 ? sent[at - 1]
+                                   : ranks > 1
+                                       ? from_rank[static_cast<size_t>((me + ranks - 1) % ranks)]
+                                       : sent[static_cast<size_t>(local - 1)];
+        const std::string name = "particles from island " + std::to_string(before);
+        uint64_t read = 0;
+        s = ReadParticles(bytes, name, m, &read);
+        if (s.ok() && read != m) {
+          s = DataLossError(name + ": " + std::to_string(read) + " copies for " +
+                            std::to_string(m) + " migrants");
+        }
+      }
+      if (s.ok() && parents_.size() != log_w_.size()) {
+        s = InternalError("island resampling: " + std::to_string(parents_.size()) + " copies for " +
+                          std::to_string(log_w_.size()) + " particles");
+      }
+      migrate_s_ += Seconds(Clock::now() - m1);
+      if (options_.collective != nullptr) {
+        GROVE_RETURN_IF_ERROR(AgreeStatus(*options_.collective, s));
+        std::vector<uint64_t> all;
+        GROVE_RETURN_IF_ERROR(
+            AllGatherValues<uint64_t>(*options_.collective, std::span(&heaviest, 1), &all));
+        heaviest = *std::min_element(all.begin(), all.end());
+      } else {
+        GROVE_RETURN_IF_ERROR(s);
+      }
+      heaviest_ = heaviest;
+      TakeGeneration(t0);
       return Status::Ok();
     }
   }
@@ -582,11 +785,15 @@ class ParticleFilter {
   std::vector<double> log_w_;
   std::vector<double> weights_;  // exp(log_w_) after the last normalisation
   std::vector<uint32_t> parents_;
-  std::vector<uint64_t> slots_;  // across ranks: each particle's first copy
+  std::vector<uint64_t> slots_;   // across ranks: each particle's first copy
+  std::vector<double> island_w_;  // island mode: an island's weights over its heaviest
+  int island_lo_ = 0;             // island mode: this rank's islands [island_lo_, island_hi_)
+  int island_hi_ = 1;
+  uint64_t migrants_ = 0;  // island mode: the particles an island sends at an exchange
   uint64_t sent_bytes_ = 0;
   uint64_t sent_particles_ = 0;
   double migrate_s_ = 0;
-  bool ranks_checked_ = false;
+  bool options_checked_ = false;
   std::vector<Status> batch_status_;
   size_t heaviest_ = 0;
   uint64_t step_ = 0;

@@ -41,6 +41,8 @@ std::vector<double> BlockPrefix(std::span<const double> block_sum) {
   return prefix;
 }
 
+}  // namespace
+
 void SystematicResample(std::span<const double> weights, double u, WorkerPool& workers,
                         std::span<uint32_t> parents) {
   const size_t n_in = weights.size();
@@ -56,6 +58,8 @@ void SystematicResample(std::span<const double> weights, double u, WorkerPool& w
     }
   });
 }
+
+namespace {
 
 // Expands offspring counts into a nondecreasing parent list.
 void ExpandCounts(const std::vector<uint32_t>& counts, std::span<uint32_t> parents) {
@@ -89,6 +93,10 @@ std::vector<double> BlockSums(std::span<const double> weights, WorkerPool& worke
 
 double SystematicUniform(uint64_t seed, uint64_t step) {
   return RandomStream(seed, step, kResampleParticle, StreamPurpose::kResample).NextUniform();
+}
+
+double IslandUniform(uint64_t seed, uint64_t step, uint32_t island, uint32_t draw) {
+  return RandomStream(seed, step, 2 * island + draw, StreamPurpose::kIslandResample).NextUniform();
 }
 
 void SystematicSlots(std::span<const double> weights, size_t first_block,

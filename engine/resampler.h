@@ -33,6 +33,15 @@ std::vector<double> BlockSums(std::span<const double> weights, WorkerPool& worke
 // The uniform of systematic resampling at `step`: the same on every rank.
 double SystematicUniform(uint64_t seed, uint64_t step);
 
+// Systematic resampling with the uniform u: fills parents (nondecreasing) as Resample() does.
+// `weights` need not sum to 1. REQUIRES: as Resample().
+void SystematicResample(std::span<const double> weights, double u, WorkerPool& workers,
+                        std::span<uint32_t> parents);
+
+// The uniform of island `island`'s draw `draw` (0: its next generation, 1: the particles it
+// sends) at `step`.
+double IslandUniform(uint64_t seed, uint64_t step, uint32_t island, uint32_t draw);
+
 // Systematic resampling of one share of the particles (a rank of a filter across ranks), bit for
 // bit as Resample(kSystematic) over all of them: `weights` are the share's, starting at block
 // `first_block`; `block_sums` holds every block's BlockSums, all ranks' in block order; n_out is

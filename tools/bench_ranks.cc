@@ -121,15 +121,21 @@ int RanksBenchCommand(const RanksBenchOptions& options, Collective& world) {
   config.grid = FootSlamGrid::kFixed;
   config.alphabet = 5;
   config.seed = options.seed;
+  config.islands = options.islands;
+  config.island_exchange_steps = options.exchange_steps;
+  config.island_exchange_fraction = options.exchange_fraction;
   if (Status s = config.Validate(); !s.ok()) return Fail(kExitUsage, s.message());
   const uint64_t total = static_cast<uint64_t>(options.particles);
-  if (Status s = CheckRankShares(total, ranks, kSumBlock); !s.ok()) {
+  if (Status s = FootSlam::CheckAcrossRanks(config, ranks); !s.ok()) {
     return Fail(kExitUsage, s.message());
   }
   // The ranks must run the same walk and filter (an MPMD launch could give them other options).
   std::vector<std::string> all_options;
-  const std::string given = fmt::format("--particles {} --minutes {} --seed {}", options.particles,
-                                        options.minutes, options.seed);
+  const std::string given = fmt::format(
+      "--particles {} --minutes {} --seed {} --islands {} --exchange-steps {} "
+      "--exchange-fraction {}",
+      options.particles, options.minutes, options.seed, options.islands, options.exchange_steps,
+      options.exchange_fraction);
   if (Status s = world.AllGather(given, &all_options); !s.ok()) {
     return Fail(kExitInternal, s.message());
   }
@@ -159,6 +165,9 @@ int RanksBenchCommand(const RanksBenchOptions& options, Collective& world) {
   filter_options.seed = config.seed;
   filter_options.batch = static_cast<size_t>(config.batch);
   filter_options.resample_threshold = config.resample_threshold;
+  filter_options.islands = config.islands;
+  filter_options.exchange_steps = static_cast<uint64_t>(config.island_exchange_steps);
+  filter_options.exchange_fraction = config.island_exchange_fraction;
   // One rank runs the filter of one process: the reference the others must match.
   filter_options.collective = ranks > 1 ? &timed : nullptr;
   filter_options.total_particles = total;
@@ -221,6 +230,10 @@ int RanksBenchCommand(const RanksBenchOptions& options, Collective& world) {
       {"particles", options.particles},
       {"steps", walk->size()},
       {"seed", options.seed},
+      {"islands", options.islands},
+      {"exchange_steps", options.islands > 1 ? options.exchange_steps : 0},
+      {"exchange_fraction", options.islands > 1 ? options.exchange_fraction : 0.0},
+      {"sent_bytes_per_step", sent_bytes / steps},
       {"run_s", slowest},
       {"ns_per_particle_step", slowest * 1e9 / (steps * static_cast<double>(total))},
       {"resamplings", filter.resamplings()},

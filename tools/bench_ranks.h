@@ -4,7 +4,7 @@
 // moving bytes) against its own work, its time writing and reading the particles that move, the
 // bytes of particles sent per resampling, and a digest
 // of every particle's final state (weight, pose, error states, path, map) that must be the same
-// at any rank and thread count.
+// at any rank and thread count (in island mode, for one island count).
 #ifndef GROVE_TOOLS_BENCH_RANKS_H_
 #define GROVE_TOOLS_BENCH_RANKS_H_
 
@@ -21,6 +21,10 @@ struct RanksBenchOptions {
   double minutes = 4;
   int threads = 0;  // per rank; 0: the rank's CPU set
   uint64_t seed = 1;
+  // Island mode (FootSlamConfig::islands and its exchange); 1: the global mode.
+  int islands = 1;
+  int64_t exchange_steps = 10;
+  double exchange_fraction = 0.1;
 };
 
 // Rank 0 writes OUT/ranks.json and prints one line; returns an exit code, the same on every rank.

@@ -53,8 +53,8 @@ constexpr double kWeightScale = 4503599627370496.0;  // 2^52
 constexpr char kCheckpointKind[] = "grove footslam";
 // FootSLAM's checkpoint body layout; bumped whenever it changes. 2: path positions relative to
 // the start, the filter's count of weighting steps. 3: the grid field, maps grown past
-// the first grid. 4: the stored map of storage of diversity.
-constexpr uint32_t kFootSlamFormatVersion = 4;
+// the first grid. 4: the stored map of storage of diversity. 5: the island fields.
+constexpr uint32_t kFootSlamFormatVersion = 5;
 
 // Storage of diversity looks for blocks to store after every kStoreEverySteps-th step: often
 // enough that an area is stored soon after the walk leaves it (50 steps, about 35 m), rarely
@@ -844,6 +844,12 @@ Status FootSlam::CheckAcrossRanks(const FootSlamConfig& config, int ranks) {
         "store_distance_m = {}: storage of diversity does not run across ranks yet; set it to 0, "
         "or run on one rank",
         config.store_distance_m));
+  }
+  if (config.islands > 1 && config.islands % ranks != 0) {
+    return InvalidArgumentError(fmt::format(
+        "islands = {}: island mode across ranks needs a multiple of the ranks ({}), each rank "
+        "holding whole islands",
+        config.islands, ranks));
   }
   return CheckRankShares(static_cast<uint64_t>(config.particles), ranks, kSumBlock);
 }

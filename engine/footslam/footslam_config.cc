@@ -51,6 +51,15 @@ const std::vector<ConfigField<FootSlamConfig>>& FootSlamConfigFields() {
                   "Resampling scheme"),
       RealField("resample_threshold", &C::resample_threshold, I::LeftOpen(0, 1), kChangesResults,
                 "Resample when ESS/N is below this; 1 resamples every step"),
+      IntegerField("islands", &C::islands, 1, 65536, kChangesResults,
+                   "Island mode: islands of whole 4,096-particle blocks, each resampled alone; "
+                   "1: off"),
+      IntegerField("island_exchange_steps", &C::island_exchange_steps, 1, int64_t{1} << 40,
+                   kChangesResults,
+                   "Island mode: steps between exchanges of particles with the next island"),
+      RealField("island_exchange_fraction", &C::island_exchange_fraction, I::Closed(0, 0.5),
+                kChangesResults,
+                "Island mode: share of the smallest island's particles sent at an exchange"),
       ChoiceField("map", &C::map, {"htree", "naive"}, kChangesResults,
                   "Map representation: htree or naive"),
       IntegerField("degree", &C::degree, 1, 256, kChangesResults,
@@ -78,6 +87,19 @@ Status FootSlamConfig::Validate() const {
           fmt::format("{} = {}: must be within 1e9 hexagon radii of the origin (hex_radius_m = "
                       "{}: |{}| <= {})",
                       name, v, hex_radius_m, name, 1e9 * hex_radius_m));
+    }
+  }
+  if (islands > 1) {
+    const int64_t blocks = (particles + 4095) / 4096;
+    if (islands > blocks) {
+      return InvalidArgumentError(fmt::format(
+          "islands = {}: an island needs a block of 4096 particles, and particles = {} make {}",
+          islands, particles, blocks));
+    }
+    if (resampling != ResamplingScheme::kSystematic) {
+      return InvalidArgumentError(
+          fmt::format("islands = {}: island mode resamples systematically (resampling = {})",
+                      islands, ResamplingSchemeName(resampling)));
     }
   }
   StatusOr<footslam::HTreeLayout> layout = footslam::HTreeLayout::Create(grid_size, degree, grid);

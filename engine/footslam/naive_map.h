@@ -124,12 +124,19 @@ class NaiveMap {
   }
 
  private:
+  // In key order: a table's slot order depends on how it was filled, and a checkpoint of a
+  // resumed engine must be the bytes it was resumed from.
   static void SaveTable(const HexTable<Htc>& t, ByteWriter* w) {
-    w->Put<uint64_t>(t.size());
-    t.ForEach([&](uint64_t key, const Htc& h) {
+    std::vector<std::pair<uint64_t, Htc>> hexes;
+    hexes.reserve(t.size());
+    t.ForEach([&](uint64_t key, const Htc& h) { hexes.push_back({key, h}); });
+    std::sort(hexes.begin(), hexes.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    w->Put<uint64_t>(hexes.size());
+    for (const auto& [key, h] : hexes) {
       w->Put(key);
       w->Put(h);
-    });
+    }
   }
 
   static Status LoadTable(ByteReader* r, uint64_t key_limit, HexTable<Htc>* t) {

@@ -79,6 +79,9 @@ RankResult RunRank(FootSlamConfig config, const std::vector<StepInput>& steps,
   options.batch = 512;
   options.collective = collective;
   options.total_particles = static_cast<uint64_t>(config.particles);
+  options.islands = config.islands;
+  options.exchange_steps = static_cast<uint64_t>(config.island_exchange_steps);
+  options.exchange_fraction = config.island_exchange_fraction;
   ParticleFilter<FootSlamModel<Map>> filter(&model, &workers, options);
   for (const StepInput& in : steps) {
     out.status = filter.Update(in);
@@ -136,9 +139,9 @@ FootSlamConfig TestConfig() {
 }
 
 template <typename Map>
-void ExpectSameAsOneProcess(int ranks, int threads) {
-  SCOPED_TRACE(std::to_string(ranks) + " ranks, " + std::to_string(threads) + " threads each");
-  const FootSlamConfig config = TestConfig();
+void ExpectSameAsOneProcess(int ranks, int threads, const FootSlamConfig& config = TestConfig()) {
+  SCOPED_TRACE(std::to_string(ranks) + " ranks, " + std::to_string(threads) + " threads each, " +
+               std::to_string(config.islands) + " islands");
   const std::vector<StepInput> steps = Loop(120);
   RankResult one = RunRank<Map>(config, steps, nullptr, 1);
   ASSERT_TRUE(one.status.ok()) << one.status.message();
@@ -181,6 +184,38 @@ TEST(DistributedFilterTest, AlphabetHTreeAcrossRanksIsBitIdentical) {
 
 TEST(DistributedFilterTest, NaiveAcrossRanksIsBitIdentical) {
   ExpectSameAsOneProcess<NaiveMap>(3, 1);
+}
+
+// Island mode: the islands, not the ranks, decide the results.
+TEST(DistributedFilterTest, IslandsGiveTheSameResultsAtAnyRankCount) {
+  FootSlamConfig config = TestConfig();
+  config.islands = 4;  // four blocks: one each, the last of 517 particles
+  config.island_exchange_steps = 7;
+  config.island_exchange_fraction = 0.2;
+  ExpectSameAsOneProcess<AlphabetHTreeMap<4>>(2, 2, config);
+  ExpectSameAsOneProcess<AlphabetHTreeMap<4>>(4, 1, config);
+  // Not the global mode's results.
+  const std::vector<StepInput> steps = Loop(120);
+  RankResult islands = RunRank<AlphabetHTreeMap<4>>(config, steps, nullptr, 2);
+  RankResult global = RunRank<AlphabetHTreeMap<4>>(TestConfig(), steps, nullptr, 2);
+  ASSERT_EQ(islands.particles.size(), global.particles.size());
+  size_t differ = 0;
+  for (size_t i = 0; i < islands.particles.size(); ++i) {
+    differ += islands.particles[i] != global.particles[i];
+  }
+  EXPECT_GT(differ, islands.particles.size() / 2);
+}
+
+// Islands must be whole on every rank: 3 islands over 2 ranks stop both, with one error.
+TEST(DistributedFilterTest, IslandsThatDoNotDivideAmongTheRanksStopEveryRank) {
+  FootSlamConfig config = TestConfig();
+  config.islands = 3;
+  for (const RankResult& p : RunRanks<HTreeMap<4>>(config, Loop(5), 2, 1)) {
+    EXPECT_EQ(p.status.code(), StatusCode::kInvalidArgument);
+    EXPECT_NE(p.status.message().find("islands = 3: must be a multiple of the ranks (2)"),
+              std::string::npos)
+        << p.status.message();
+  }
 }
 
 TEST(DistributedFilterTest, RankSharesAreWholeBlocksInOrder) {

@@ -4,10 +4,12 @@
 
 #include <cmath>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "concurrency/random_stream.h"
+#include "engine/checkpoint_io.h"
 #include "engine/persistent_trie.h"
 #include "engine/version_set.h"
 
@@ -259,6 +261,141 @@ TEST(ParticleFilterTest, MapsOfResampledParticlesAreSharedNotCopied) {
   for (const auto& r : model.roots()) owned_or_shared += model.trie().CountNodes(r);
   EXPECT_LT(model.trie().live_nodes() * 2, owned_or_shared);
   EXPECT_TRUE(model.CheckCounts().ok()) << model.CheckCounts().ToString();
+}
+
+// Island mode on a model whose particles carry the island they started in: particles move
+// between islands only at exchanges, and then only to the next island.
+class OriginModel {
+ public:
+  OriginModel(size_t n, size_t island) : origin_(n), value_(n, 0.0) {
+    for (size_t i = 0; i < n; ++i) origin_[i] = static_cast<uint32_t>(i / island);
+  }
+  size_t size() const { return origin_.size(); }
+  Status Advance(const double&, uint64_t step, size_t begin, size_t end, int, double* log_w) {
+    for (size_t i = begin; i < end; ++i) {
+      RandomStream rs(9, step, static_cast<uint32_t>(i));
+      value_[i] += rs.NextNormal();
+      log_w[i] += -0.5 * value_[i] * value_[i] * 0.01;
+    }
+    return Status::Ok();
+  }
+  void Gather(std::span<const uint32_t> parents, WorkerPool&) {
+    // Each parent's copies are adjacent, and no parent appears twice.
+    for (size_t k = 1; k < parents.size(); ++k) {
+      if (parents[k] != parents[k - 1]) {
+        EXPECT_TRUE(seen_.insert(parents[k]).second) << k;
+      }
+    }
+    seen_.clear();
+    std::vector<uint32_t> origin(parents.size());
+    std::vector<double> value(parents.size());
+    for (size_t k = 0; k < parents.size(); ++k) {
+      origin[k] = origin_[parents[k]];
+      value[k] = value_[parents[k]];
+    }
+    origin_.swap(origin);
+    value_.swap(value);
+  }
+  void ReleaseDead(WorkerPool&) {}
+  void Export(std::span<const uint32_t> which, ByteWriter* w) const {
+    for (uint32_t i : which) {
+      w->Put(origin_[i]);
+      w->Put(value_[i]);
+    }
+  }
+  Status Import(ByteReader* r, size_t count, uint64_t) {
+    for (size_t k = 0; k < count; ++k) {
+      uint32_t origin = 0;
+      double value = 0;
+      GROVE_RETURN_IF_ERROR(r->Get("origin", &origin));
+      GROVE_RETURN_IF_ERROR(r->Get("value", &value));
+      origin_.push_back(origin);
+      value_.push_back(value);
+    }
+    return Status::Ok();
+  }
+  const std::vector<uint32_t>& origin() const { return origin_; }
+  const std::vector<double>& value() const { return value_; }
+
+ private:
+  std::vector<uint32_t> origin_;
+  std::vector<double> value_;
+  std::set<uint32_t> seen_;
+};
+
+struct IslandRun {
+  Status status;
+  std::vector<uint32_t> origin;
+  std::vector<double> value;
+  uint64_t resamplings = 0;
+};
+
+IslandRun RunIslands(int threads, int steps, double fraction, uint64_t exchange_steps,
+                     int islands = 4) {
+  constexpr size_t kIsland = kSumBlock;
+  WorkerPool workers(threads);
+  OriginModel model(4 * kIsland, kIsland);
+  FilterOptions options;
+  options.resample_threshold = 0.9;
+  options.islands = islands;
+  options.exchange_fraction = fraction;
+  options.exchange_steps = exchange_steps;
+  ParticleFilter<OriginModel> filter(&model, &workers, options);
+  IslandRun run;
+  for (int k = 0; k < steps && run.status.ok(); ++k) run.status = filter.Update(0.0);
+  run.origin = model.origin();
+  run.value = model.value();
+  run.resamplings = filter.resamplings();
+  return run;
+}
+
+TEST(ParticleFilterTest, IslandsWithoutExchangeKeepTheirLineages) {
+  IslandRun run = RunIslands(2, 30, 0.0, 5);
+  ASSERT_TRUE(run.status.ok()) << run.status.message();
+  EXPECT_GE(run.resamplings, 6u);  // every 5 steps at least
+  for (size_t i = 0; i < run.origin.size(); ++i) {
+    ASSERT_EQ(run.origin[i], i / kSumBlock) << "particle " << i;
+  }
+}
+
+TEST(ParticleFilterTest, AnExchangeSendsASampleToTheNextIsland) {
+  // Steps 0 to 3: the exchange is the fourth step's; before it nothing left its island.
+  IslandRun run = RunIslands(2, 4, 0.25, 4);
+  ASSERT_TRUE(run.status.ok()) << run.status.message();
+  const size_t m = kSumBlock / 4;
+  for (size_t j = 0; j < 4; ++j) {
+    for (size_t k = 0; k < kSumBlock; ++k) {
+      // An island's own draws first, then the previous island's migrants.
+      const uint32_t want = k < kSumBlock - m ? j : (j + 3) % 4;
+      ASSERT_EQ(run.origin[j * kSumBlock + k], want) << "island " << j << " slot " << k;
+    }
+  }
+}
+
+TEST(ParticleFilterTest, IslandsAreBitIdenticalAtAnyThreadCount) {
+  IslandRun one = RunIslands(1, 40, 0.1, 3);
+  ASSERT_TRUE(one.status.ok()) << one.status.message();
+  IslandRun two = RunIslands(2, 40, 0.1, 3);
+  EXPECT_EQ(two.origin, one.origin);
+  EXPECT_EQ(two.value, one.value);
+  std::set<uint32_t> origins_of_island_0(one.origin.begin(), one.origin.begin() + kSumBlock);
+  EXPECT_GT(origins_of_island_0.size(), 1u);  // particles did move
+}
+
+TEST(ParticleFilterTest, IslandsNeedWholeBlocksAndSystematicResampling) {
+  IslandRun run = RunIslands(1, 1, 0.1, 3, 5);
+  EXPECT_EQ(run.status.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(run.status.message().find("islands = 5: an island needs a block"), std::string::npos)
+      << run.status.message();
+  WorkerPool workers(1);
+  OriginModel model(2 * kSumBlock, kSumBlock);
+  FilterOptions options;
+  options.islands = 2;
+  options.resampling = ResamplingScheme::kResidual;
+  ParticleFilter<OriginModel> filter(&model, &workers, options);
+  Status s = filter.Update(0.0);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("systematically"), std::string::npos) << s.message();
 }
 
 }  // namespace

@@ -1,8 +1,9 @@
 #!/bin/sh
 # `grove footslam run` as one filter across MPI ranks: the outputs rank 0 writes (maps, the
 # heaviest, mean and smoothed paths, the images) are byte-identical to one process's for 2 ranks
-# at 1 and 2 threads and for 4 ranks (oversubscribed on any machine). Ranks that read different
-# steps, checkpoints, and too few particles for the ranks are refused on every rank.
+# at 1 and 2 threads and for 4 ranks (oversubscribed on any machine), and so are island mode's on
+# 1, 2 and 4 ranks. Ranks that read different steps, checkpoints, too few particles for the ranks
+# and islands that do not divide among them are refused on every rank.
 # Usage: mpi_run_test.sh GROVE_BINARY MPIEXEC BUNDLED_STEPS_CSV
 set -eu
 grove=$1
@@ -30,6 +31,20 @@ for run in "2 1" "2 2" "4 1"; do
   grep -q "\"ranks\": $1" "$dir/summary.json" || { echo "FAIL: -np $1: no ranks in summary"; fail=1; }
   echo "ok: -np $1, $2 threads per rank: the outputs of one process"
 done
+# Island mode: the islands decide the results, not the ranks.
+islands="$args --islands 4 --island-exchange-steps 5 --island-exchange-fraction 0.2"
+"$grove" footslam run $islands --threads 2 --out "$work/islands" 2>/dev/null
+cmp -s "$work/one/trajectory.csv" "$work/islands/trajectory.csv" &&
+  { echo "FAIL: island mode gave the global mode's path"; fail=1; }
+for np in 2 4; do
+  dir="$work/islands$np"
+  mpi -np "$np" "$grove" footslam run $islands --threads 1 --out "$dir" 2>"$work/err" ||
+    { echo "FAIL: islands -np $np: exit $?"; cat "$work/err"; fail=1; continue; }
+  for f in $outputs; do
+    cmp -s "$work/islands/$f" "$dir/$f" || { echo "FAIL: islands -np $np: $f differs"; fail=1; }
+  done
+  echo "ok: 4 islands on -np $np: the outputs of one process"
+done
 # Every rank must read the same steps: rank 1 reads a walk with one value changed.
 sed '100s/^\([0-9.]*\),[-0-9.e]*,/\1,0.5,/' "$work/steps.csv" >"$work/other.csv"
 cmp -s "$work/steps.csv" "$work/other.csv" && { echo "FAIL: the other walk is the same"; fail=1; }
@@ -41,7 +56,8 @@ mpi -np 1 "$grove" footslam run $args --out "$work/mpmd" : \
 grep -q 'rank 1 read other values than rank 0 in steps 99' "$work/mpmd.err" ||
   { echo "FAIL: the refusal does not name the step"; cat "$work/mpmd.err"; fail=1; }
 [ ! -e "$work/mpmd/map.csv" ] || { echo "FAIL: a refused run wrote outputs"; fail=1; }
-for bad in "--particles 12805 --checkpoint-every 10" "--particles 4096"; do
+for bad in "--particles 12805 --checkpoint-every 10" "--particles 4096" \
+  "--particles 12805 --islands 3"; do
   status=0
   mpi -np 2 "$grove" footslam run $common $bad --out "$work/bad" >/dev/null 2>"$work/bad.err" ||
     status=$?

@@ -258,6 +258,21 @@ int Main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0, 256));
   ranks_bench->add_option("--seed", ranks_options.seed)->capture_default_str();
+  ranks_bench
+      ->add_option("--islands", ranks_options.islands,
+                   "Island mode: islands of whole 4,096-particle blocks; 1: the global mode")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 65536));
+  ranks_bench
+      ->add_option("--exchange-steps", ranks_options.exchange_steps,
+                   "Island mode: steps between exchanges")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{1}, int64_t{1} << 40));
+  ranks_bench
+      ->add_option("--exchange-fraction", ranks_options.exchange_fraction,
+                   "Island mode: share of an island's particles sent at an exchange")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 0.5));
 
   CLI::App* fs_accuracy = bench->add_subcommand(
       "fastslam-accuracy", "FastSLAM 1.0 and 2.0 RMSE on the webmap against particles and seeds");

@@ -182,6 +182,9 @@ typedef struct grove_footslam_config {
   double prior_map_confidence; /* weight of a prior map's counts; default 1 */
   int alphabet;
   double store_distance_m; /* storage of diversity: store areas this far away; 0 (default): off */
+  int islands;             /* island mode: 1 (default) is off */
+  int64_t island_exchange_steps;
+  double island_exchange_fraction;
   /* Options that change only speed. */
   int threads; /* 0: one per hardware thread */
   int64_t batch;

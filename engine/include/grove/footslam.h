@@ -119,6 +119,17 @@ struct GROVE_EXPORT FootSlamConfig {
   ResamplingScheme resampling = ResamplingScheme::kSystematic;
   // Resample when ESS / N < threshold. Range: (0, 1]; 1 resamples every step. Default: 0.5.
   double resample_threshold = 0.5;
+  // Island mode (FilterOptions::islands): above 1, the particles form this many islands of whole
+  // blocks of 4,096, each resampled from its own weights (systematic resampling only); across
+  // MPI ranks a multiple of the ranks. Range: 1..65536, at most ceil(particles / 4096).
+  // Default: 1 (one population, resampled as a whole).
+  int islands = 1;
+  // Island mode: every this many steps the islands resample and each sends the next a sample of
+  // island_exchange_fraction of its particles. Range: >= 1. Default: 10.
+  int64_t island_exchange_steps = 10;
+  // Island mode: the share of the smallest island's particles an island sends at an exchange.
+  // Range: [0, 0.5]. Default: 0.1.
+  double island_exchange_fraction = 0.1;
 
   // Map representation. Default: kHTree.
   FootSlamMapKind map = FootSlamMapKind::kHTree;
