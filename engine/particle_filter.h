@@ -280,8 +280,9 @@ class ParticleFilter {
     GROVE_RETURN_IF_ERROR(r->Get("weight count", &count));
     if (weight_steps > step) return r->Error("weighting steps", "more than the steps");
     if (resamplings > weight_steps) return r->Error("resamplings", "more than the steps");
-    if (heaviest >= n) return r->Error("heaviest particle", "not a particle");
-    if (!(ess >= 0 && ess <= static_cast<double>(n) * (1 + 1e-9)) || !std::isfinite(ess_sum)) {
+    // Across ranks the heaviest particle and the ESS are the whole filter's.
+    if (heaviest >= total_) return r->Error("heaviest particle", "not a particle");
+    if (!(ess >= 0 && ess <= static_cast<double>(total_) * (1 + 1e-9)) || !std::isfinite(ess_sum)) {
       return r->Error("ESS", "outside [0, particles]");
     }
     for (double t : {times.advance_s, times.normalize_s, times.resample_s, times.release_s}) {
@@ -295,7 +296,10 @@ class ParticleFilter {
       if (std::isnan(v) || v > 1e-9) return r->Error("log weights", "a weight is NaN or above 1");
       any_finite = any_finite || std::isfinite(v);
     }
-    if (!any_finite) return r->Error("log weights", "every weight is zero");
+    // (A rank's share alone may weigh nothing.)
+    if (!any_finite && options_.collective == nullptr) {
+      return r->Error("log weights", "every weight is zero");
+    }
     step_ = step;
     resamplings_ = resamplings;
     heaviest_ = heaviest;

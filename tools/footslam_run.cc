@@ -67,6 +67,14 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
     if (!s.ok()) return Status(s.code(), options_.prior_map_path + ": " + s.message());
     return Status::Ok();
   }
+  // Across ranks, collective: this rank's share from the file this rank wrote.
+  Status Resume(std::string_view bytes, const std::string& name, std::string* user) override {
+    StatusOr<std::unique_ptr<FootSlam>> engine =
+        FootSlam::Resume(config_, bytes, name, user, options_.run.ranks);
+    if (!engine.ok()) return engine.status();
+    engine_ = std::move(engine).value();
+    return Status::Ok();
+  }
   std::vector<std::string> OutputNames() const override {
     std::vector<std::string> names = {"map.csv",
                                       "map_best.csv",

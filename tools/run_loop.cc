@@ -345,6 +345,10 @@ StatusOr<int> AgreeOnSignal(Collective& ranks) {
   return 0;
 }
 
+std::string RankCheckpointPath(const std::string& path, int rank) {
+  return rank == 0 ? path : fmt::format("{}.rank{}", path, rank);
+}
+
 int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& config) {
   auto wall_start = std::chrono::steady_clock::now();
   // Across ranks rank 0 (the lead) checks and writes the outputs and reports; every rank takes
@@ -358,6 +362,11 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
   const std::string checkpoint_path = options.checkpoint_path.empty()
                                           ? options.out_dir + "/checkpoint.grove"
                                           : options.checkpoint_path;
+  // Across ranks each rank writes and reads its own share's file.
+  const int rank = ranks == nullptr ? 0 : ranks->rank();
+  const std::string my_checkpoint_path = RankCheckpointPath(checkpoint_path, rank);
+  const std::string my_resume_path =
+      options.resume_path.empty() ? "" : RankCheckpointPath(options.resume_path, rank);
 
   // Every output path is checked, and the output directory locked, before any work.
   std::optional<OutputDirectory> out_dir;
@@ -399,10 +408,17 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
                   s.message());
     }
   } else {
-    StatusOr<std::string> bytes = ReadCheckpointFile(options.resume_path);
-    if (!bytes.ok()) return fail(kExitInput, bytes.status().message());
+    StatusOr<std::string> bytes = ReadCheckpointFile(my_resume_path);
+    if (!bytes.ok() && rank > 0) {
+      bytes = Status(bytes.status().code(),
+                     bytes.status().message() +
+                         " (across ranks, rank q resumes from the file --resume names plus "
+                         "\".rank<q>\": resume on as many ranks as wrote the checkpoint)");
+    }
+    if (Status s = agree(bytes.status()); !s.ok()) return fail(kExitInput, s.message());
     std::string user;
-    Status s = job->Resume(*bytes, options.resume_path, &user);
+    // Collective across ranks: every rank's error reaches every rank.
+    Status s = job->Resume(*bytes, my_resume_path, &user);
     if (!s.ok()) {
       // Another configuration or format is a usage error; a corrupt file a bad input.
       return fail(s.code() == StatusCode::kFailedPrecondition  ? kExitUsage
@@ -410,8 +426,8 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
                                                                : kExitInput,
                   s.message());
     }
-    StatusOr<InputPosition> at = InputPosition::FromJson(user, options.resume_path);
-    if (!at.ok()) return fail(kExitInput, at.status().message());
+    StatusOr<InputPosition> at = InputPosition::FromJson(user, my_resume_path);
+    if (Status s = agree(at.status()); !s.ok()) return fail(kExitInput, s.message());
     resumed_at = *at;
   }
 
@@ -419,42 +435,39 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
   position.input_name = job->InputName();
   int64_t checkpoints_written = 0, checkpoint_bytes = 0;
   double checkpoint_s = 0;
+  // Across ranks every rank writes its own file and the ranks agree on the outcome; a crash
+  // between two ranks' renames leaves files of two steps, which a resume refuses.
   auto write_checkpoint = [&]() -> Status {
     auto t0 = std::chrono::steady_clock::now();
-    if (ranks != nullptr) {
-      return FailedPreconditionError("a run across ranks cannot write a checkpoint yet");
-    }
     StatusOr<std::string> bytes = job->Checkpoint(position.ToJson());
-    if (!bytes.ok()) return bytes.status();
-    GROVE_RETURN_IF_ERROR(WriteFileAtomically(checkpoint_path, *bytes));
-    out_dir->Keep();  // it holds a checkpoint now (the default path)
+    Status s = bytes.status();
+    if (s.ok()) s = WriteFileAtomically(my_checkpoint_path, *bytes);
+    GROVE_RETURN_IF_ERROR(agree(s));
+    if (out_dir) out_dir->Keep();  // it holds a checkpoint now (the default path)
     ++checkpoints_written;
     checkpoint_bytes = static_cast<int64_t>(bytes->size());
     checkpoint_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return Status::Ok();
   };
+  // Across ranks every rank comes here together (the signal is agreed).
   auto stop_with_checkpoint = [&](int signal) {
-    if (ranks != nullptr) {
-      if (lead) {
-        std::fprintf(stderr,
-                     "\ngrove: stopped by %s after step %lld; a run across ranks writes no "
-                     "checkpoint yet: nothing was written\n",
-                     strsignal(signal), static_cast<long long>(job->steps()));
-      }
-      return kExitSignalBase + signal;
-    }
     if (position.records < resumed_at.records) {  // still re-reading: nothing new to save
-      std::fprintf(stderr, "\ngrove: stopped by %s before any new step; %s is unchanged\n",
-                   strsignal(signal), options.resume_path.c_str());
+      if (lead) {
+        std::fprintf(stderr, "\ngrove: stopped by %s before any new step; %s is unchanged\n",
+                     strsignal(signal), options.resume_path.c_str());
+      }
       return kExitSignalBase + signal;
     }
     Status s = write_checkpoint();
     if (!s.ok()) return fail(kExitOutput, s.message());
-    std::fprintf(stderr,
-                 "\ngrove: stopped by %s after step %lld: wrote %s; continue with the same "
-                 "command and --resume %s\n",
-                 strsignal(signal), static_cast<long long>(job->steps()), checkpoint_path.c_str(),
-                 checkpoint_path.c_str());
+    if (lead) {
+      std::fprintf(stderr,
+                   "\ngrove: stopped by %s after step %lld: wrote %s%s; continue with the same "
+                   "command and --resume %s\n",
+                   strsignal(signal), static_cast<long long>(job->steps()), checkpoint_path.c_str(),
+                   ranks == nullptr ? "" : " (and one file per further rank beside it)",
+                   checkpoint_path.c_str());
+    }
     return kExitSignalBase + signal;
   };
 
@@ -482,13 +495,16 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
     const bool replay = position.records < resumed_at.records;
     position.Add(digest_bytes);
     if (replay) {
+      Status same;
       if (position.records == resumed_at.records && position.digest != resumed_at.digest) {
-        return fail(kExitInput,
-                    fmt::format("{}: the first {} {} differ from those of {} (made from {}): "
-                                "resume with the same input",
-                                job->InputName(), resumed_at.records, job->RecordsName(),
-                                options.resume_path, QuoteForMessage(resumed_at.input_name, 200)));
+        same = InvalidArgumentError(
+            fmt::format("{}: the first {} {} differ from those of {} (made from {}): resume with "
+                        "the same input",
+                        job->InputName(), resumed_at.records, job->RecordsName(), my_resume_path,
+                        QuoteForMessage(resumed_at.input_name, 200)));
       }
+      if (ranks != nullptr && position.records == resumed_at.records) same = agree(same);
+      if (!same.ok()) return fail(kExitInput, same.message());
       job->Replay();
       continue;
     }
@@ -502,12 +518,13 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
       if (Status s = write_checkpoint(); !s.ok()) return fail(ExitCodeOf(s), s.message());
     }
   }
+  Status long_enough;
   if (position.records < resumed_at.records) {
-    return fail(kExitInput, fmt::format("{}: has {} {}, but {} was made after {}: resume with "
-                                        "the same input",
-                                        job->InputName(), position.records, job->RecordsName(),
-                                        options.resume_path, resumed_at.records));
+    long_enough = InvalidArgumentError(fmt::format(
+        "{}: has {} {}, but {} was made after {}: resume with the same input", job->InputName(),
+        position.records, job->RecordsName(), my_resume_path, resumed_at.records));
   }
+  if (Status s = agree(long_enough); !s.ok()) return fail(kExitInput, s.message());
   if (job->steps() == 0) return fail(kExitInput, fmt::format("{}: no steps", job->InputName()));
   if (show_progress && !HangupSeen()) progress.Finish();
 

@@ -171,6 +171,10 @@ class FacadeRunJob : public RunJob {
 int64_t CountLines(std::string_view text);
 int64_t CountRegularFileLines(const std::string& path);
 
+// The checkpoint file of rank `rank` of a run whose checkpoint path is `path`: `path` itself for
+// rank 0 (and for one process), `path.rank<q>` beside it for rank q.
+std::string RankCheckpointPath(const std::string& path, int rank);
+
 // Runs `job` as `options` say; `config` is the effective configuration for summary.json.
 // Returns the exit code after printing any error on stderr as one line.
 int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& config);

@@ -122,6 +122,9 @@ class FootSlam::Impl {
   // Replaces the state of a freshly created engine with the rest of a checkpoint body.
   virtual Status Load(ByteReader* r) = 0;
   virtual Status CheckInvariants() const = 0;
+  // This engine's rank and the ranks of its filter (0 of 1 alone).
+  virtual int rank() const = 0;
+  virtual int rank_count() const = 0;
 };
 
 namespace {
@@ -399,12 +402,12 @@ class Engine final : public FootSlam::Impl {
 
   StatusOr<std::string> Save(std::string_view user_data) const override {
     GROVE_RETURN_IF_ERROR(driver_.CheckNotFailed("there is no state to save"));
-    if (ranks_ != nullptr) {
-      return FailedPreconditionError("a filter across ranks cannot write a checkpoint yet");
-    }
     ByteWriter w;
     WriteCheckpointHead(&w, kCheckpointKind, CheckpointFieldsOf(FootSlamConfigFields(), config_),
                         user_data);
+    // Across ranks, each rank saves its own share: which share it is comes first.
+    w.Put<uint32_t>(static_cast<uint32_t>(rank()));
+    w.Put<uint32_t>(static_cast<uint32_t>(rank_count()));
     driver_.Save(&w);
     model_.Save(&w);
     map_.Save(&w);
@@ -415,6 +418,17 @@ class Engine final : public FootSlam::Impl {
   }
 
   Status Load(ByteReader* r) override {
+    uint32_t rank = 0, count = 0;
+    GROVE_RETURN_IF_ERROR(r->Get("rank", &rank));
+    GROVE_RETURN_IF_ERROR(r->Get("rank count", &count));
+    if (count == 0 || rank >= count) return r->Error("rank", "not one of the ranks");
+    if (rank != static_cast<uint32_t>(this->rank()) ||
+        count != static_cast<uint32_t>(rank_count())) {
+      return FailedPreconditionError(fmt::format(
+          "{}: the checkpoint holds rank {} of {}'s particles, and this is rank {} of {}: resume "
+          "on as many ranks as wrote it, each rank from its own file",
+          r->name(), rank, count, this->rank(), rank_count()));
+    }
     GROVE_RETURN_IF_ERROR(driver_.Load(r));
     GROVE_RETURN_IF_ERROR(model_.Load(r, static_cast<uint64_t>(driver_.steps())));
     GROVE_RETURN_IF_ERROR(map_.Load(r, layout_.key_count()));
@@ -429,6 +443,9 @@ class Engine final : public FootSlam::Impl {
   }
 
   Status CheckInvariants() const override { return model_.CheckCounts(); }
+
+  int rank() const override { return ranks_ == nullptr ? 0 : ranks_->rank(); }
+  int rank_count() const override { return ranks_ == nullptr ? 1 : ranks_->size(); }
 
  private:
   // Storage of diversity (config.store_distance_m): folds every block of the particles' maps
@@ -939,6 +956,38 @@ StatusOr<std::unique_ptr<FootSlam>> FootSlam::Resume(const FootSlamConfig& confi
                                                      std::string_view checkpoint,
                                                      const std::string& name,
                                                      std::string* user_data) {
+  return Resume(config, checkpoint, name, user_data, nullptr);
+}
+
+StatusOr<std::unique_ptr<FootSlam>> FootSlam::Resume(const FootSlamConfig& config,
+                                                     std::string_view checkpoint,
+                                                     const std::string& name,
+                                                     std::string* user_data, Collective* ranks) {
+  if (ranks == nullptr || ranks->size() == 1)
+    return ResumeShare(config, checkpoint, name, user_data, nullptr);
+  StatusOr<std::unique_ptr<FootSlam>> slam =
+      ResumeShare(config, checkpoint, name, user_data, ranks);
+  GROVE_RETURN_IF_ERROR(AgreeStatus(*ranks, slam.status()));
+  // Every rank's file must be of the same step (files of one checkpoint, not of two).
+  const int64_t steps = (*slam)->steps();
+  std::vector<int64_t> all;
+  GROVE_RETURN_IF_ERROR(AllGatherValues<int64_t>(*ranks, std::span(&steps, 1), &all));
+  for (size_t q = 1; q < all.size(); ++q) {
+    if (all[q] != all[0]) {
+      return FailedPreconditionError(fmt::format(
+          "rank {}'s checkpoint was made after step {}, rank 0's after step {}: every rank must "
+          "resume from the files of one checkpoint",
+          q, all[q], all[0]));
+    }
+  }
+  return slam;
+}
+
+StatusOr<std::unique_ptr<FootSlam>> FootSlam::ResumeShare(const FootSlamConfig& config,
+                                                          std::string_view checkpoint,
+                                                          const std::string& name,
+                                                          std::string* user_data,
+                                                          Collective* ranks) {
   GROVE_RETURN_IF_ERROR(config.Validate());
   return NoThrow([&]() -> StatusOr<std::unique_ptr<FootSlam>> {
     StatusOr<UnsealedCheckpoint> file = UnsealCheckpoint(checkpoint, name);
@@ -949,9 +998,9 @@ StatusOr<std::unique_ptr<FootSlam>> FootSlam::Resume(const FootSlamConfig& confi
     GROVE_RETURN_IF_ERROR(ReadCheckpointHead(
         &reader, kCheckpointKind, "FootSLAM", file->format_version, kFootSlamFormatVersion,
         CheckpointFieldsOf(FootSlamConfigFields(), config), &user));
-    StatusOr<std::unique_ptr<FootSlam>> slam = Create(config);
+    StatusOr<std::unique_ptr<FootSlam>> slam = Create(config, ranks);
     if (!slam.ok()) return slam.status();
-    GROVE_RETURN_IF_ERROR((*slam)->impl_->Load(&reader));  // DataLoss only
+    GROVE_RETURN_IF_ERROR((*slam)->impl_->Load(&reader));
     if (user_data != nullptr) user_data->swap(user);
     return slam;
   });

@@ -1,6 +1,7 @@
 // The FootSLAM facade across ranks (threads of this process, joined by InProcessCollective): every
 // read-out of a filter split over 2 and 3 ranks is, on every rank, bit for bit what one process
-// gives; what does not run across ranks yet is refused with a clear error.
+// gives, and so is a run resumed from each rank's checkpoint; what does not run across ranks yet
+// is refused with a clear error.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -35,18 +36,9 @@ Status Take(StatusOr<T> v, T* out) {
   return Status::Ok();
 }
 
-ReadOuts RunOne(const FootSlamConfig& config, const std::vector<Step>& steps, Collective* ranks) {
+// Every read-out of `s` (collective across ranks).
+ReadOuts ReadAll(FootSlam& s) {
   ReadOuts r;
-  StatusOr<std::unique_ptr<FootSlam>> slam = FootSlam::Create(config, ranks);
-  if (!slam.ok()) {
-    r.status = slam.status();
-    return r;
-  }
-  FootSlam& s = **slam;
-  for (const Step& step : steps) {
-    r.status = s.Step(step.t, step.dx, step.dy);
-    if (!r.status.ok()) return r;
-  }
   r.heaviest_pose = s.HeaviestPose();
   r.mean = s.MeanTrajectory();
   if (r.status = Take(s.HeaviestTrajectory(), &r.heaviest); !r.status.ok()) return r;
@@ -61,17 +53,77 @@ ReadOuts RunOne(const FootSlamConfig& config, const std::vector<Step>& steps, Co
   return r;
 }
 
-std::vector<ReadOuts> RunRanks(const FootSlamConfig& config, const std::vector<Step>& steps,
-                               int ranks) {
-  std::vector<ReadOuts> out(static_cast<size_t>(ranks));
+ReadOuts RunOne(const FootSlamConfig& config, const std::vector<Step>& steps, Collective* ranks) {
+  StatusOr<std::unique_ptr<FootSlam>> slam = FootSlam::Create(config, ranks);
+  ReadOuts r;
+  if (!slam.ok()) {
+    r.status = slam.status();
+    return r;
+  }
+  for (const Step& step : steps) {
+    r.status = (*slam)->Step(step.t, step.dx, step.dy);
+    if (!r.status.ok()) return r;
+  }
+  return ReadAll(**slam);
+}
+
+// Runs `body(rank, collective)` on each of `ranks` ranks as threads.
+template <typename F>
+void OnRanks(int ranks, F&& body) {
   std::vector<std::unique_ptr<Collective>> endpoints = InProcessCollective::Create(ranks);
   std::vector<std::thread> threads;
   for (int r = 0; r < ranks; ++r) {
-    threads.emplace_back([&, r] {
-      out[static_cast<size_t>(r)] = RunOne(config, steps, endpoints[static_cast<size_t>(r)].get());
-    });
+    threads.emplace_back([&, r] { body(r, endpoints[static_cast<size_t>(r)].get()); });
   }
   for (std::thread& t : threads) t.join();
+}
+
+// Each rank's checkpoint after the first `cut` steps.
+std::vector<std::string> CheckpointsAfter(const FootSlamConfig& config,
+                                          const std::vector<Step>& steps, size_t cut, int ranks) {
+  std::vector<std::string> files(static_cast<size_t>(ranks));
+  OnRanks(ranks, [&](int r, Collective* c) {
+    StatusOr<std::unique_ptr<FootSlam>> slam = FootSlam::Create(config, c);
+    ASSERT_TRUE(slam.ok()) << slam.status().ToString();
+    for (size_t k = 0; k < cut; ++k) {
+      ASSERT_TRUE((*slam)->Step(steps[k].t, steps[k].dx, steps[k].dy).ok());
+    }
+    StatusOr<std::string> bytes = (*slam)->Checkpoint("user");
+    ASSERT_TRUE(bytes.ok()) << bytes.status().ToString();
+    files[static_cast<size_t>(r)] = *bytes;
+  });
+  return files;
+}
+
+// Each rank resumes from files[rank] and takes the steps after `cut`.
+std::vector<ReadOuts> ResumeRanks(const FootSlamConfig& config, const std::vector<Step>& steps,
+                                  size_t cut, const std::vector<std::string>& files) {
+  const int ranks = static_cast<int>(files.size());
+  std::vector<ReadOuts> out(files.size());
+  OnRanks(ranks, [&](int r, Collective* c) {
+    ReadOuts& got = out[static_cast<size_t>(r)];
+    std::string user;
+    StatusOr<std::unique_ptr<FootSlam>> slam =
+        FootSlam::Resume(config, files[static_cast<size_t>(r)], "c.ckpt", &user, c);
+    if (!slam.ok()) {
+      got.status = slam.status();
+      return;
+    }
+    EXPECT_EQ(user, "user");
+    for (size_t k = cut; k < steps.size(); ++k) {
+      got.status = (*slam)->Step(steps[k].t, steps[k].dx, steps[k].dy);
+      if (!got.status.ok()) return;
+    }
+    got = ReadAll(**slam);
+  });
+  return out;
+}
+
+std::vector<ReadOuts> RunRanks(const FootSlamConfig& config, const std::vector<Step>& steps,
+                               int ranks) {
+  std::vector<ReadOuts> out(static_cast<size_t>(ranks));
+  OnRanks(ranks,
+          [&](int r, Collective* c) { out[static_cast<size_t>(r)] = RunOne(config, steps, c); });
   return out;
 }
 
@@ -159,26 +211,56 @@ TEST(FootSlamRanksTest, WhatDoesNotRunAcrossRanksIsRefused) {
     EXPECT_NE(r.status.message().find("store_distance_m = 30"), std::string::npos)
         << r.status.ToString();
   }
-  // A checkpoint of one rank's share is refused on every rank.
-  std::vector<std::unique_ptr<Collective>> endpoints = InProcessCollective::Create(2);
-  std::vector<Status> saved(2);
-  std::vector<std::thread> threads;
-  for (int r = 0; r < 2; ++r) {
-    threads.emplace_back([&, r] {
-      StatusOr<std::unique_ptr<FootSlam>> slam =
-          FootSlam::Create(RanksConfig(), endpoints[static_cast<size_t>(r)].get());
-      if (!slam.ok()) {
-        saved[static_cast<size_t>(r)] = slam.status();
-        return;
-      }
-      for (const Step& s : steps) (void)(*slam)->Step(s.t, s.dx, s.dy);
-      saved[static_cast<size_t>(r)] = (*slam)->Checkpoint().status();
-    });
+}
+
+// Each rank checkpoints its share; resumed on as many ranks, the filter goes on as if never
+// stopped, in island mode too.
+TEST(FootSlamRanksTest, ACheckpointPerRankResumesBitIdentically) {
+  const std::vector<Step> steps = Walk(120, 5);
+  for (int islands : {1, 2}) {
+    FootSlamConfig config = RanksConfig();
+    config.islands = islands;
+    config.island_exchange_steps = 7;
+    SCOPED_TRACE(::testing::Message() << islands << " islands");
+    const ReadOuts one = RunOne(config, steps, nullptr);
+    ASSERT_TRUE(one.status.ok()) << one.status.ToString();
+    const std::vector<ReadOuts> resumed =
+        ResumeRanks(config, steps, 61, CheckpointsAfter(config, steps, 61, 2));
+    for (const ReadOuts& got : resumed) {
+      ASSERT_TRUE(got.status.ok()) << got.status.ToString();
+      ExpectSamePaths(one.heaviest, got.heaviest, "heaviest path");
+      ExpectSamePaths(one.mean, got.mean, "mean path");
+      ExpectSamePaths(one.smoothed, got.smoothed, "smoothed path");
+      ExpectSameMaps(one.cumulative, got.cumulative, "cumulative map");
+      EXPECT_EQ(got.resamplings, one.resamplings);
+    }
   }
-  for (std::thread& t : threads) t.join();
-  for (const Status& s : saved) {
-    EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition) << s.ToString();
-  }
+}
+
+// Files of other ranks, of another rank count, or of two different steps are refused on every
+// rank.
+TEST(FootSlamRanksTest, CheckpointFilesMustBeEachRanksOwnOfOneStep) {
+  const std::vector<Step> steps = Walk(40, 5);
+  const FootSlamConfig config = RanksConfig();
+  const std::vector<std::string> at20 = CheckpointsAfter(config, steps, 20, 2);
+  const std::vector<std::string> at30 = CheckpointsAfter(config, steps, 30, 2);
+  auto expect_refused = [&](const std::vector<std::string>& files, const std::string& want) {
+    for (const ReadOuts& r : ResumeRanks(config, steps, 20, files)) {
+      EXPECT_EQ(r.status.code(), StatusCode::kFailedPrecondition) << r.status.ToString();
+      EXPECT_NE(r.status.message().find(want), std::string::npos) << r.status.ToString();
+    }
+  };
+  expect_refused({at20[1], at20[0]},
+                 "the checkpoint holds rank 1 of 2's particles, and this is "
+                 "rank 0 of 2");
+  expect_refused({at20[0], at30[1]},
+                 "rank 1's checkpoint was made after step 30, rank 0's after step 20");
+  // One process cannot take a rank's file.
+  std::string user;
+  StatusOr<std::unique_ptr<FootSlam>> alone = FootSlam::Resume(config, at20[0], "c.ckpt", &user);
+  EXPECT_EQ(alone.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(alone.status().message().find("rank 0 of 2"), std::string::npos)
+      << alone.status().ToString();
 }
 
 }  // namespace

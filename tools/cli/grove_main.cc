@@ -327,13 +327,6 @@ int Main(int argc, char** argv) {
     gt::MpiWorld world;  // one rank unless started by mpirun
     if (world.active() && world.size() > 1) {
       // One filter across the ranks; threads per rank from the rank's CPU set unless given.
-      if (run_options.run.checkpoint_every > 0 || !run_options.run.resume_path.empty()) {
-        return world.rank() == 0
-                   ? gt::Fail(gt::kExitUsage,
-                              "--checkpoint-every and --resume: a run across MPI ranks cannot "
-                              "checkpoint yet; run without them, or on one rank")
-                   : gt::kExitUsage;
-      }
       if (grove::Status s = grove::FootSlam::CheckAcrossRanks(config, world.size()); !s.ok()) {
         return world.rank() == 0 ? gt::Fail(gt::kExitUsage, s.message()) : gt::kExitUsage;
       }

@@ -214,9 +214,10 @@ class GROVE_EXPORT FootSlam {
   // (engine/collective.h; null: one process, as Create(config)). Every rank creates its engine
   // with the same configuration and makes the same calls in the same order: Step, and every
   // read-out, is collective, and gives every rank the whole filter's result, the same bits as
-  // one process. Storage of diversity (store_distance_m > 0) and checkpoints do not run across
-  // ranks yet (InvalidArgument, FailedPrecondition); every rank needs at least one block of
-  // 4,096 particles (InvalidArgument). Summary()'s memory and phase figures are this rank's.
+  // one process. Checkpoint() saves this rank's share (Resume with ranks reads it back).
+  // Storage of diversity (store_distance_m > 0) does not run across ranks yet (InvalidArgument);
+  // every rank needs at least one block of 4,096 particles (InvalidArgument). Summary()'s memory
+  // and phase figures are this rank's.
   static StatusOr<std::unique_ptr<FootSlam>> Create(const FootSlamConfig& config,
                                                     Collective* ranks);
   // What Create(config, ranks) checks of a configuration for `ranks` ranks beyond Validate():
@@ -305,11 +306,24 @@ class GROVE_EXPORT FootSlam {
                                                     std::string_view checkpoint,
                                                     const std::string& name,
                                                     std::string* user_data);
+  // Across ranks (collective: every rank calls it with its own file): rank q's share from the
+  // checkpoint rank q wrote. FailedPrecondition on every rank when a file is another rank's or
+  // of another rank count, or the ranks' files are of different steps; any rank's error reaches
+  // every rank (the lowest failing rank's).
+  static StatusOr<std::unique_ptr<FootSlam>> Resume(const FootSlamConfig& config,
+                                                    std::string_view checkpoint,
+                                                    const std::string& name, std::string* user_data,
+                                                    Collective* ranks);
 
   class Impl;
 
  private:
   explicit FootSlam(std::unique_ptr<Impl> impl);
+  // Resume()'s work on one rank.
+  static StatusOr<std::unique_ptr<FootSlam>> ResumeShare(const FootSlamConfig& config,
+                                                         std::string_view checkpoint,
+                                                         const std::string& name,
+                                                         std::string* user_data, Collective* ranks);
   std::unique_ptr<Impl> impl_;
 };
 

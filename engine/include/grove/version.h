@@ -18,9 +18,9 @@ struct VersionInfo {
   int major = GROVE_VERSION_MAJOR;
   int minor = GROVE_VERSION_MINOR;
   int patch = GROVE_VERSION_PATCH;
-  std::string version;       // "0.2.0"
-  std::string commit;        // the short hash built from, "-dirty" with changes ("unknown" outside git)
-  std::string compiler;      // "GCC 12.2.0"
+  std::string version;   // "0.2.0"
+  std::string commit;    // the short hash built from, "-dirty" with changes ("unknown" outside git)
+  std::string compiler;  // "GCC 12.2.0"
   std::string build_type;    // "Release", "Debug", ...
   std::string simd_targets;  // the Highway targets compiled in, best first ("AVX3 AVX2 SSE4 ...")
   std::string simd_target;   // the one this machine runs
