@@ -17,6 +17,24 @@ Status CheckRankShares(uint64_t total, int ranks, uint64_t block) {
                   total, ranks, block, block * (k - 1) + 1));
 }
 
+Status CheckIslands(uint64_t total, int islands, int ranks, uint64_t block) {
+  if (islands <= 1) return Status::Ok();
+  const uint64_t blocks = (total + block - 1) / block;
+  if (static_cast<uint64_t>(islands) > blocks) {
+    return InvalidArgumentError(
+        fmt::format("islands = {}: an island needs a block of {} particles, and particles = {} "
+                    "make {}",
+                    islands, block, total, blocks));
+  }
+  if (ranks > 1 && islands % ranks != 0) {
+    return InvalidArgumentError(
+        fmt::format("islands = {}: must be a multiple of the ranks ({}), each rank holding whole "
+                    "islands",
+                    islands, ranks));
+  }
+  return Status::Ok();
+}
+
 Status AgreeStatus(Collective& c, const Status& mine) {
   ByteWriter w;
   w.Put<uint32_t>(static_cast<uint32_t>(mine.code()));

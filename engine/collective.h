@@ -55,6 +55,10 @@ inline ParticleShare RankShare(uint64_t total, int ranks, int rank, uint64_t blo
 // `total` (more than block * (ranks - 1) particles).
 Status CheckRankShares(uint64_t total, int ranks, uint64_t block);
 
+// InvalidArgument unless `islands` islands of whole blocks of `block` particles fit `total`
+// particles and divide among `ranks` ranks (island mode, FilterOptions::islands; OK for 1).
+Status CheckIslands(uint64_t total, int islands, int ranks, uint64_t block);
+
 // Every rank's values of a trivially copyable type, concatenated in rank order.
 template <typename T>
 Status AllGatherValues(Collective& c, std::span<const T> mine, std::vector<T>* all) {

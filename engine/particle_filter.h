@@ -208,8 +208,8 @@ class ParticleFilter {
     }
     ess_sum_ += ess_;
     const double n = static_cast<double>(total_);
-    const bool exchange =
-        options_.islands > 1 && (step_ + 1) % std::max<uint64_t>(options_.exchange_steps, 1) == 0;
+    // (CheckOptions() refused exchange_steps = 0 in island mode.)
+    const bool exchange = options_.islands > 1 && (step_ + 1) % options_.exchange_steps == 0;
     if (exchange || options_.resample_threshold >= 1.0 || ess_ < options_.resample_threshold * n) {
       if (options_.islands > 1) {
         status = ResampleIslands(exchange);
@@ -476,18 +476,7 @@ class ParticleFilter {
     const int islands = options_.islands;
     if (islands <= 1) return Status::Ok();
     const int ranks = options_.collective == nullptr ? 1 : options_.collective->size();
-    const uint64_t blocks = (total_ + kSumBlock - 1) / kSumBlock;
-    if (static_cast<uint64_t>(islands) > blocks) {
-      return InvalidArgumentError("islands = " + std::to_string(islands) +
-                                  ": an island needs a block of " + std::to_string(kSumBlock) +
-                                  " particles, and " + std::to_string(total_) + " make " +
-                                  std::to_string(blocks));
-    }
-    if (islands % ranks != 0) {
-      return InvalidArgumentError("islands = " + std::to_string(islands) +
-                                  ": must be a multiple of the ranks (" + std::to_string(ranks) +
-                                  ")");
-    }
+    GROVE_RETURN_IF_ERROR(grove::CheckIslands(total_, islands, ranks, kSumBlock));
     if (!(options_.exchange_fraction >= 0 && options_.exchange_fraction <= 0.5)) {
       return InvalidArgumentError(
           "exchange_fraction = " + std::to_string(options_.exchange_fraction) +

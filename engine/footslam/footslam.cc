@@ -862,12 +862,8 @@ Status FootSlam::CheckAcrossRanks(const FootSlamConfig& config, int ranks) {
         "or run on one rank",
         config.store_distance_m));
   }
-  if (config.islands > 1 && config.islands % ranks != 0) {
-    return InvalidArgumentError(fmt::format(
-        "islands = {}: island mode across ranks needs a multiple of the ranks ({}), each rank "
-        "holding whole islands",
-        config.islands, ranks));
-  }
+  GROVE_RETURN_IF_ERROR(
+      CheckIslands(static_cast<uint64_t>(config.particles), config.islands, ranks, kSumBlock));
   return CheckRankShares(static_cast<uint64_t>(config.particles), ranks, kSumBlock);
 }
 

@@ -3,7 +3,9 @@
 
 #include <cmath>
 
+#include "engine/collective.h"
 #include "engine/footslam/htree_layout.h"
+#include "engine/resampler.h"
 #include "grove/footslam.h"
 
 namespace grove {
@@ -89,13 +91,8 @@ Status FootSlamConfig::Validate() const {
                       name, v, hex_radius_m, name, 1e9 * hex_radius_m));
     }
   }
+  GROVE_RETURN_IF_ERROR(CheckIslands(static_cast<uint64_t>(particles), islands, 1, kSumBlock));
   if (islands > 1) {
-    const int64_t blocks = (particles + 4095) / 4096;
-    if (islands > blocks) {
-      return InvalidArgumentError(fmt::format(
-          "islands = {}: an island needs a block of 4096 particles, and particles = {} make {}",
-          islands, particles, blocks));
-    }
     if (resampling != ResamplingScheme::kSystematic) {
       return InvalidArgumentError(
           fmt::format("islands = {}: island mode resamples systematically (resampling = {})",

@@ -71,11 +71,7 @@ class NaiveMap {
 
   template <typename F>
   void ForEachHex(size_t i, F&& f) const {
-    std::vector<std::pair<uint64_t, Htc>> hexes;
-    tables_[i].ForEach([&](uint64_t key, const Htc& h) { hexes.push_back({key, h}); });
-    std::sort(hexes.begin(), hexes.end(),
-              [](const auto& a, const auto& b) { return a.first < b.first; });
-    for (const auto& [key, h] : hexes) f(key, h);
+    for (const auto& [key, h] : Sorted(tables_[i])) f(key, h);
   }
 
   // Brute force over every particle: this is the cost the H-tree avoids.
@@ -124,14 +120,19 @@ class NaiveMap {
   }
 
  private:
-  // In key order: a table's slot order depends on how it was filled, and a checkpoint of a
-  // resumed engine must be the bytes it was resumed from.
-  static void SaveTable(const HexTable<Htc>& t, ByteWriter* w) {
+  // A table's hexagons in key order: its slot order depends on how it was filled, and a
+  // checkpoint of a resumed engine must be the bytes it was resumed from.
+  static std::vector<std::pair<uint64_t, Htc>> Sorted(const HexTable<Htc>& t) {
     std::vector<std::pair<uint64_t, Htc>> hexes;
     hexes.reserve(t.size());
     t.ForEach([&](uint64_t key, const Htc& h) { hexes.push_back({key, h}); });
     std::sort(hexes.begin(), hexes.end(),
               [](const auto& a, const auto& b) { return a.first < b.first; });
+    return hexes;
+  }
+
+  static void SaveTable(const HexTable<Htc>& t, ByteWriter* w) {
+    const std::vector<std::pair<uint64_t, Htc>> hexes = Sorted(t);
     w->Put<uint64_t>(hexes.size());
     for (const auto& [key, h] : hexes) {
       w->Put(key);
