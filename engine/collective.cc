@@ -35,6 +35,41 @@ Status CheckIslands(uint64_t total, int islands, int ranks, uint64_t block) {
   return Status::Ok();
 }
 
+void WriteCheckpointRank(ByteWriter* w, const Collective* ranks) {
+  w->Put<uint32_t>(ranks == nullptr ? 0 : static_cast<uint32_t>(ranks->rank()));
+  w->Put<uint32_t>(ranks == nullptr ? 1 : static_cast<uint32_t>(ranks->size()));
+}
+
+Status ReadCheckpointRank(ByteReader* r, const Collective* ranks) {
+  uint32_t rank = 0, count = 0;
+  GROVE_RETURN_IF_ERROR(r->Get("rank", &rank));
+  GROVE_RETURN_IF_ERROR(r->Get("rank count", &count));
+  if (count == 0 || rank >= count) return r->Error("rank", "not one of the ranks");
+  const uint32_t me = ranks == nullptr ? 0 : static_cast<uint32_t>(ranks->rank());
+  const uint32_t size = ranks == nullptr ? 1 : static_cast<uint32_t>(ranks->size());
+  if (rank != me || count != size) {
+    return FailedPreconditionError(fmt::format(
+        "{}: the checkpoint holds rank {} of {}'s particles, and this is rank {} of {}: resume on "
+        "as many ranks as wrote it, each rank from its own file",
+        r->name(), rank, count, me, size));
+  }
+  return Status::Ok();
+}
+
+Status CheckCheckpointSteps(Collective& c, int64_t steps) {
+  std::vector<int64_t> all;
+  GROVE_RETURN_IF_ERROR(AllGatherValues<int64_t>(c, std::span(&steps, 1), &all));
+  for (size_t q = 1; q < all.size(); ++q) {
+    if (all[q] != all[0]) {
+      return FailedPreconditionError(fmt::format(
+          "rank {}'s checkpoint was made after step {}, rank 0's after step {}: every rank must "
+          "resume from the files of one checkpoint",
+          q, all[q], all[0]));
+    }
+  }
+  return Status::Ok();
+}
+
 Status AgreeStatus(Collective& c, const Status& mine) {
   ByteWriter w;
   w.Put<uint32_t>(static_cast<uint32_t>(mine.code()));

@@ -51,6 +51,12 @@ inline ParticleShare RankShare(uint64_t total, int ranks, int rank, uint64_t blo
   return ParticleShare{first, end - first};
 }
 
+// This rank's share of `total` particles in blocks of `block` (without ranks, null: all).
+inline ParticleShare ShareOf(uint64_t total, const Collective* ranks, uint64_t block) {
+  if (ranks == nullptr) return ParticleShare{0, total};
+  return RankShare(total, ranks->size(), ranks->rank(), block);
+}
+
 // InvalidArgument unless each of `ranks` ranks gets at least one block of `block` particles of
 // `total` (more than block * (ranks - 1) particles).
 Status CheckRankShares(uint64_t total, int ranks, uint64_t block);
@@ -58,6 +64,18 @@ Status CheckRankShares(uint64_t total, int ranks, uint64_t block);
 // InvalidArgument unless `islands` islands of whole blocks of `block` particles fit `total`
 // particles and divide among `ranks` ranks (island mode, FilterOptions::islands; OK for 1).
 Status CheckIslands(uint64_t total, int islands, int ranks, uint64_t block);
+
+class ByteReader;
+class ByteWriter;
+
+// A checkpoint of one rank's share names its rank and rank count after the head (`ranks` null:
+// rank 0 of 1). Reading refuses, FailedPrecondition naming both, another rank's file or one of
+// another rank count (DataLoss for a rank that is not one of the count).
+void WriteCheckpointRank(ByteWriter* w, const Collective* ranks);
+Status ReadCheckpointRank(ByteReader* r, const Collective* ranks);
+// Collective: FailedPrecondition on every rank unless every rank's checkpoint was made after the
+// same step (the files of one checkpoint, not of two).
+Status CheckCheckpointSteps(Collective& c, int64_t steps);
 
 // Every rank's values of a trivially copyable type, concatenated in rank order.
 template <typename T>
@@ -74,6 +92,15 @@ Status AllGatherValues(Collective& c, std::span<const T> mine, std::vector<T>* a
     if (!p.empty()) std::memcpy(all->data() + at, p.data(), p.size());
   }
   return Status::Ok();
+}
+
+// Every rank's `mine` concatenated in rank order, or `mine` alone without ranks (null).
+template <typename T>
+StatusOr<std::vector<T>> GatherOverRanks(Collective* c, std::vector<T> mine) {
+  if (c == nullptr) return mine;
+  std::vector<T> all;
+  GROVE_RETURN_IF_ERROR(AllGatherValues<T>(*c, mine, &all));
+  return all;
 }
 
 // The same status on every rank: the lowest failing rank's (OK when none failed). A rank whose

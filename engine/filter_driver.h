@@ -24,6 +24,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <exception>
+#include <memory>
 #include <new>
 #include <string>
 #include <vector>
@@ -67,6 +68,28 @@ FilterOptions FilterOptionsOf(const Config& c) {
     o.exchange_fraction = c.island_exchange_fraction;
   }
   return o;
+}
+
+// The options of one rank's share of a filter of c.particles across `ranks` (null: one
+// process, as FilterOptionsOf(c)).
+template <typename Config>
+FilterOptions FilterOptionsOf(const Config& c, Collective* ranks) {
+  FilterOptions o = FilterOptionsOf(c);
+  o.collective = ranks;
+  o.total_particles = static_cast<uint64_t>(c.particles);
+  return o;
+}
+
+// A facade's Resume() across ranks (collective): resume_share(ranks) on every rank, whose
+// errors then reach every rank, and the ranks' files must be of one step (CheckCheckpointSteps).
+// Without ranks, or with one, resume_share(nullptr).
+template <typename Engine, typename F>
+StatusOr<std::unique_ptr<Engine>> ResumeOnRanks(Collective* ranks, F&& resume_share) {
+  if (ranks == nullptr || ranks->size() == 1) return resume_share(nullptr);
+  StatusOr<std::unique_ptr<Engine>> engine = resume_share(ranks);
+  GROVE_RETURN_IF_ERROR(AgreeStatus(*ranks, engine.status()));
+  GROVE_RETURN_IF_ERROR(CheckCheckpointSteps(*ranks, (*engine)->steps()));
+  return engine;
 }
 
 enum class TimeOrder {
@@ -171,6 +194,9 @@ class FilterDriver {
     s.resample_s = t.resample_s;
     s.release_s = t.release_s;
     s.bookkeeping_s = bookkeeping_s_;
+    s.sent_particles = static_cast<int64_t>(filter_.sent_particles());
+    s.sent_bytes = static_cast<int64_t>(filter_.sent_bytes());
+    s.migrate_s = filter_.migrate_seconds();
     return s;
   }
 

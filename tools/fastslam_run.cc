@@ -16,6 +16,7 @@
 #include <numbers>
 
 #include "engine/config_json.h"
+#include "engine/resampler.h"
 #include "tools/fastslam_inputs.h"
 #include "tools/filter_outputs.h"
 #include "tools/map_render.h"
@@ -214,7 +215,7 @@ std::string GpsErrorCsv(const GpsErrors& e) {
 class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
  public:
   FastSlamJob(const FastSlamConfig& config, const FastSlamRunOptions& options)
-      : FacadeRunJob(config), options_(options) {}
+      : FacadeRunJob(config, options.run.ranks), options_(options) {}
 
   const FastSlamConfig& config() const { return config_; }
 
@@ -279,8 +280,11 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
   // A rough bound, not a calibrated model: 64 MiB fixed, 4 KiB per particle (state, its own map
   // paths in two generations, path segments) and 256 bytes per input row (the step log, times
   // and poses of the driver, the outputs built in memory).
+  // Across ranks, of this rank's particles.
   int64_t PredictPeakBytes(int64_t records) const override {
-    return (int64_t{64} << 20) + config_.particles * 4096 + records * 256;
+    const uint64_t share =
+        ShareOf(static_cast<uint64_t>(config_.particles), ranks_, kSumBlock).count;
+    return (int64_t{64} << 20) + static_cast<int64_t>(share) * 4096 + records * 256;
   }
   std::string DescribePrediction(int64_t records) const override {
     return fmt::format("{} particles, {} input rows{}", config_.particles, records,
@@ -322,13 +326,16 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
   }
 
   Status WriteOutputs(OutputSet* out, nlohmann::json* summary) override {
+    // Every read-out first: across ranks they are collective, and every rank takes them.
     const std::vector<StampedPose>& mean = engine_->MeanTrajectory();
-    GROVE_RETURN_IF_ERROR(out->Add("trajectory.csv", TrajectoryCsv(mean)));
     StatusOr<std::vector<StampedPose>> heaviest = engine_->HeaviestTrajectory();
     if (!heaviest.ok()) return heaviest.status();
-    GROVE_RETURN_IF_ERROR(out->Add("heaviest_trajectory.csv", TrajectoryCsv(*heaviest)));
     StatusOr<std::vector<LandmarkEstimate>> landmarks = engine_->HeaviestLandmarks();
     if (!landmarks.ok()) return landmarks.status();
+    const FastSlamSummary engine_summary = engine_->Summary();
+    if (out == nullptr) return Status::Ok();  // not rank 0
+    GROVE_RETURN_IF_ERROR(out->Add("trajectory.csv", TrajectoryCsv(mean)));
+    GROVE_RETURN_IF_ERROR(out->Add("heaviest_trajectory.csv", TrajectoryCsv(*heaviest)));
     GROVE_RETURN_IF_ERROR(out->Add("landmarks.csv", LandmarksCsv(*landmarks)));
     if (StopRequested()) return Status::Ok();
     MapImage image;
@@ -364,7 +371,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
     }
     GROVE_RETURN_IF_ERROR(AddMapImages(out, image));
     if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
-    summary->update(FastSlamSummaryJson(engine_->Summary()));
+    summary->update(FastSlamSummaryJson(engine_summary));
     if (park_ != nullptr) {
       (*summary)["inputs"] = {
           {"victoria_park", options_.victoria_park_dir},

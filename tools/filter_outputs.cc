@@ -41,7 +41,10 @@ nlohmann::json FilterSummaryJson(const FilterSummary& s) {
             {"release", s.release_s},
             {"bookkeeping", s.bookkeeping_s}}},
           {"resamplings", s.resamplings},
-          {"mean_ess", s.mean_ess}};
+          {"mean_ess", s.mean_ess},
+          {"sent_particles", s.sent_particles},
+          {"sent_bytes", s.sent_bytes},
+          {"migrate_s", s.migrate_s}};
 }
 
 }  // namespace grove::tools

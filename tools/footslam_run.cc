@@ -23,7 +23,7 @@ namespace {
 class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
  public:
   FootSlamJob(const FootSlamConfig& config, const FootSlamRunOptions& options)
-      : FacadeRunJob(config),
+      : FacadeRunJob(config, options.run.ranks),
         options_(options),
         steps_name_(options.steps_path.empty() ? EmbeddedWalkName() : options.steps_path),
         odometry_(Pose2{config.start_x_m, config.start_y_m, config.start_heading_rad}) {}
@@ -59,20 +59,10 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   }
 
   Status Create() override {
-    StatusOr<std::unique_ptr<FootSlam>> engine = FootSlam::Create(config_, options_.run.ranks);
-    if (!engine.ok()) return engine.status();
-    engine_ = std::move(engine).value();
+    GROVE_RETURN_IF_ERROR(FacadeRunJob::Create());
     if (options_.prior_map_path.empty()) return Status::Ok();
     Status s = engine_->SetPriorMap(prior_);
     if (!s.ok()) return Status(s.code(), options_.prior_map_path + ": " + s.message());
-    return Status::Ok();
-  }
-  // Across ranks, collective: this rank's share from the file this rank wrote.
-  Status Resume(std::string_view bytes, const std::string& name, std::string* user) override {
-    StatusOr<std::unique_ptr<FootSlam>> engine =
-        FootSlam::Resume(config_, bytes, name, user, options_.run.ranks);
-    if (!engine.ok()) return engine.status();
-    engine_ = std::move(engine).value();
     return Status::Ok();
   }
   std::vector<std::string> OutputNames() const override {
@@ -92,12 +82,8 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   int64_t ExpectedRecords() const override { return records_; }
   int64_t PredictPeakBytes(int64_t records) const override {
     FootSlamConfig share = config_;  // across ranks, this rank's particles
-    if (options_.run.ranks != nullptr) {
-      share.particles = static_cast<int64_t>(RankShare(static_cast<uint64_t>(config_.particles),
-                                                       options_.run.ranks->size(),
-                                                       options_.run.ranks->rank(), kSumBlock)
-                                                 .count);
-    }
+    share.particles = static_cast<int64_t>(
+        ShareOf(static_cast<uint64_t>(config_.particles), ranks_, kSumBlock).count);
     return FootSlam::EstimatePeakBytes(share, records) + records * kCommandBytesPerStep;
   }
   std::string DescribePrediction(int64_t records) const override {

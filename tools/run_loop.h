@@ -70,7 +70,8 @@ struct RunOptions {
   bool handle_signals = true;
   // One filter across these ranks (null: one process). Rank 0 checks the output paths, writes
   // the outputs and reports; the ranks agree on every record read, every error and every stop
-  // signal, and all exit with the same code. No checkpoints yet.
+  // signal, and all exit with the same code. Each rank checkpoints its own share
+  // (RankCheckpointPath).
   Collective* ranks = nullptr;
 };
 
@@ -136,21 +137,23 @@ class RunJob {
 };
 
 // The part of a RunJob every model writes alike: its engine made, resumed and checkpointed
-// through its facade (FootSlam, FastSlam: Create, Resume, Checkpoint, steps).
+// through its facade (FootSlam, FastSlam: Create, Resume, Checkpoint, steps), across `ranks`
+// (null: one process; RunOptions::ranks).
 template <typename Facade, typename Config>
 class FacadeRunJob : public RunJob {
  public:
-  explicit FacadeRunJob(const Config& config) : config_(config) {}
+  FacadeRunJob(const Config& config, Collective* ranks) : config_(config), ranks_(ranks) {}
 
   int64_t particles() const override { return config_.particles; }
   Status Create() override {
-    StatusOr<std::unique_ptr<Facade>> engine = Facade::Create(config_);
+    StatusOr<std::unique_ptr<Facade>> engine = Facade::Create(config_, ranks_);
     if (!engine.ok()) return engine.status();
     engine_ = std::move(engine).value();
     return Status::Ok();
   }
+  // Across ranks, collective: this rank's share from the file this rank wrote.
   Status Resume(std::string_view bytes, const std::string& name, std::string* user) override {
-    StatusOr<std::unique_ptr<Facade>> engine = Facade::Resume(config_, bytes, name, user);
+    StatusOr<std::unique_ptr<Facade>> engine = Facade::Resume(config_, bytes, name, user, ranks_);
     if (!engine.ok()) return engine.status();
     engine_ = std::move(engine).value();
     return Status::Ok();
@@ -163,6 +166,7 @@ class FacadeRunJob : public RunJob {
 
  protected:
   Config config_;
+  Collective* ranks_;
   std::unique_ptr<Facade> engine_;
 };
 

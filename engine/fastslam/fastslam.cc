@@ -12,6 +12,7 @@
 
 #include "concurrency/worker_pool.h"
 #include "engine/checkpoint_io.h"
+#include "engine/collective.h"
 #include "engine/fastslam/fastslam_model.h"
 #include "engine/filter_driver.h"
 
@@ -28,7 +29,8 @@ namespace {
 constexpr char kCheckpointKind[] = "grove fastslam";
 // FastSLAM's checkpoint body layout; bumped whenever it changes.
 // Version 3: the seed's filters (their configuration fields, evolution counts).
-constexpr uint32_t kFastSlamFormatVersion = 3;
+// Version 4: the rank and rank count of the share it holds.
+constexpr uint32_t kFastSlamFormatVersion = 4;
 
 // The landmark trees' degree, 2^kLog2Degree (see the README for the measurement behind it).
 constexpr int kLog2Degree = 3;
@@ -77,11 +79,13 @@ class FastSlam::Impl {
  public:
   using Model = FastSlamModel<kLog2Degree>;
 
-  Impl(const FastSlamConfig& config, int threads)
+  Impl(const FastSlamConfig& config, int threads, Collective* ranks)
       : config_(config),
+        ranks_(ranks),
+        share_(ShareOf(static_cast<uint64_t>(config.particles), ranks, kSumBlock)),
         workers_(threads),
-        model_(config, workers_.num_slots()),
-        driver_(&model_, &workers_, FilterOptionsOf(config), config.threads,
+        model_(config, workers_.num_slots(), share_, ranks),
+        driver_(&model_, &workers_, FilterOptionsOf(config, ranks), config.threads,
                 Pose2{config.start_x_m, config.start_y_m, config.start_heading_rad},
                 TimeOrder::kNonDecreasing),
         geometry_(fastslam::VehicleGeometry::Of(config)) {
@@ -171,35 +175,67 @@ class FastSlam::Impl {
   int64_t steps() const { return driver_.steps(); }
   Pose2 MeanPose() const { return driver_.mean_trajectory().back().pose; }
   Pose2 HeaviestPose() const {
-    const VehiclePose& p = model_.pose(driver_.filter().heaviest());
-    return Pose2{p.x_m, p.y_m, p.heading_rad};
+    std::vector<Pose2> mine;
+    size_t i;
+    if (Holds(driver_.filter().heaviest(), &i)) {
+      const VehiclePose& p = model_.pose(i);
+      mine.push_back(Pose2{p.x_m, p.y_m, p.heading_rad});
+    }
+    // Across ranks, from the rank that holds it (the mean pose if that fails).
+    StatusOr<std::vector<Pose2>> all = GatherOverRanks(ranks_, std::move(mine));
+    return all.ok() && all->size() == 1 ? all->front() : MeanPose();
   }
   const std::vector<StampedPose>& MeanTrajectory() const { return reported_; }
 
-  // The weighted covariance of the particles' poses about the weighted mean (a serial sum: the
-  // same at any thread count).
+  // The weighted covariance of the particles' poses about the weighted mean: sums over fixed
+  // blocks of particles, added in block order (across ranks, every rank's blocks), so the same
+  // at any thread or rank count. NaN when the ranks fail to exchange them.
   Pose2Covariance PoseCovariance() const {
     const Pose2 mean = MeanPose();
     std::span<const double> lw = driver_.filter().log_weights();
+    std::vector<Pose2Covariance> blocks;
+    for (size_t b = 0; b < model_.size(); b += kSumBlock) {
+      Pose2Covariance& c = blocks.emplace_back();
+      for (size_t i = b; i < std::min(model_.size(), b + kSumBlock); ++i) {
+        const VehiclePose& p = model_.pose(i);
+        const double w = std::exp(lw[i]);
+        const double dx = p.x_m - mean.x_m, dy = p.y_m - mean.y_m;
+        const double dh = fastslam::WrapAngle(p.heading_rad - mean.heading_rad);
+        c.xx += w * dx * dx;
+        c.xy += w * dx * dy;
+        c.xh += w * dx * dh;
+        c.yy += w * dy * dy;
+        c.yh += w * dy * dh;
+        c.hh += w * dh * dh;
+      }
+    }
+    StatusOr<std::vector<Pose2Covariance>> all = GatherOverRanks(ranks_, std::move(blocks));
     Pose2Covariance c;
-    for (size_t i = 0; i < model_.size(); ++i) {
-      const VehiclePose& p = model_.pose(i);
-      const double w = std::exp(lw[i]);
-      const double dx = p.x_m - mean.x_m, dy = p.y_m - mean.y_m;
-      const double dh = fastslam::WrapAngle(p.heading_rad - mean.heading_rad);
-      c.xx += w * dx * dx;
-      c.xy += w * dx * dy;
-      c.xh += w * dx * dh;
-      c.yy += w * dy * dy;
-      c.yh += w * dy * dh;
-      c.hh += w * dh * dh;
+    if (!all.ok()) {
+      const double nan = std::nan("");
+      return Pose2Covariance{nan, nan, nan, nan, nan, nan};
+    }
+    for (const Pose2Covariance& b : *all) {
+      c.xx += b.xx;
+      c.xy += b.xy;
+      c.xh += b.xh;
+      c.yy += b.yy;
+      c.yh += b.yh;
+      c.hh += b.hh;
     }
     return c;
   }
 
-  // Replays the heaviest particle's predictions segment by segment (fastslam_model.h).
-  std::vector<StampedPose> HeaviestTrajectory() const {
-    const size_t h = driver_.filter().heaviest();
+  // Replays the heaviest particle's predictions segment by segment (fastslam_model.h), on the
+  // rank that holds it.
+  StatusOr<std::vector<StampedPose>> HeaviestTrajectory() const {
+    size_t h;
+    if (!Holds(driver_.filter().heaviest(), &h))
+      return GatherOverRanks(ranks_, std::vector<StampedPose>{});
+    return GatherOverRanks(ranks_, TrajectoryOf(h));
+  }
+
+  std::vector<StampedPose> TrajectoryOf(size_t h) const {
     const std::vector<double>& times = driver_.times();
     const size_t steps = log_.size();
     std::vector<StampedPose> out;
@@ -236,16 +272,18 @@ class FastSlam::Impl {
     return out;
   }
 
-  std::vector<LandmarkEstimate> HeaviestLandmarks() const {
+  StatusOr<std::vector<LandmarkEstimate>> HeaviestLandmarks() const {
     std::vector<LandmarkEstimate> out;
-    model_.trie().ForEach(
-        model_.map(driver_.filter().heaviest()), [&](uint64_t id, const fastslam::Landmark& leaf) {
-          const fastslam::Landmark l =
-              model_.traits().square_root_map() ? fastslam::WithCovariance(leaf) : leaf;
-          out.push_back({static_cast<int64_t>(id), l.x_m, l.y_m, l.xx, l.xy, l.yy,
-                         model_.unknown_association() ? l.tag : -1});
-        });
-    return out;
+    size_t h;
+    if (Holds(driver_.filter().heaviest(), &h)) {
+      model_.trie().ForEach(model_.map(h), [&](uint64_t id, const fastslam::Landmark& leaf) {
+        const fastslam::Landmark l =
+            model_.traits().square_root_map() ? fastslam::WithCovariance(leaf) : leaf;
+        out.push_back({static_cast<int64_t>(id), l.x_m, l.y_m, l.xx, l.xy, l.yy,
+                       model_.unknown_association() ? l.tag : -1});
+      });
+    }
+    return GatherOverRanks(ranks_, std::move(out));
   }
 
   FastSlamSummary Summary() const {
@@ -255,12 +293,34 @@ class FastSlam::Impl {
     s.scans = scans_;
     s.observations = observations_;
     s.predict_steps = driver_.steps() - scans_;
-    int64_t landmarks = 0;
-    model_.trie().ForEach(model_.map(driver_.filter().heaviest()),
-                          [&](uint64_t, const fastslam::Landmark&) { ++landmarks; });
-    s.landmarks = landmarks;
-    if (model_.unknown_association()) s.association = model_.counts(driver_.filter().heaviest());
-    s.evolution = model_.evolution_counts();
+    // The heaviest particle's figures from the rank that holds it, the evolution's summed over
+    // the ranks (across ranks; left at 0 when the exchange fails).
+    struct Figures {
+      int64_t landmarks = 0;
+      AssociationCounts association;
+      EvolutionCounts evolution;
+      uint8_t holds = 0;
+    };
+    Figures mine;
+    mine.evolution = model_.evolution_counts();
+    size_t h;
+    if (Holds(driver_.filter().heaviest(), &h)) {
+      mine.holds = 1;
+      model_.trie().ForEach(model_.map(h),
+                            [&](uint64_t, const fastslam::Landmark&) { ++mine.landmarks; });
+      if (model_.unknown_association()) mine.association = model_.counts(h);
+    }
+    StatusOr<std::vector<Figures>> all = GatherOverRanks(ranks_, std::vector<Figures>{mine});
+    if (all.ok()) {
+      for (const Figures& f : *all) {
+        if (f.holds) {
+          s.landmarks = f.landmarks;
+          s.association = f.association;
+        }
+        s.evolution.trials += f.evolution.trials;
+        s.evolution.accepted += f.evolution.accepted;
+      }
+    }
     s.map_memory = model_.map_memory();
     s.trajectory_memory = model_.path_memory();
     return s;
@@ -273,6 +333,8 @@ class FastSlam::Impl {
     ByteWriter w;
     WriteCheckpointHead(&w, kCheckpointKind, CheckpointFieldsOf(FastSlamConfigFields(), config_),
                         user_data);
+    // Across ranks, each rank saves its own share: which share it is comes first.
+    WriteCheckpointRank(&w, ranks_);
     driver_.Save(&w);
     model_.Save(&w);
     w.Put<int64_t>(controls_);
@@ -288,6 +350,7 @@ class FastSlam::Impl {
   }
 
   Status Load(ByteReader* r) {
+    GROVE_RETURN_IF_ERROR(ReadCheckpointRank(r, ranks_));
     GROVE_RETURN_IF_ERROR(driver_.Load(r));
     const uint64_t steps = static_cast<uint64_t>(driver_.steps());
     GROVE_RETURN_IF_ERROR(model_.Load(r, steps));
@@ -343,6 +406,13 @@ class FastSlam::Impl {
   }
 
  private:
+  // Whether this rank holds the filter's particle `global`, and its index here.
+  bool Holds(size_t global, size_t* local) const {
+    if (global < share_.first || global - share_.first >= model_.size()) return false;
+    *local = global - share_.first;
+    return true;
+  }
+
   struct Held {
     double v_mps = 0;
     double steer_rad = 0;
@@ -367,6 +437,8 @@ class FastSlam::Impl {
   }
 
   FastSlamConfig config_;
+  Collective* ranks_;  // null: one process
+  ParticleShare share_;
   WorkerPool workers_;
   Model model_;
   FilterDriver<Model> driver_;
@@ -383,13 +455,27 @@ class FastSlam::Impl {
 FastSlam::FastSlam(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 FastSlam::~FastSlam() = default;
 
+Status FastSlam::CheckAcrossRanks(const FastSlamConfig& config, int ranks) {
+  return CheckRankShares(static_cast<uint64_t>(config.particles), ranks, kSumBlock);
+}
+
 StatusOr<std::unique_ptr<FastSlam>> FastSlam::Create(const FastSlamConfig& config) {
+  return Create(config, nullptr);
+}
+
+StatusOr<std::unique_ptr<FastSlam>> FastSlam::Create(const FastSlamConfig& config,
+                                                     Collective* ranks) {
   GROVE_RETURN_IF_ERROR(config.Validate());
+  if (ranks != nullptr && ranks->size() > 1) {
+    GROVE_RETURN_IF_ERROR(CheckAcrossRanks(config, ranks->size()));
+  } else {
+    ranks = nullptr;
+  }
   return NoThrow([&]() -> StatusOr<std::unique_ptr<FastSlam>> {
     const int threads = config.threads > 0
                             ? config.threads
                             : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-    return std::unique_ptr<FastSlam>(new FastSlam(std::make_unique<Impl>(config, threads)));
+    return std::unique_ptr<FastSlam>(new FastSlam(std::make_unique<Impl>(config, threads, ranks)));
   });
 }
 
@@ -406,12 +492,10 @@ Pose2 FastSlam::HeaviestPose() const { return impl_->HeaviestPose(); }
 const std::vector<StampedPose>& FastSlam::MeanTrajectory() const { return impl_->MeanTrajectory(); }
 Pose2Covariance FastSlam::PoseCovariance() const { return impl_->PoseCovariance(); }
 StatusOr<std::vector<StampedPose>> FastSlam::HeaviestTrajectory() const {
-  return NoThrow(
-      [&]() -> StatusOr<std::vector<StampedPose>> { return impl_->HeaviestTrajectory(); });
+  return NoThrow([&]() { return impl_->HeaviestTrajectory(); });
 }
 StatusOr<std::vector<LandmarkEstimate>> FastSlam::HeaviestLandmarks() const {
-  return NoThrow(
-      [&]() -> StatusOr<std::vector<LandmarkEstimate>> { return impl_->HeaviestLandmarks(); });
+  return NoThrow([&]() { return impl_->HeaviestLandmarks(); });
 }
 FastSlamSummary FastSlam::Summary() const { return impl_->Summary(); }
 Status FastSlam::CheckInvariants() const { return impl_->CheckInvariants(); }
@@ -428,6 +512,22 @@ StatusOr<std::unique_ptr<FastSlam>> FastSlam::Resume(const FastSlamConfig& confi
                                                      std::string_view checkpoint,
                                                      const std::string& name,
                                                      std::string* user_data) {
+  return Resume(config, checkpoint, name, user_data, nullptr);
+}
+
+StatusOr<std::unique_ptr<FastSlam>> FastSlam::Resume(const FastSlamConfig& config,
+                                                     std::string_view checkpoint,
+                                                     const std::string& name,
+                                                     std::string* user_data, Collective* ranks) {
+  return ResumeOnRanks<FastSlam>(
+      ranks, [&](Collective* r) { return ResumeShare(config, checkpoint, name, user_data, r); });
+}
+
+StatusOr<std::unique_ptr<FastSlam>> FastSlam::ResumeShare(const FastSlamConfig& config,
+                                                          std::string_view checkpoint,
+                                                          const std::string& name,
+                                                          std::string* user_data,
+                                                          Collective* ranks) {
   GROVE_RETURN_IF_ERROR(config.Validate());
   return NoThrow([&]() -> StatusOr<std::unique_ptr<FastSlam>> {
     StatusOr<UnsealedCheckpoint> file = UnsealCheckpoint(checkpoint, name);
@@ -437,7 +537,7 @@ StatusOr<std::unique_ptr<FastSlam>> FastSlam::Resume(const FastSlamConfig& confi
     GROVE_RETURN_IF_ERROR(ReadCheckpointHead(
         &reader, kCheckpointKind, "FastSLAM", file->format_version, kFastSlamFormatVersion,
         CheckpointFieldsOf(FastSlamConfigFields(), config), &user));
-    StatusOr<std::unique_ptr<FastSlam>> slam = Create(config);
+    StatusOr<std::unique_ptr<FastSlam>> slam = Create(config, ranks);
     if (!slam.ok()) return slam.status();
     GROVE_RETURN_IF_ERROR((*slam)->impl_->Load(&reader));
     if (user_data != nullptr) user_data->swap(user);

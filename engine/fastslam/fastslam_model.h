@@ -162,15 +162,21 @@ class FastSlamModel {
  public:
   using Trie = PersistentTrie<Landmark, kLog2Degree>;
 
-  // REQUIRES: config.Validate() is ok.
-  FastSlamModel(const FastSlamConfig& config, int slots)
+  // A model of every particle, or across ranks of this rank's `share` of the filter's
+  // config.particles (particle i here is the filter's first + i; `ranks` carries differential
+  // evolution's exchanges). REQUIRES: config.Validate() is ok.
+  FastSlamModel(const FastSlamConfig& config, int slots, ParticleShare share = {},
+                Collective* ranks = nullptr)
       : config_(config),
         traits_(TraitsOf(config.filter)),
         geometry_(VehicleGeometry::Of(config)),
         noise_{config.sigma_range_m, config.sigma_bearing_rad},
         control_noise_{config.sigma_speed_mps, config.sigma_steer_rad},
         rule_{config.ut_alpha, config.ut_beta, config.ut_kappa},
-        n_(static_cast<size_t>(config.particles)),
+        n_(ranks == nullptr ? static_cast<size_t>(config.particles) : share.count),
+        first_(ranks == nullptr ? 0 : share.first),
+        total_(static_cast<uint64_t>(config.particles)),
+        ranks_(ranks),
         trie_(1, slots),
         history_(slots),
         maps_(&trie_, n_),
@@ -202,6 +208,9 @@ class FastSlamModel {
   }
 
   size_t size() const { return n_; }
+  // The filter's index of particle 0 here, and the filter's particle count.
+  uint64_t first() const { return first_; }
+  uint64_t total() const { return total_; }
   const FilterTraits& traits() const { return traits_; }
 
   // The pose covariance every particle starts with and, for the sigma-point pose steps, returns
@@ -224,6 +233,7 @@ class FastSlamModel {
   void NoteScan(const ScanStep& scan) {
     for (const LandmarkObservation& z : scan.observations)
       max_range_ = std::max(max_range_, z.range_m);
+    scan_size_ = scan.observations.size();
   }
   bool unknown_association() const { return ml_; }
   // Unknown association: stores `l` in particle i's map as a new landmark would be (benchmarks
@@ -282,7 +292,7 @@ class FastSlamModel {
     for (size_t i = begin; i < end; ++i) {
       const VehiclePose p = pose_[i];
       if (segment_start_) {
-        SegmentStart s{p.x_m, p.y_m, p.heading_rad, static_cast<uint32_t>(i), 0};
+        SegmentStart s{p.x_m, p.y_m, p.heading_rad, static_cast<uint32_t>(first_ + i), 0};
         SegmentHistory::Node* node =
             history_.Append(paths_[i], static_cast<uint32_t>(step), s, slot);
         if (node == nullptr) return NoMemory(i, "path");
@@ -298,7 +308,9 @@ class FastSlamModel {
         cov_[i] = Store(m);
       } else {
         ControlTerms own;
-        if (!ekf && !NoisyTerms(c, step, static_cast<uint32_t>(i), &own)) return BadSteering(i);
+        if (!ekf && !NoisyTerms(c, step, static_cast<uint32_t>(first_ + i), &own)) {
+          return BadSteering(i);
+        }
         const ControlTerms& u = ekf ? shared : own;
         StepTrig trig;
         next = MoveVehicle(geometry_, u, p, &trig);
@@ -312,7 +324,8 @@ class FastSlamModel {
       if (!std::isfinite(next.x_m) || !std::isfinite(next.y_m) ||
           !std::isfinite(next.heading_rad)) {
         return FailedPreconditionError(fmt::format("particle {}'s pose ({}, {}, {}) is not finite",
-                                                   i, next.x_m, next.y_m, next.heading_rad));
+                                                   first_ + i, next.x_m, next.y_m,
+                                                   next.heading_rad));
       }
       pose_[i] = next;
       if (ekf) {
@@ -408,26 +421,39 @@ class FastSlamModel {
                                          return Status::Ok();
                                        }));
     // Without an observation of a mapped landmark every fitness is 0 and there is nothing to
-    // improve.
-    if (n_ >= 3 && evidence.load(std::memory_order_relaxed)) {
+    // improve. Across ranks every rank decides alike, from every rank's evidence.
+    bool any = evidence.load(std::memory_order_relaxed);
+    if (ranks_ != nullptr) {
+      std::vector<uint8_t> all;
+      const uint8_t mine = any ? 1 : 0;
+      GROVE_RETURN_IF_ERROR(AllGatherValues<uint8_t>(*ranks_, std::span(&mine, 1), &all));
+      any = std::find(all.begin(), all.end(), uint8_t{1}) != all.end();
+    }
+    if (total_ >= 3 && any) {
       std::vector<VehiclePose> trial(n_);
       std::vector<double> trial_fitness(n_);
+      std::vector<VehiclePose> everyone;  // across ranks: every particle's pose, in order
       for (int64_t g = 0; g < config_.de_generations; ++g) {
-        const size_t best = static_cast<size_t>(std::max_element(fitness_.begin(), fitness_.end()) -
-                                                fitness_.begin());
-        const VehiclePose x_best = pose_[best];
+        VehiclePose x_best;
+        GROVE_RETURN_IF_ERROR(BestPose(&x_best));
+        std::span<const VehiclePose> population = pose_;
+        if (ranks_ != nullptr) {
+          GROVE_RETURN_IF_ERROR(AllGatherValues<VehiclePose>(
+              *ranks_, std::span<const VehiclePose>(pose_.data(), n_), &everyone));
+          population = everyone;
+        }
         const uint32_t purpose =
             StreamPurpose::kDifferentialEvolution + 256 * static_cast<uint32_t>(g);
-        GROVE_RETURN_IF_ERROR(RunInBatches(workers, n_, static_cast<size_t>(config_.batch),
-                                           &batch_status_, [&](int, size_t b, size_t e) {
-                                             for (size_t i = b; i < e; ++i) {
-                                               RandomStream rs(config_.seed, step + 1,
-                                                               static_cast<uint32_t>(i), purpose);
-                                               trial[i] = TrialPose(i, x_best, &rs);
-                                               trial_fitness[i] = Fitness(scan, i, trial[i]);
-                                             }
-                                             return Status::Ok();
-                                           }));
+        GROVE_RETURN_IF_ERROR(RunInBatches(
+            workers, n_, static_cast<size_t>(config_.batch), &batch_status_,
+            [&](int, size_t b, size_t e) {
+              for (size_t i = b; i < e; ++i) {
+                RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(first_ + i), purpose);
+                trial[i] = TrialPose(first_ + i, population, x_best, &rs);
+                trial_fitness[i] = Fitness(scan, i, trial[i]);
+              }
+              return Status::Ok();
+            }));
         for (size_t i = 0; i < n_; ++i) {
           ++evolution_.trials;
           if (trial_fitness[i] > fitness_[i]) {
@@ -495,6 +521,7 @@ class FastSlamModel {
     if (!pending_.empty()) GatherValues(parents, workers, &pending_);
     maps_.Gather(parents, workers);
     paths_.Gather(parents, workers);
+    n_ = parents.size();  // imported particles were named by parents or are dropped
   }
 
   void ReleaseDead(WorkerPool& workers) {
@@ -554,24 +581,8 @@ class FastSlamModel {
     GROVE_RETURN_IF_ERROR(r->GetBytes("pose covariances", cov.data(), n_ * sizeof(PoseCovariance)));
     std::vector<Unit> unit(n_);
     GROVE_RETURN_IF_ERROR(r->GetBytes("heading vectors", unit.data(), n_ * sizeof(Unit)));
-    for (const Unit& u : unit) {
-      if (!(std::fabs(u.c * u.c + u.s * u.s - 1) < 1e-6)) {
-        return r->Error("heading vectors", "not a unit vector");
-      }
-    }
     for (size_t i = 0; i < n_; ++i) {
-      if (!std::isfinite(pose[i].x_m) || !std::isfinite(pose[i].y_m) ||
-          !(std::fabs(pose[i].heading_rad) <= 4)) {
-        return r->Error("poses", "particle " + std::to_string(i) + "'s pose is not finite");
-      }
-      const PoseCovariance& c = cov[i];
-      for (double v : {c.xx, c.xy, c.xh, c.yy, c.yh, c.hh}) {
-        if (!std::isfinite(v)) return r->Error("pose covariances", "a value is not finite");
-      }
-      // Variances, or a factor's diagonal.
-      if (!(c.xx >= 0 && c.yy >= 0 && c.hh >= 0)) {
-        return r->Error("pose covariances", "a variance is negative");
-      }
+      GROVE_RETURN_IF_ERROR(CheckParticle(r, i, pose[i], unit[i], cov[i]));
     }
     uint8_t segment = 0;
     GROVE_RETURN_IF_ERROR(r->Get("segment flag", &segment));
@@ -584,12 +595,7 @@ class FastSlamModel {
     std::vector<AssociationCounts> counts(counts_.size());
     GROVE_RETURN_IF_ERROR(r->GetBytes("association counts", counts.data(),
                                       counts.size() * sizeof(AssociationCounts)));
-    for (const AssociationCounts& c : counts) {
-      for (int64_t v :
-           {c.associated, c.created, c.ignored, c.removed, c.dropped, c.tagged, c.wrong}) {
-        if (v < 0) return r->Error("association counts", "a count is negative");
-      }
-    }
+    for (const AssociationCounts& c : counts) GROVE_RETURN_IF_ERROR(CheckCounts(r, c));
     EvolutionCounts evolution;
     GROVE_RETURN_IF_ERROR(r->Get("evolution trials", &evolution.trials));
     GROVE_RETURN_IF_ERROR(r->Get("evolution accepted", &evolution.accepted));
@@ -606,7 +612,7 @@ class FastSlamModel {
     Status s = history_.Load(r, n_, static_cast<uint32_t>(steps), 0, &ValidSegmentStart, &heads);
     if (s.ok() && steps > 0) {
       for (size_t i = 0; i < n_ && s.ok(); ++i) {
-        if (heads[i] == nullptr || heads[i]->value.index >= n_) {
+        if (heads[i] == nullptr || heads[i]->value.index >= total_) {
           s = r->Error("path", "particle " + std::to_string(i) + " has no path or a bad index");
         }
       }
@@ -630,10 +636,148 @@ class FastSlamModel {
     return Status::Ok();
   }
 
+  // Particles `which` (increasing) for another rank: their values, the scan's pending
+  // proposals and matches, their paths and their maps, each shared entry and node written once.
+  void Export(std::span<const uint32_t> which, ByteWriter* w) const {
+    for (uint32_t i : which) w->Put(pose_[i]);
+    for (uint32_t i : which) w->Put(unit_[i]);
+    for (uint32_t i : which) w->Put(cov_[i]);
+    if (traits_.draws_after_resampling) {
+      for (uint32_t i : which) {
+        for (int k = 0; k < 3; ++k) w->Put<double>(proposal_mu_[i](k));
+        w->Put(proposal_sigma_[i]);
+      }
+    }
+    if (ml_) {
+      for (uint32_t i : which) w->Put(counts_[i]);
+    }
+    if (!pending_.empty()) {
+      // An empty scan's query is not used after Advance() (and its view may name landmarks its
+      // evidence removed): none is sent.
+      const ScanQuery none;
+      for (uint32_t i : which) {
+        const ScanQuery& q = scan_size_ > 0 ? pending_[i] : none;
+        w->Put<uint64_t>(q.matches.size());
+        for (const Match& m : q.matches) {
+          w->Put<uint32_t>(m.detection);
+          w->Put<uint64_t>(m.key);
+          w->Put<double>(m.log_likelihood);
+          w->Put<double>(m.d2);
+        }
+        w->Put<uint64_t>(q.in_view.size());
+        w->PutBytes(q.in_view.data(), q.in_view.size() * sizeof(uint64_t));
+      }
+    }
+    SegmentHistory::Save(paths_.Pick(which), w);
+    trie_.Save(maps_.Pick(which), w);
+  }
+
+  // Appends `count` particles written by Export() after step `steps`: size() grows by count
+  // until the next Gather(). Checks every value. On error the model must not step again.
+  Status Import(ByteReader* r, size_t count, uint64_t steps) {
+    if (count > r->remaining() / (sizeof(VehiclePose) + sizeof(Unit) + sizeof(PoseCovariance))) {
+      return r->Error("particle count", "larger than the message");
+    }
+    if (steps >= UINT32_MAX) return r->Error("step", "too many steps");
+    const size_t at = n_, end = n_ + count;
+    pose_.resize(end);
+    unit_.resize(end);
+    cov_.resize(end);
+    GROVE_RETURN_IF_ERROR(r->GetBytes("poses", pose_.data() + at, count * sizeof(VehiclePose)));
+    GROVE_RETURN_IF_ERROR(r->GetBytes("heading vectors", unit_.data() + at, count * sizeof(Unit)));
+    GROVE_RETURN_IF_ERROR(
+        r->GetBytes("pose covariances", cov_.data() + at, count * sizeof(PoseCovariance)));
+    for (size_t i = at; i < end; ++i) {
+      GROVE_RETURN_IF_ERROR(CheckParticle(r, i - at, pose_[i], unit_[i], cov_[i]));
+    }
+    if (traits_.draws_after_resampling) {
+      proposal_mu_.resize(end);
+      proposal_sigma_.resize(end);
+      for (size_t i = at; i < end; ++i) {
+        for (int k = 0; k < 3; ++k) {
+          GROVE_RETURN_IF_ERROR(r->Get("proposal mean", &proposal_mu_[i](k)));
+        }
+        GROVE_RETURN_IF_ERROR(r->Get("proposal covariance", &proposal_sigma_[i]));
+        const PoseCovariance& c = proposal_sigma_[i];
+        if (!proposal_mu_[i].allFinite() ||
+            !std::isfinite(c.xx + c.xy + c.xh + c.yy + c.yh + c.hh)) {
+          return r->Error("proposal", "a value is not finite");
+        }
+      }
+    }
+    if (ml_) {
+      counts_.resize(end);
+      GROVE_RETURN_IF_ERROR(r->GetBytes("association counts", counts_.data() + at,
+                                        count * sizeof(AssociationCounts)));
+      for (size_t i = at; i < end; ++i) GROVE_RETURN_IF_ERROR(CheckCounts(r, counts_[i]));
+    }
+    if (!pending_.empty()) {
+      pending_.resize(end);
+      for (size_t i = at; i < end; ++i) GROVE_RETURN_IF_ERROR(ReadQuery(r, &pending_[i]));
+    }
+    std::vector<SegmentHistory::Node*> heads;
+    GROVE_RETURN_IF_ERROR(
+        history_.Load(r, count, static_cast<uint32_t>(steps), 0, &ValidSegmentStart, &heads));
+    std::vector<typename Trie::Node*> roots;
+    Status s;
+    for (size_t k = 0; k < count && s.ok(); ++k) {
+      if (steps > 0 && (heads[k] == nullptr || heads[k]->value.index >= total_)) {
+        s = r->Error("path", "particle " + std::to_string(k) + " has no path or a bad index");
+      }
+    }
+    if (s.ok()) s = trie_.Load(r, count, 0, &ValidLandmark, &roots);
+    // The pending matches and views name landmarks of the particle's own map.
+    for (size_t k = 0; k < count && s.ok() && !pending_.empty(); ++k) {
+      const ScanQuery& q = pending_[at + k];
+      auto known = [&](uint64_t key) { return trie_.Find(roots[k], key) != nullptr; };
+      for (const Match& m : q.matches) {
+        if (!known(m.key)) s = r->Error("matches", "a match names a landmark not in the map");
+      }
+      for (uint64_t key : q.in_view) {
+        if (!known(key)) s = r->Error("view", "a landmark in view is not in the map");
+      }
+    }
+    if (!s.ok()) {
+      for (auto* h : heads) history_.Release(h, 0);
+      for (auto* root : roots) trie_.Release(root, 0);
+      return s;
+    }
+    paths_.Append(heads);
+    maps_.Append(roots);
+    n_ = end;
+    return Status::Ok();
+  }
+
  private:
   struct Unit {
     double c, s;
   };
+
+  // Checks of a particle's values read from a checkpoint or a message (`k`: its place there).
+  static Status CheckParticle(ByteReader* r, size_t k, const VehiclePose& p, const Unit& u,
+                              const PoseCovariance& c) {
+    if (!(std::fabs(u.c * u.c + u.s * u.s - 1) < 1e-6)) {
+      return r->Error("heading vectors", "not a unit vector");
+    }
+    if (!std::isfinite(p.x_m) || !std::isfinite(p.y_m) || !(std::fabs(p.heading_rad) <= 4)) {
+      return r->Error("poses", "particle " + std::to_string(k) + "'s pose is not finite");
+    }
+    for (double v : {c.xx, c.xy, c.xh, c.yy, c.yh, c.hh}) {
+      if (!std::isfinite(v)) return r->Error("pose covariances", "a value is not finite");
+    }
+    // Variances, or a factor's diagonal.
+    if (!(c.xx >= 0 && c.yy >= 0 && c.hh >= 0)) {
+      return r->Error("pose covariances", "a variance is negative");
+    }
+    return Status::Ok();
+  }
+  static Status CheckCounts(ByteReader* r, const AssociationCounts& c) {
+    for (int64_t v :
+         {c.associated, c.created, c.ignored, c.removed, c.dropped, c.tagged, c.wrong}) {
+      if (v < 0) return r->Error("association counts", "a count is negative");
+    }
+    return Status::Ok();
+  }
 
   static bool ValidLandmark(const Landmark& l) {
     return std::isfinite(l.x_m) && std::isfinite(l.y_m) && std::isfinite(l.xx) &&
@@ -704,7 +848,7 @@ class FastSlamModel {
     return FailedPreconditionError(fmt::format(
         "particle {}'s steering angle is outside what the {} model can use (|G| < pi/2 and "
         "1 - tan(G) H / L > 0)",
-        i, FastSlamVehicleName(config_.vehicle)));
+        first_ + i, FastSlamVehicleName(config_.vehicle)));
   }
 
   // ---- The filters' per-observation steps ----
@@ -755,12 +899,14 @@ class FastSlamModel {
   // A draw from N(mu, sigma) (sigma a covariance or a factor) keyed by (step, i).
   Status Draw(uint64_t step, size_t i, const Eigen::Vector3d& mu, const Eigen::Matrix3d& sigma,
               VehiclePose* out) const {
-    RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(i), StreamPurpose::kProposal);
+    RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(first_ + i),
+                    StreamPurpose::kProposal);
     const Eigen::Vector3d normals(rs.NextNormal(), rs.NextNormal(), rs.NextNormal());
     Status s = traits_.square_root_pose() ? SamplePoseFromFactor(mu, sigma, normals, out)
                                           : SamplePose(mu, sigma, normals, out);
     if (!s.ok()) {
-      return FailedPreconditionError(fmt::format("particle {}'s proposal: {}", i, s.message()));
+      return FailedPreconditionError(
+          fmt::format("particle {}'s proposal: {}", first_ + i, s.message()));
     }
     return Status::Ok();
   }
@@ -803,13 +949,13 @@ class FastSlamModel {
       return FailedPreconditionError(
           fmt::format("particle {}: a pose covariance is singular: the importance ratio is not "
                       "defined",
-                      i));
+                      first_ + i));
     }
     w += LogDensityOfFactor<3>(prior, PoseDifference(xv, prior_mu)) -
          LogDensityOfFactor<3>(sigma, PoseDifference(xv, mu));
     if (!std::isfinite(w)) {
       return FailedPreconditionError(
-          fmt::format("particle {}'s importance weight is not finite", i));
+          fmt::format("particle {}'s importance weight is not finite", first_ + i));
     }
     *lw = w;
     pose_[i] = x;
@@ -875,24 +1021,52 @@ class FastSlamModel {
 
   // ---- Differential evolution ----
 
-  // Particle i's trial pose (DE/best/1/bin). REQUIRES: n_ >= 3.
-  VehiclePose TrialPose(size_t i, const VehiclePose& best, RandomStream* rs) const {
+  // The pose of the first particle of highest fitness (across ranks, the whole filter's).
+  Status BestPose(VehiclePose* best) const {
+    struct Best {
+      double fitness;
+      VehiclePose pose;
+    };
+    const size_t k = static_cast<size_t>(
+        std::max_element(fitness_.begin(), fitness_.begin() + static_cast<ptrdiff_t>(n_)) -
+        fitness_.begin());
+    Best mine{fitness_[k], pose_[k]};
+    if (ranks_ == nullptr) {
+      *best = mine.pose;
+      return Status::Ok();
+    }
+    std::vector<Best> all;
+    GROVE_RETURN_IF_ERROR(AllGatherValues<Best>(*ranks_, std::span(&mine, 1), &all));
+    // The first strict maximum in rank order is the first in particle order.
+    size_t q = 0;
+    for (size_t r = 1; r < all.size(); ++r) {
+      if (all[r].fitness > all[q].fitness) q = r;
+    }
+    *best = all[q].pose;
+    return Status::Ok();
+  }
+
+  // The trial pose of the filter's particle i (DE/best/1/bin), from `population`, every
+  // particle's pose in the filter's order. REQUIRES: total_ >= 3.
+  VehiclePose TrialPose(size_t i, std::span<const VehiclePose> population, const VehiclePose& best,
+                        RandomStream* rs) const {
+    const size_t n = population.size();
     auto other = [&](size_t a, size_t b) {
       for (;;) {
-        const size_t k = static_cast<size_t>(rs->NextUniform() * static_cast<double>(n_));
-        if (k < n_ && k != a && k != b) return k;
+        const size_t k = static_cast<size_t>(rs->NextUniform() * static_cast<double>(n));
+        if (k < n && k != a && k != b) return k;
       }
     };
     const size_t r1 = other(i, i);
     const size_t r2 = other(i, r1);
     const int j_rand = std::min(2, static_cast<int>(rs->NextUniform() * 3));
-    const VehiclePose& a = pose_[r1];
-    const VehiclePose& b = pose_[r2];
+    const VehiclePose& a = population[r1];
+    const VehiclePose& b = population[r2];
     const double mutant[3] = {
         best.x_m + config_.de_scale * (a.x_m - b.x_m),
         best.y_m + config_.de_scale * (a.y_m - b.y_m),
         best.heading_rad + config_.de_scale * WrapAngle(a.heading_rad - b.heading_rad)};
-    const double target[3] = {pose_[i].x_m, pose_[i].y_m, pose_[i].heading_rad};
+    const double target[3] = {population[i].x_m, population[i].y_m, population[i].heading_rad};
     double u[3];
     for (int j = 0; j < 3; ++j) {
       const bool cross = rs->NextUniform() < config_.de_crossover || j == j_rand;
@@ -915,6 +1089,31 @@ class FastSlamModel {
     std::vector<uint64_t> keys;
   };
 
+  // A pending ScanQuery as Export() writes it: matches of this scan's detections, the view's
+  // keys increasing (their landmarks are checked against the map once it is read).
+  Status ReadQuery(ByteReader* r, ScanQuery* q) const {
+    constexpr size_t kMatchBytes = sizeof(uint32_t) + sizeof(uint64_t) + 2 * sizeof(double);
+    uint64_t count = 0;
+    GROVE_RETURN_IF_ERROR(r->GetCount("match count", kMatchBytes, &count));
+    q->matches.resize(count);
+    for (Match& m : q->matches) {
+      GROVE_RETURN_IF_ERROR(r->Get("match detection", &m.detection));
+      GROVE_RETURN_IF_ERROR(r->Get("match key", &m.key));
+      GROVE_RETURN_IF_ERROR(r->Get("match likelihood", &m.log_likelihood));
+      GROVE_RETURN_IF_ERROR(r->Get("match distance", &m.d2));
+      if (m.detection >= scan_size_ || std::isnan(m.log_likelihood) || !(m.d2 >= 0)) {
+        return r->Error("matches", "a detection that is not the scan's, or a bad likelihood");
+      }
+    }
+    GROVE_RETURN_IF_ERROR(r->GetCount("view count", sizeof(uint64_t), &count));
+    q->in_view.resize(count);
+    GROVE_RETURN_IF_ERROR(r->GetBytes("view", q->in_view.data(), count * sizeof(uint64_t)));
+    for (size_t k = 1; k < count; ++k) {
+      if (q->in_view[k] <= q->in_view[k - 1]) return r->Error("view", "keys not increasing");
+    }
+    return Status::Ok();
+  }
+
   // The query and decisions of particle i's scan seen from `pose`, into sc.
   Status DecideScan(const ScanStep& scan, size_t i, const VehiclePose& pose, Scratch* sc) const {
     sc->query.matches.clear();
@@ -924,7 +1123,7 @@ class FastSlamModel {
     Status s = FindMatches(trie_, maps_[i], pose, scan.observations, params_, max_range_,
                            /*use_index=*/true, &sc->query.matches, evidence ? &view : nullptr,
                            &sc->query.in_view);
-    if (!s.ok()) return Status(s.code(), fmt::format("particle {}, {}", i, s.message()));
+    if (!s.ok()) return Status(s.code(), fmt::format("particle {}, {}", first_ + i, s.message()));
     Decide(sc->query.matches, scan.observations.size(), params_, &sc->decisions);
     return Status::Ok();
   }
@@ -993,8 +1192,8 @@ class FastSlamModel {
     Cell cell;
     if (!CellOf(l.x_m, l.y_m, params_.cell_m, &cell)) {
       return FailedPreconditionError(fmt::format(
-          "particle {}: a landmark at ({}, {}) is outside the landmark index (|x|, |y| < {} m)", i,
-          l.x_m, l.y_m, static_cast<double>(kMaxCell) * params_.cell_m));
+          "particle {}: a landmark at ({}, {}) is outside the landmark index (|x|, |y| < {} m)",
+          first_ + i, l.x_m, l.y_m, static_cast<double>(kMaxCell) * params_.cell_m));
     }
     const int k = FreeSlot(i, cell);
     if (k < 0) {
@@ -1085,14 +1284,17 @@ class FastSlamModel {
     return Status::Ok();
   }
 
-  static Status NoMemory(size_t i, const char* what) {
-    return ResourceExhaustedError(fmt::format("out of memory for particle {}'s {}", i, what));
+  // Errors of particle i here, named by the filter's index.
+  Status NoMemory(size_t i, const char* what) const {
+    return ResourceExhaustedError(
+        fmt::format("out of memory for particle {}'s {}", first_ + i, what));
   }
-  static Status ParticleError(size_t i, const LandmarkObservation& z, const Status& s) {
-    return Status(s.code(), fmt::format("particle {}, landmark {}: {}", i, z.id, s.message()));
+  Status ParticleError(size_t i, const LandmarkObservation& z, const Status& s) const {
+    return Status(s.code(),
+                  fmt::format("particle {}, landmark {}: {}", first_ + i, z.id, s.message()));
   }
-  static Status ParticleStatus(size_t i, const Status& s) {
-    return Status(s.code(), fmt::format("particle {}: {}", i, s.message()));
+  Status ParticleStatus(size_t i, const Status& s) const {
+    return Status(s.code(), fmt::format("particle {}: {}", first_ + i, s.message()));
   }
 
   const FastSlamConfig config_;
@@ -1101,7 +1303,11 @@ class FastSlamModel {
   const SensorNoise noise_;
   const ControlNoise control_noise_;
   const UnscentedRule rule_;
-  const size_t n_;
+  size_t n_;                 // particles here (more after an Import(), until the next Gather())
+  const uint64_t first_;     // the filter's index of particle 0 here
+  const uint64_t total_;     // the filter's particles
+  Collective* const ranks_;  // null: this model holds every particle
+  size_t scan_size_ = 0;     // the last scan's detections (NoteScan())
   Eigen::Matrix2d q_;
   Trie trie_;
   SegmentHistory history_;

@@ -136,16 +136,14 @@ class Engine final : public FootSlam::Impl {
          std::unique_ptr<const Alphabet> alphabet, Collective* ranks)
       : config_(config),
         ranks_(ranks),
-        share_(ranks == nullptr ? ParticleShare{0, static_cast<uint64_t>(config.particles)}
-                                : RankShare(static_cast<uint64_t>(config.particles), ranks->size(),
-                                            ranks->rank(), kSumBlock)),
+        share_(ShareOf(static_cast<uint64_t>(config.particles), ranks, kSumBlock)),
         workers_(threads),
         grid_(config.hex_radius_m),
         layout_(std::move(layout)),
         alphabet_(std::move(alphabet)),
         map_(layout_, workers_.num_slots(), static_cast<size_t>(share_.count), alphabet_.get()),
         model_(config, &grid_, &layout_, &map_, workers_.num_slots(), share_),
-        driver_(&model_, &workers_, OptionsAcross(config, ranks), config.threads,
+        driver_(&model_, &workers_, FilterOptionsOf(config, ranks), config.threads,
                 Pose2{config.start_x_m, config.start_y_m, config.start_heading_rad},
                 TimeOrder::kIncreasing) {
     // Blocks: the largest subtrees no wider than the store distance, below the first grid's
@@ -406,8 +404,7 @@ class Engine final : public FootSlam::Impl {
     WriteCheckpointHead(&w, kCheckpointKind, CheckpointFieldsOf(FootSlamConfigFields(), config_),
                         user_data);
     // Across ranks, each rank saves its own share: which share it is comes first.
-    w.Put<uint32_t>(static_cast<uint32_t>(rank()));
-    w.Put<uint32_t>(static_cast<uint32_t>(rank_count()));
+    WriteCheckpointRank(&w, ranks_);
     driver_.Save(&w);
     model_.Save(&w);
     map_.Save(&w);
@@ -418,17 +415,7 @@ class Engine final : public FootSlam::Impl {
   }
 
   Status Load(ByteReader* r) override {
-    uint32_t rank = 0, count = 0;
-    GROVE_RETURN_IF_ERROR(r->Get("rank", &rank));
-    GROVE_RETURN_IF_ERROR(r->Get("rank count", &count));
-    if (count == 0 || rank >= count) return r->Error("rank", "not one of the ranks");
-    if (rank != static_cast<uint32_t>(this->rank()) ||
-        count != static_cast<uint32_t>(rank_count())) {
-      return FailedPreconditionError(fmt::format(
-          "{}: the checkpoint holds rank {} of {}'s particles, and this is rank {} of {}: resume "
-          "on as many ranks as wrote it, each rank from its own file",
-          r->name(), rank, count, this->rank(), rank_count()));
-    }
+    GROVE_RETURN_IF_ERROR(ReadCheckpointRank(r, ranks_));
     GROVE_RETURN_IF_ERROR(driver_.Load(r));
     GROVE_RETURN_IF_ERROR(model_.Load(r, static_cast<uint64_t>(driver_.steps())));
     GROVE_RETURN_IF_ERROR(map_.Load(r, layout_.key_count()));
@@ -567,13 +554,6 @@ class Engine final : public FootSlam::Impl {
     return total;
   }
 
-  static FilterOptions OptionsAcross(const FootSlamConfig& config, Collective* ranks) {
-    FilterOptions o = FilterOptionsOf(config);
-    o.collective = ranks;
-    o.total_particles = static_cast<uint64_t>(config.particles);
-    return o;
-  }
-
   // Whether this rank holds particle `global` (a global index), and its index here.
   bool Holds(size_t global, size_t* local) const {
     if (global < share_.first || global - share_.first >= model_.size()) return false;
@@ -584,10 +564,7 @@ class Engine final : public FootSlam::Impl {
   // Every rank's `mine`, concatenated in rank order (on one process, `mine`).
   template <typename T>
   StatusOr<std::vector<T>> Gathered(std::vector<T> mine) const {
-    if (ranks_ == nullptr) return mine;
-    std::vector<T> all;
-    GROVE_RETURN_IF_ERROR(AllGatherValues<T>(*ranks_, mine, &all));
-    return all;
+    return GatherOverRanks(ranks_, std::move(mine));
   }
 
   // The particles' weights in fixed point (kWeightScale).
@@ -959,24 +936,8 @@ StatusOr<std::unique_ptr<FootSlam>> FootSlam::Resume(const FootSlamConfig& confi
                                                      std::string_view checkpoint,
                                                      const std::string& name,
                                                      std::string* user_data, Collective* ranks) {
-  if (ranks == nullptr || ranks->size() == 1)
-    return ResumeShare(config, checkpoint, name, user_data, nullptr);
-  StatusOr<std::unique_ptr<FootSlam>> slam =
-      ResumeShare(config, checkpoint, name, user_data, ranks);
-  GROVE_RETURN_IF_ERROR(AgreeStatus(*ranks, slam.status()));
-  // Every rank's file must be of the same step (files of one checkpoint, not of two).
-  const int64_t steps = (*slam)->steps();
-  std::vector<int64_t> all;
-  GROVE_RETURN_IF_ERROR(AllGatherValues<int64_t>(*ranks, std::span(&steps, 1), &all));
-  for (size_t q = 1; q < all.size(); ++q) {
-    if (all[q] != all[0]) {
-      return FailedPreconditionError(fmt::format(
-          "rank {}'s checkpoint was made after step {}, rank 0's after step {}: every rank must "
-          "resume from the files of one checkpoint",
-          q, all[q], all[0]));
-    }
-  }
-  return slam;
+  return ResumeOnRanks<FootSlam>(
+      ranks, [&](Collective* r) { return ResumeShare(config, checkpoint, name, user_data, r); });
 }
 
 StatusOr<std::unique_ptr<FootSlam>> FootSlam::ResumeShare(const FootSlamConfig& config,

@@ -7,16 +7,18 @@
 #include <cstring>
 #include <memory>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "engine/collective.h"
 #include "grove/footslam.h"
 #include "tests/api/test_walk.h"
+#include "tests/ranks_testing.h"
 
 namespace grove {
 namespace {
 
+using testing::OnRanks;
+using testing::SameBits;
 using testing::Step;
 using testing::Walk;
 
@@ -67,17 +69,6 @@ ReadOuts RunOne(const FootSlamConfig& config, const std::vector<Step>& steps, Co
   return ReadAll(**slam);
 }
 
-// Runs `body(rank, collective)` on each of `ranks` ranks as threads.
-template <typename F>
-void OnRanks(int ranks, F&& body) {
-  std::vector<std::unique_ptr<Collective>> endpoints = InProcessCollective::Create(ranks);
-  std::vector<std::thread> threads;
-  for (int r = 0; r < ranks; ++r) {
-    threads.emplace_back([&, r] { body(r, endpoints[static_cast<size_t>(r)].get()); });
-  }
-  for (std::thread& t : threads) t.join();
-}
-
 // Each rank's checkpoint after the first `cut` steps.
 std::vector<std::string> CheckpointsAfter(const FootSlamConfig& config,
                                           const std::vector<Step>& steps, size_t cut, int ranks) {
@@ -126,8 +117,6 @@ std::vector<ReadOuts> RunRanks(const FootSlamConfig& config, const std::vector<S
           [&](int r, Collective* c) { out[static_cast<size_t>(r)] = RunOne(config, steps, c); });
   return out;
 }
-
-bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof(a)) == 0; }
 
 void ExpectSamePaths(const std::vector<StampedPose>& a, const std::vector<StampedPose>& b,
                      const char* what) {

@@ -29,6 +29,27 @@ namespace {
 using grove::FootSlamConfig;
 namespace gt = grove::tools;
 
+// Under mpirun with more than one rank, one filter across the ranks: checks the configuration
+// for them (exit 2, one error line from rank 0, when it cannot run across that many), takes the
+// threads per rank from the rank's CPU set unless given and points the run at the ranks. -1 to
+// go on.
+template <typename Facade, typename Config>
+int AcrossRanks(gt::MpiWorld& world, Config* config, gt::RunOptions* run) {
+  if (!world.active() || world.size() == 1) return -1;
+  if (grove::Status s = Facade::CheckAcrossRanks(*config, world.size()); !s.ok()) {
+    return world.rank() == 0 ? gt::Fail(gt::kExitUsage, s.message()) : gt::kExitUsage;
+  }
+  if (config->threads == 0) config->threads = gt::UsableCpus();
+  run->ranks = &world;
+  return -1;
+}
+int AcrossRanks(gt::MpiWorld& world, FootSlamConfig* config, gt::RunOptions* run) {
+  return AcrossRanks<grove::FootSlam>(world, config, run);
+}
+int AcrossRanks(gt::MpiWorld& world, grove::FastSlamConfig* config, gt::RunOptions* run) {
+  return AcrossRanks<grove::FastSlam>(world, config, run);
+}
+
 int Main(int argc, char** argv) {
   CLI::App app{"grove: particle-filter SLAM with shared persistent maps"};
   app.set_version_flag(
@@ -325,13 +346,8 @@ int Main(int argc, char** argv) {
                                        {{steps_option, "--steps"}, {prior_option, "--prior-map"}});
     if (code >= 0) return code;
     gt::MpiWorld world;  // one rank unless started by mpirun
-    if (world.active() && world.size() > 1) {
-      // One filter across the ranks; threads per rank from the rank's CPU set unless given.
-      if (grove::Status s = grove::FootSlam::CheckAcrossRanks(config, world.size()); !s.ok()) {
-        return world.rank() == 0 ? gt::Fail(gt::kExitUsage, s.message()) : gt::kExitUsage;
-      }
-      if (config.threads == 0) config.threads = gt::UsableCpus();
-      run_options.run.ranks = &world;
+    if (const int refused = AcrossRanks(world, &config, &run_options.run); refused >= 0) {
+      return refused;
     }
     return gt::RunFootSlamCommand(config, run_options);
   }
@@ -369,6 +385,10 @@ int Main(int argc, char** argv) {
                                            {fs_truth, "--truth"},
                                            {fs_landmarks_truth, "--landmarks-truth"}});
     if (code >= 0) return code;
+    gt::MpiWorld world;  // one rank unless started by mpirun
+    if (const int refused = AcrossRanks(world, &config, &fs_run_options.run); refused >= 0) {
+      return refused;
+    }
     return gt::RunFastSlamCommand(config, fs_run_options);
   }
   if (*fs_park) {
@@ -376,6 +396,10 @@ int Main(int argc, char** argv) {
     const int code =
         fs_park_flags.Prepare(&config, &fs_park_options.run, {{fs_park_data, "--data"}});
     if (code >= 0) return code;
+    gt::MpiWorld world;  // one rank unless started by mpirun
+    if (const int refused = AcrossRanks(world, &config, &fs_park_options.run); refused >= 0) {
+      return refused;
+    }
     return gt::RunFastSlamCommand(config, fs_park_options);
   }
   if (*fs_mc) {

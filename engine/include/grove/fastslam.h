@@ -261,10 +261,23 @@ struct GROVE_EXPORT FastSlamSummary : FilterSummary {
   std::string BriefReport() const;
 };
 
+class Collective;
+
 class GROVE_EXPORT FastSlam {
  public:
   // Validates `config` and builds the engine; nothing is built when the config is invalid.
   static StatusOr<std::unique_ptr<FastSlam>> Create(const FastSlamConfig& config);
+  // One rank's engine of a filter whose config.particles are split over the ranks of `ranks`
+  // (engine/collective.h; null: one process, as Create(config)), as FootSlam's: every rank
+  // creates its engine with the same configuration and makes the same calls in the same order;
+  // Control, Scan and every read-out are collective and give every rank the whole filter's
+  // result, the same bits as one process. Checkpoint() saves this rank's share. Every rank needs
+  // at least one block of 4,096 particles (InvalidArgument). Summary()'s memory and phase
+  // figures are this rank's.
+  static StatusOr<std::unique_ptr<FastSlam>> Create(const FastSlamConfig& config,
+                                                    Collective* ranks);
+  // What Create(config, ranks) checks of a configuration for `ranks` ranks beyond Validate().
+  static Status CheckAcrossRanks(const FastSlamConfig& config, int ranks);
   virtual ~FastSlam();
 
   // A control (speed m/s, steering angle rad) from time t_s on: predicts from the last time to
@@ -307,11 +320,21 @@ class GROVE_EXPORT FastSlam {
                                                     std::string_view checkpoint,
                                                     const std::string& name,
                                                     std::string* user_data);
+  // Across ranks (collective: every rank calls it with its own file), as FootSlam's.
+  static StatusOr<std::unique_ptr<FastSlam>> Resume(const FastSlamConfig& config,
+                                                    std::string_view checkpoint,
+                                                    const std::string& name, std::string* user_data,
+                                                    Collective* ranks);
 
   class Impl;
 
  private:
   explicit FastSlam(std::unique_ptr<Impl> impl);
+  // Resume()'s work on one rank.
+  static StatusOr<std::unique_ptr<FastSlam>> ResumeShare(const FastSlamConfig& config,
+                                                         std::string_view checkpoint,
+                                                         const std::string& name,
+                                                         std::string* user_data, Collective* ranks);
   std::unique_ptr<Impl> impl_;
 };
 

@@ -51,6 +51,11 @@ struct GROVE_EXPORT FilterSummary {
   double resample_s = 0;     // drawing parents and gathering the new generation
   double release_s = 0;      // freeing the dead generation
   double bookkeeping_s = 0;  // weighted-mean pose per step
+  // Across ranks, this rank's: the particles and bytes it sent to other ranks (resamplings,
+  // island exchanges) and the seconds spent writing and reading them; 0 in one process.
+  int64_t sent_particles = 0;
+  int64_t sent_bytes = 0;
+  double migrate_s = 0;
   double filter_s() const {
     return advance_s + normalize_s + resample_s + release_s + bookkeeping_s;
   }
