@@ -437,79 +437,135 @@ class Engine final : public FootSlam::Impl {
  private:
   // Storage of diversity (config.store_distance_m): folds every block of the particles' maps
   // farther than the store distance from every particle into the stored map and the prior, and
-  // drops it from the particles' maps.
+  // drops it from the particles' maps. Across ranks (collective) the box, the blocks and the
+  // folds are every rank's, so every rank stores the same map, one process's bits.
   Status StoreFarBlocks() {
     const auto t0 = std::chrono::steady_clock::now();
     // The particles' bounding box: a block this far from it is this far from every particle.
     constexpr double kInf = std::numeric_limits<double>::infinity();
-    double lo_x = kInf, lo_y = kInf, hi_x = -kInf, hi_y = -kInf;
+    struct Box {
+      double lo_x = kInf, lo_y = kInf, hi_x = -kInf, hi_y = -kInf;
+    };
+    Box mine;
     for (size_t i = 0; i < model_.size(); ++i) {
-      lo_x = std::min(lo_x, model_.x(i));
-      hi_x = std::max(hi_x, model_.x(i));
-      lo_y = std::min(lo_y, model_.y(i));
-      hi_y = std::max(hi_y, model_.y(i));
+      mine.lo_x = std::min(mine.lo_x, model_.x(i));
+      mine.hi_x = std::max(mine.hi_x, model_.x(i));
+      mine.lo_y = std::min(mine.lo_y, model_.y(i));
+      mine.hi_y = std::max(mine.hi_y, model_.y(i));
     }
+    StatusOr<std::vector<Box>> boxes = Gathered(std::vector<Box>{mine});
+    if (!boxes.ok()) return boxes.status();
+    Box box;
+    for (const Box& b : *boxes) {
+      box.lo_x = std::min(box.lo_x, b.lo_x);
+      box.hi_x = std::max(box.hi_x, b.hi_x);
+      box.lo_y = std::min(box.lo_y, b.lo_y);
+      box.hi_y = std::max(box.hi_y, b.hi_y);
+    }
+    // The blocks any particle's map holds, in increasing order.
+    StatusOr<std::vector<uint64_t>> blocks = Gathered(map_.Blocks(store_level_));
+    if (!blocks.ok()) return blocks.status();
+    std::sort(blocks->begin(), blocks->end());
+    blocks->erase(std::unique(blocks->begin(), blocks->end()), blocks->end());
     // A block's box: its corner hexagons' centres, widened by a hexagon's width (the odd rows
     // are offset by half of one) and its circumradius.
     const int shift = layout_.log2_degree() * (store_level_ + 1);
     const double margin = (std::sqrt(3.0) + 1) * config_.hex_radius_m;
     std::vector<uint64_t> far;
-    for (uint64_t prefix : map_.Blocks(store_level_)) {
+    for (uint64_t prefix : *blocks) {
       const uint64_t first = prefix << shift;
       const uint64_t last = first | ((uint64_t{1} << shift) - 1);
       double x0, y0, x1, y1;
       grid_.Center(model_.HexOfKey(first), &x0, &y0);
       grid_.Center(model_.HexOfKey(last), &x1, &y1);
-      const double gap_x =
-          std::max({0.0, std::min(x0, x1) - margin - hi_x, lo_x - std::max(x0, x1) - margin});
-      const double gap_y =
-          std::max({0.0, std::min(y0, y1) - margin - hi_y, lo_y - std::max(y0, y1) - margin});
+      const double gap_x = std::max(
+          {0.0, std::min(x0, x1) - margin - box.hi_x, box.lo_x - std::max(x0, x1) - margin});
+      const double gap_y = std::max(
+          {0.0, std::min(y0, y1) - margin - box.hi_y, box.lo_y - std::max(y0, y1) - margin});
       if (std::hypot(gap_x, gap_y) > config_.store_distance_m) far.push_back(prefix);
     }
     if (!far.empty()) {
-      std::vector<uint64_t> weights = FixedWeights();
-      unsigned __int128 total = 0;
-      bool all_weighted = true;  // a weightless particle's counts would leave no trace
-      for (uint64_t w : weights) {
-        total += w;
-        all_weighted = all_weighted && w > 0;
-      }
-      for (uint64_t prefix : far)
-        GROVE_RETURN_IF_ERROR(StoreBlock(prefix, weights, total, all_weighted));
+      Status stored = StoreBlocks(far);
+      // A rank out of memory stops every rank.
+      if (ranks_ != nullptr) stored = AgreeStatus(*ranks_, stored);
+      GROVE_RETURN_IF_ERROR(stored);
       SelectPrior();
     }
     store_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return Status::Ok();
   }
 
-  // Folds one block: each hexagon's counters become their weighted mean over the particles,
-  // exact when every particle held the same counters there (counted in stored_blocks_exact_).
-  Status StoreBlock(uint64_t prefix, std::span<const uint64_t> weights, unsigned __int128 total,
-                    bool all_weighted) {
+  // Folds blocks `far` (increasing): each hexagon's counters become their weighted mean over the
+  // particles, exact when every particle held the same counters there (counted per block in
+  // stored_blocks_exact_). Across ranks each rank folds its particles and the folds are merged
+  // by integer sums, so every rank gets one process's values.
+  Status StoreBlocks(const std::vector<uint64_t>& far) {
+    // One hexagon's fold on one rank; no padding (the parts are sent as bytes).
     struct Fold {
-      std::array<unsigned __int128, 6> sum{};
-      unsigned __int128 weight = 0;
-      Htc first;
-      bool differs = false;
+      unsigned __int128 sum[6];
+      unsigned __int128 weight;
+      uint64_t key;
+      uint32_t first[6];  // the first counters folded
+      uint32_t block;     // its index in `far`
+      uint32_t differs;   // 1 when another particle's counters differ from `first`
+      uint32_t zero[2];
     };
-    std::map<uint64_t, Fold> folds;
-    map_.FoldBlock(store_level_, prefix, weights, [&](uint64_t key, const Htc& h, uint64_t w) {
-      auto [it, inserted] = folds.try_emplace(key);
-      Fold& f = it->second;
-      if (inserted) {
-        f.first = h;
-      } else if (!std::equal(h.c, h.c + 6, f.first.c)) {
-        f.differs = true;
-      }
-      for (int e = 0; e < 6; ++e) f.sum[e] += static_cast<unsigned __int128>(h.c[e]) * w;
-      f.weight += w;
+    static_assert(sizeof(Fold) == 160);
+    struct Weights {
+      unsigned __int128 total;
+      uint64_t all_weighted;  // a weightless particle's counts would leave no trace
+      uint64_t zero;
+    };
+    const std::vector<uint64_t> weights = FixedWeights();
+    Weights w{0, 1, 0};
+    for (uint64_t v : weights) {
+      w.total += v;
+      w.all_weighted = w.all_weighted && v > 0;
+    }
+    StatusOr<std::vector<Weights>> all_weights = Gathered(std::vector<Weights>{w});
+    if (!all_weights.ok()) return all_weights.status();
+    unsigned __int128 total = 0;
+    bool all_weighted = true;
+    for (const Weights& r : *all_weights) {
+      total += r.total;
+      all_weighted = all_weighted && r.all_weighted != 0;
+    }
+    std::vector<Fold> mine;
+    for (uint32_t b = 0; b < far.size(); ++b) {
+      std::map<uint64_t, Fold> folds;
+      map_.FoldBlock(store_level_, far[b], weights, [&](uint64_t key, const Htc& h, uint64_t wk) {
+        auto [it, inserted] = folds.try_emplace(key);
+        Fold& f = it->second;
+        if (inserted) {
+          f = Fold{{}, 0, key, {}, b, 0, {}};
+          std::copy(h.c, h.c + 6, f.first);
+        } else if (!std::equal(h.c, h.c + 6, f.first)) {
+          f.differs = 1;
+        }
+        for (int e = 0; e < 6; ++e) f.sum[e] += static_cast<unsigned __int128>(h.c[e]) * wk;
+        f.weight += wk;
+      });
+      for (const auto& [key, f] : folds) mine.push_back(f);
+    }
+    StatusOr<std::vector<Fold>> all = Gathered(std::move(mine));
+    if (!all.ok()) return all.status();
+    // Every rank's folds of a hexagon, in rank order, merged.
+    std::stable_sort(all->begin(), all->end(), [](const Fold& a, const Fold& b) {
+      return a.block != b.block ? a.block < b.block : a.key < b.key;
     });
-    bool exact = all_weighted;
     if (user_prior_.size() > 0 && combined_.size() == 0) combined_ = user_prior_;
-    for (const auto& [key, f] : folds) {
-      exact = exact && !f.differs && f.weight == total;
-      PriorHex& stored = stored_.FindOrInsert(key);
-      PriorHex* combined = combined_.size() > 0 ? &combined_.FindOrInsert(key) : nullptr;
+    std::vector<bool> exact(far.size(), all_weighted);
+    for (size_t i = 0; i < all->size();) {
+      Fold f = (*all)[i];
+      for (++i; i < all->size() && (*all)[i].block == f.block && (*all)[i].key == f.key; ++i) {
+        const Fold& g = (*all)[i];
+        for (int e = 0; e < 6; ++e) f.sum[e] += g.sum[e];
+        f.weight += g.weight;
+        if (g.differs || !std::equal(g.first, g.first + 6, f.first)) f.differs = 1;
+      }
+      if (f.differs || f.weight != total) exact[f.block] = false;
+      PriorHex& stored = stored_.FindOrInsert(f.key);
+      PriorHex* combined = combined_.size() > 0 ? &combined_.FindOrInsert(f.key) : nullptr;
       for (int e = 0; e < 6; ++e) {
         const double mean = MeanOf(f.sum[e], total);
         stored.edge[e] += mean;
@@ -518,11 +574,13 @@ class Engine final : public FootSlam::Impl {
       stored.total = EdgeSum(stored);
       if (combined != nullptr) combined->total = EdgeSum(*combined);
     }
-    if (!map_.DropBlock(store_level_, prefix, 0)) {
-      return ResourceExhaustedError("out of memory while dropping a stored map block");
+    for (size_t b = 0; b < far.size(); ++b) {
+      if (!map_.DropBlock(store_level_, far[b], 0)) {
+        return ResourceExhaustedError("out of memory while dropping a stored map block");
+      }
+      ++stored_blocks_;
+      stored_blocks_exact_ += exact[b] ? 1 : 0;
     }
-    ++stored_blocks_;
-    stored_blocks_exact_ += exact ? 1 : 0;
     return Status::Ok();
   }
 
@@ -833,12 +891,6 @@ FootSlam::FootSlam(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 FootSlam::~FootSlam() = default;
 
 Status FootSlam::CheckAcrossRanks(const FootSlamConfig& config, int ranks) {
-  if (ranks > 1 && config.store_distance_m > 0) {
-    return InvalidArgumentError(fmt::format(
-        "store_distance_m = {}: storage of diversity does not run across ranks yet; set it to 0, "
-        "or run on one rank",
-        config.store_distance_m));
-  }
   GROVE_RETURN_IF_ERROR(
       CheckIslands(static_cast<uint64_t>(config.particles), config.islands, ranks, kSumBlock));
   return CheckRankShares(static_cast<uint64_t>(config.particles), ranks, kSumBlock);

@@ -1,7 +1,7 @@
 // The FootSLAM facade across ranks (threads of this process, joined by InProcessCollective): every
 // read-out of a filter split over 2 and 3 ranks is, on every rank, bit for bit what one process
-// gives, and so is a run resumed from each rank's checkpoint; what does not run across ranks yet
-// is refused with a clear error.
+// gives, with storage of diversity too, and so is a run resumed from each rank's checkpoint; too
+// few particles for the ranks is refused with a clear error.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -25,10 +25,10 @@ using testing::Walk;
 struct ReadOuts {
   Status status;
   std::vector<StampedPose> heaviest, mean, smoothed;
-  std::vector<HexCounts> cumulative, best;
+  std::vector<HexCounts> cumulative, best, stored;
   Pose2 heaviest_pose;
   double mean_scale = 0, mean_heading_error = 0;
-  int64_t particles = 0, resamplings = 0;
+  int64_t particles = 0, resamplings = 0, stored_blocks = 0, stored_blocks_exact = 0;
 };
 
 template <typename T>
@@ -47,11 +47,14 @@ ReadOuts ReadAll(FootSlam& s) {
   if (r.status = Take(s.SmoothedTrajectory(), &r.smoothed); !r.status.ok()) return r;
   if (r.status = Take(s.CumulativeMap(), &r.cumulative); !r.status.ok()) return r;
   if (r.status = Take(s.HeaviestMap(), &r.best); !r.status.ok()) return r;
+  if (r.status = Take(s.StoredMap(), &r.stored); !r.status.ok()) return r;
   const FootSlamSummary summary = s.Summary();
   r.mean_scale = summary.mean_scale;
   r.mean_heading_error = summary.mean_heading_error_rad;
   r.particles = summary.particles;
   r.resamplings = summary.resamplings;
+  r.stored_blocks = summary.stored_blocks;
+  r.stored_blocks_exact = summary.stored_blocks_exact;
   return r;
 }
 
@@ -184,7 +187,7 @@ TEST(FootSlamRanksTest, EveryReadOutIsOneProcessesOnEveryRank) {
   }
 }
 
-TEST(FootSlamRanksTest, WhatDoesNotRunAcrossRanksIsRefused) {
+TEST(FootSlamRanksTest, TooFewParticlesForTheRanksAreRefused) {
   const std::vector<Step> steps = Walk(5, 5);
   FootSlamConfig config = RanksConfig();
   config.particles = 4096;  // one block: not enough for 2 ranks
@@ -193,12 +196,37 @@ TEST(FootSlamRanksTest, WhatDoesNotRunAcrossRanksIsRefused) {
     EXPECT_NE(r.status.message().find("particles = 4096: across 2 ranks"), std::string::npos)
         << r.status.ToString();
   }
-  config = RanksConfig();
-  config.store_distance_m = 30;
-  for (const ReadOuts& r : RunRanks(config, steps, 2)) {
-    EXPECT_EQ(r.status.code(), StatusCode::kInvalidArgument);
-    EXPECT_NE(r.status.message().find("store_distance_m = 30"), std::string::npos)
-        << r.status.ToString();
+}
+
+// Storage of diversity across ranks: the ranks fold the far blocks of every rank's particles
+// into one stored map, one process's to the bit.
+TEST(FootSlamRanksTest, StorageOfDiversityIsOneProcessesOnEveryRank) {
+  // Out 42 m and back: the start's area is stored on the way out.
+  std::vector<Step> steps;
+  for (int k = 1; k <= 120; ++k) steps.push_back({0.5 * k, k <= 60 ? 0.7 : -0.7, 0.01});
+  for (int degree : {16, 4}) {
+    FootSlamConfig config = RanksConfig();
+    config.degree = degree;
+    config.alphabet = degree == 16 ? 5 : 0;
+    config.store_distance_m = 10;
+    SCOPED_TRACE(::testing::Message() << "degree " << degree);
+    const ReadOuts one = RunOne(config, steps, nullptr);
+    ASSERT_TRUE(one.status.ok()) << one.status.ToString();
+    ASSERT_GT(one.stored_blocks, 0);
+    ASSERT_FALSE(one.stored.empty());
+    for (int ranks : {2, 3}) {
+      SCOPED_TRACE(::testing::Message() << ranks << " ranks");
+      const std::vector<ReadOuts> all = RunRanks(config, steps, ranks);
+      for (const ReadOuts& got : all) {
+        ASSERT_TRUE(got.status.ok()) << got.status.ToString();
+        ExpectSameMaps(one.stored, got.stored, "stored map");
+        ExpectSameMaps(one.cumulative, got.cumulative, "cumulative map");
+        ExpectSameMaps(one.best, got.best, "heaviest map");
+        ExpectSamePaths(one.heaviest, got.heaviest, "heaviest path");
+        EXPECT_EQ(got.stored_blocks, one.stored_blocks);
+        EXPECT_EQ(got.stored_blocks_exact, one.stored_blocks_exact);
+      }
+    }
   }
 }
 

@@ -1,7 +1,7 @@
 #!/bin/sh
 # `grove fastslam run` as one filter across MPI ranks: the outputs rank 0 writes (the mean and
 # heaviest paths, the heaviest particle's landmarks, the images) are byte-identical to one
-# process's for 2 ranks at 1 and 2 threads and for 3 ranks (oversubscribed on any machine), for
+# process's for 2 ranks at 1 and 2 threads and for 4 ranks (oversubscribed on any machine), for
 # FastSLAM 2.0 under unknown association and for DE-SRCD-FastSLAM, whose differential evolution
 # draws from every rank's poses; so are those of a run resumed from a checkpoint per rank. Too
 # few particles for the ranks is refused on every rank.
@@ -27,9 +27,9 @@ for case in "fastslam2 30" "de_srcd 6"; do
   set -- $case
   filter=$1
   args="--controls $work/controls$2.csv --observations $work/observations$2.csv --no-progress
-    --particles 8200 --filter $filter --association ml"
+    --particles 12300 --filter $filter --association ml"
   "$grove" fastslam run $args --threads 2 --out "$work/$filter" 2>/dev/null
-  for run in "2 1" "2 2" "3 1"; do
+  for run in "2 1" "2 2" "4 1"; do
     set -- $run
     dir="$work/$filter-np$1t$2"
     mpi -np "$1" "$grove" fastslam run $args --threads "$2" --out "$dir" 2>"$work/err" ||
@@ -41,9 +41,9 @@ for case in "fastslam2 30" "de_srcd 6"; do
     echo "ok: $filter -np $1, $2 threads per rank: the outputs of one process"
   done
 done
-# Checkpoints: each rank writes its own file every 300 input rows of the first 15 s; resumed on as many ranks with
-# the whole input, the run gives the outputs of one uninterrupted process.
-args="--no-progress --particles 8200 --filter fastslam2 --association ml"
+# Checkpoints: each rank writes its own file every 300 input rows of the first 15 s; resumed on
+# as many ranks with the whole input, the run gives the outputs of one uninterrupted process.
+args="--no-progress --particles 12300 --filter fastslam2 --association ml"
 mpi -np 2 "$grove" fastslam run $args --controls "$work/controls15.csv" \
   --observations "$work/observations15.csv" --checkpoint-every 300 \
   --checkpoint "$work/ck/run.grove" --out "$work/part" 2>"$work/err" ||

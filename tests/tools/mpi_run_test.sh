@@ -2,9 +2,10 @@
 # `grove footslam run` as one filter across MPI ranks: the outputs rank 0 writes (maps, the
 # heaviest, mean and smoothed paths, the images) are byte-identical to one process's for 2 ranks
 # at 1 and 2 threads and for 4 ranks (oversubscribed on any machine), and so are island mode's on
-# 1, 2 and 4 ranks, and so are those of a run resumed from a checkpoint per rank. Ranks that read
-# different steps, a resume on another rank count, too few particles for the ranks and islands
-# that do not divide among them are refused on every rank.
+# 1, 2 and 4 ranks, and so are storage of diversity's on 2 ranks and those of a run resumed from
+# a checkpoint per rank. Ranks that read different steps, a resume on another rank count, too
+# few particles for the ranks and islands that do not divide among them are refused on every
+# rank.
 # Usage: mpi_run_test.sh GROVE_BINARY MPIEXEC BUNDLED_STEPS_CSV
 set -eu
 grove=$1
@@ -46,6 +47,16 @@ for np in 2 4; do
   done
   echo "ok: 4 islands on -np $np: the outputs of one process"
 done
+# Storage of diversity: the ranks fold every rank's far blocks into one stored map.
+stored="$args --store-distance-m 10"
+"$grove" footslam run $stored --threads 2 --out "$work/stored" 2>/dev/null
+[ -s "$work/stored/stored_map.csv" ] || { echo "FAIL: nothing was stored"; fail=1; }
+mpi -np 2 "$grove" footslam run $stored --threads 1 --out "$work/stored2" 2>"$work/err" ||
+  { echo "FAIL: storage -np 2: exit $?"; cat "$work/err"; fail=1; }
+for f in $outputs stored_map.csv; do
+  cmp -s "$work/stored/$f" "$work/stored2/$f" || { echo "FAIL: storage -np 2: $f differs"; fail=1; }
+done
+echo "ok: storage of diversity on -np 2: the outputs of one process"
 # Checkpoints: each rank writes its own file every 100 steps of the first 200; resumed on as
 # many ranks with the whole walk, the run gives the outputs of one uninterrupted process.
 head -n 201 "$work/steps.csv" >"$work/first200.csv"

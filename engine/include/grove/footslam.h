@@ -215,9 +215,9 @@ class GROVE_EXPORT FootSlam {
   // with the same configuration and makes the same calls in the same order: Step, and every
   // read-out, is collective, and gives every rank the whole filter's result, the same bits as
   // one process. Checkpoint() saves this rank's share (Resume with ranks reads it back).
-  // Storage of diversity (store_distance_m > 0) does not run across ranks yet (InvalidArgument);
-  // every rank needs at least one block of 4,096 particles (InvalidArgument). Summary()'s memory
-  // and phase figures are this rank's.
+  // Storage of diversity folds every rank's far blocks into one stored map that every rank
+  // holds. Every rank needs at least one block of 4,096 particles (InvalidArgument).
+  // Summary()'s memory and phase figures are this rank's.
   static StatusOr<std::unique_ptr<FootSlam>> Create(const FootSlamConfig& config,
                                                     Collective* ranks);
   // What Create(config, ranks) checks of a configuration for `ranks` ranks beyond Validate():
