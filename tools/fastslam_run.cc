@@ -236,8 +236,10 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
         FastSlamInputReader::Open(options_.controls_path, options_.observations_path);
     if (!reader.ok()) return reader.status();
     if (!reader->has_ids() && config_.association == FastSlamAssociation::kKnown) {
-      std::fprintf(stderr, "%s has no id column: unknown association (association = ml)\n",
-                   options_.observations_path.c_str());
+      if (ranks_ == nullptr || ranks_->rank() == 0) {  // one line, not one per rank
+        std::fprintf(stderr, "%s has no id column: unknown association (association = ml)\n",
+                     options_.observations_path.c_str());
+      }
       config_.association = FastSlamAssociation::kMaximumLikelihood;
     }
     source_ = std::make_unique<FastSlamInputReader>(std::move(reader).value());
