@@ -212,6 +212,27 @@ std::string GpsErrorCsv(const GpsErrors& e) {
   return out;
 }
 
+// A filter's name for a chart's title.
+const char* FilterTitle(FastSlamFilter filter) {
+  switch (filter) {
+    case FastSlamFilter::kFastSlam1:
+      return "FastSLAM 1.0";
+    case FastSlamFilter::kFastSlam2:
+      return "FastSLAM 2.0";
+    case FastSlamFilter::kUnscented:
+      return "U-FastSLAM";
+    case FastSlamFilter::kSrcd:
+      return "SRCD-FastSLAM";
+    case FastSlamFilter::kSrcdAided:
+      return "SRCD-aided FastSLAM";
+    case FastSlamFilter::kSrcdParticle:
+      return "SRCD-PF";
+    case FastSlamFilter::kDeSrcd:
+      return "DE-SRCD-FastSLAM";
+  }
+  return FastSlamFilterName(filter);
+}
+
 class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
  public:
   FastSlamJob(const FastSlamConfig& config, const FastSlamRunOptions& options)
@@ -347,8 +368,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
       image.landmarks.push_back({l.x_m, l.y_m, l.sxx, l.sxy, l.syy});
     }
     for (const auto& [id, l] : landmarks_truth_) image.landmarks_truth.push_back({l.x_m, l.y_m});
-    const char* filter =
-        config_.filter == FastSlamFilter::kFastSlam1 ? "FastSLAM 1.0" : "FastSLAM 2.0";
+    const char* filter = FilterTitle(config_.filter);
     image.title = fmt::format("{}, {} particles: heaviest particle's path and landmarks", filter,
                               config_.particles);
     StatusOr<GpsErrors> gps_mean = InvalidArgumentError("no GPS"), gps_heaviest = gps_mean;
