@@ -34,7 +34,7 @@ const BaileySimulation& Simulation() {
   }();
   return sim;
 }
-constexpr size_t kControls = 160;
+constexpr size_t kControls = 120;
 
 // Every read-out as numbers, and the summary's counts.
 struct ReadOuts {
@@ -154,19 +154,18 @@ TEST_P(AcrossRanks, TwoRanksGiveOneProcessesBits) {
   for (size_t r = 0; r < two.size(); ++r) ExpectSame(one, two[r], "rank " + std::to_string(r));
 }
 
-// Balanced shares on 3 ranks (one block each), and each rank's checkpoint resumed.
+// 3 ranks (two blocks and 8 particles), and each rank's checkpoint resumed.
 TEST(FastSlamAcrossRanks, ThreeRanksAndTheirCheckpoints) {
   for (FastSlamFilter filter : {FastSlamFilter::kFastSlam2, FastSlamFilter::kDeSrcd}) {
-    const FastSlamConfig config =
-        ConfigOf(filter, FastSlamAssociation::kMaximumLikelihood, 3 * 4096);
+    const FastSlamConfig config = ConfigOf(filter, FastSlamAssociation::kMaximumLikelihood, 8200);
     const std::string name = FastSlamFilterName(filter);
     const ReadOuts one = Drive(config, nullptr);
     const std::vector<ReadOuts> three = RunRanks(config, 3);
     for (size_t r = 0; r < three.size(); ++r) {
       ExpectSame(one, three[r], name + " rank " + std::to_string(r));
     }
-    // Checkpoints after 80 controls, resumed on as many ranks.
-    constexpr size_t kCut = 80;
+    // Checkpoints after 60 controls, resumed on as many ranks.
+    constexpr size_t kCut = 60;
     std::vector<std::string> files(3);
     OnRanks(3, [&](int r, Collective* c) {
       StatusOr<std::unique_ptr<FastSlam>> slam = FastSlam::Create(config, c);

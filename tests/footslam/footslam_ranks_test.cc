@@ -209,6 +209,7 @@ TEST(FootSlamRanksTest, StorageOfDiversityIsOneProcessesOnEveryRank) {
     config.degree = degree;
     config.alphabet = degree == 16 ? 5 : 0;
     config.store_distance_m = 10;
+    config.particles = 8200;  // 2 blocks and a part
     SCOPED_TRACE(::testing::Message() << "degree " << degree);
     const ReadOuts one = RunOne(config, steps, nullptr);
     ASSERT_TRUE(one.status.ok()) << one.status.ToString();
