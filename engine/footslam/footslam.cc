@@ -549,8 +549,9 @@ class Engine final : public FootSlam::Impl {
     }
     StatusOr<std::vector<Fold>> all = Gathered(std::move(mine));
     if (!all.ok()) return all.status();
-    // Every rank's folds of a hexagon, in rank order, merged.
-    std::stable_sort(all->begin(), all->end(), [](const Fold& a, const Fold& b) {
+    // Every rank's folds of a hexagon, merged (integer sums, and whether any counters differ:
+    // the same in any order).
+    std::sort(all->begin(), all->end(), [](const Fold& a, const Fold& b) {
       return a.block != b.block ? a.block < b.block : a.key < b.key;
     });
     if (user_prior_.size() > 0 && combined_.size() == 0) combined_ = user_prior_;
