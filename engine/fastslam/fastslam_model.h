@@ -208,9 +208,6 @@ class FastSlamModel {
   }
 
   size_t size() const { return n_; }
-  // The filter's index of particle 0 here, and the filter's particle count.
-  uint64_t first() const { return first_; }
-  uint64_t total() const { return total_; }
   const FilterTraits& traits() const { return traits_; }
 
   // The pose covariance every particle starts with and, for the sigma-point pose steps, returns

@@ -122,9 +122,6 @@ class FootSlam::Impl {
   // Replaces the state of a freshly created engine with the rest of a checkpoint body.
   virtual Status Load(ByteReader* r) = 0;
   virtual Status CheckInvariants() const = 0;
-  // This engine's rank and the ranks of its filter (0 of 1 alone).
-  virtual int rank() const = 0;
-  virtual int rank_count() const = 0;
 };
 
 namespace {
@@ -430,9 +427,6 @@ class Engine final : public FootSlam::Impl {
   }
 
   Status CheckInvariants() const override { return model_.CheckCounts(); }
-
-  int rank() const override { return ranks_ == nullptr ? 0 : ranks_->rank(); }
-  int rank_count() const override { return ranks_ == nullptr ? 1 : ranks_->size(); }
 
  private:
   // Storage of diversity (config.store_distance_m): folds every block of the particles' maps
