@@ -177,32 +177,29 @@ class PersistentTrie {
     if (*root == nullptr && need > height_) RaiseTopHeight(need);
     Node* cur = *root;
     Node** link = root;
+    // A copy counts every child but its path child: that one is copied next (what lies below a
+    // shared node is shared) and the copy links the new node instead. `held`, the first node
+    // copied, keeps the reference our link to it had until the whole path is copied: while it
+    // lives, every old node below it on the path lives and, shared by it, is changed in place by
+    // no other version.
+    Node* held = nullptr;
     for (int level = cur == nullptr ? need - 1 : cur->level; level > 0; --level) {
       int d = Digit(key, level);
       Inner* n;
       if (cur == nullptr) {
         n = NewInner(slot, level);
-        if (n == nullptr) return false;  // *link is still nullptr: the contents are unchanged
-      } else if (cur->rc.unique()) {
+        if (n == nullptr) return Abandon(held, cur, slot);
+      } else if (held == nullptr && cur->rc.unique()) {
         n = static_cast<Inner*>(cur);
       } else {
-        // Shared: copy it; every child gains the copy as a parent. The path child is counted
-        // too: once `cur` loses our reference another version may own it alone and change it
-        // in place, so the copy must not lean on `cur`'s link.
         Inner* old = static_cast<Inner*>(cur);
         n = NewInner(slot, level);
-        if (n == nullptr) return false;  // *link still holds our reference to `old`
+        if (n == nullptr) return Abandon(held, cur, slot);
         std::memcpy(n->child, old->child, sizeof(n->child));
-        for (Node* c : old->child) {
-          if (c != nullptr) c->rc.Acquire();
+        for (int i = 0; i < kDegree; ++i) {
+          if (i != d && old->child[i] != nullptr) old->child[i]->rc.Acquire();
         }
-        if (old->rc.Release()) {
-          // Every other owner dropped `old` meanwhile: its references were the ones just added.
-          for (Node* c : old->child) {
-            if (c != nullptr) c->rc.Release();
-          }
-          FreeNode(old, slot);
-        }
+        if (held == nullptr) held = old;
       }
       *link = n;
       link = &n->child[d];
@@ -212,17 +209,18 @@ class PersistentTrie {
     Bottom* b;
     if (cur == nullptr) {
       b = NewBottom(slot);
-      if (b == nullptr) return false;
-    } else if (cur->rc.unique()) {
+      if (b == nullptr) return Abandon(held, cur, slot);
+    } else if (held == nullptr && cur->rc.unique()) {
       b = static_cast<Bottom*>(cur);
     } else {
       Bottom* old = static_cast<Bottom*>(cur);
       b = NewBottom(slot);
-      if (b == nullptr) return false;
+      if (b == nullptr) return Abandon(held, cur, slot);
       std::memcpy(b->present, old->present, sizeof(b->present));
       std::memcpy(static_cast<void*>(b->leaf), old->leaf, sizeof(b->leaf));
-      if (old->rc.Release()) FreeNode(old, slot);
+      if (held == nullptr) held = old;
     }
+    Release(held, slot);
     bool existed = b->Has(d);
     if (!existed) {
       b->leaf[d] = Leaf{};
@@ -813,6 +811,17 @@ class PersistentTrie {
       inner_pool_.Free(n, slot);
     }
   }
+  // Update() could not get a node for `cur`'s place (the path child of the last copy when
+  // `held`, the first node copied, is set; that link is then not counted): counts the link and
+  // drops `held`, so the version holds the same contents. Returns false.
+  bool Abandon(Node* held, Node* cur, int slot) {
+    if (held != nullptr) {
+      if (cur != nullptr) cur->rc.Acquire();
+      Release(held, slot);
+    }
+    return false;
+  }
+
   // Frees `dead` (its count has reached zero) and every node only it reached. Iterative, with a
   // fixed stack: allocates nothing.
   // A count of references to one node, to be dropped together.

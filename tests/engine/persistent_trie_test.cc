@@ -707,5 +707,37 @@ TEST(PersistentTrieFaultTest, AFailedAllocationLeavesEveryVersionIntactAndLeaksN
   }
 }
 
+// A shared path whose copy runs out of memory at each of its levels in turn: the first copy
+// keeps the old path alive until the whole path is copied and the copies do not count their path
+// children, so a copy abandoned part way must count the link it left and drop the old path.
+TEST(PersistentTrieFaultTest, ACopyAbandonedAtAnyLevelOfASharedPathKeepsEveryCount) {
+  using Trie = PersistentTrie<Value, 2>;
+  for (int64_t fail_after = 0; fail_after <= 8; ++fail_after) {
+    SCOPED_TRACE(testing::Message() << "fail after " << fail_after);
+    Trie trie(8, 1);
+    std::vector<Trie::Root> roots(2, nullptr);
+    std::map<uint64_t, uint64_t> model;
+    for (uint64_t k = 0; k < 65536; k += 611) {
+      ASSERT_TRUE(trie.Update(&roots[0], k, 0, [&](Value& x, bool) { x.v = k; }));
+      model[k] = k;
+    }
+    roots[1] = Trie::Share(roots[0]);
+    FailAllocationsAfter(fail_after);
+    const bool updated = trie.Update(&roots[1], 611 * 7, 0, [](Value& x, bool) { x.v = 1; });
+    FailAllocationsAfter(-1);
+    EXPECT_EQ(updated, fail_after == 8);  // a path of 8 nodes
+    std::map<uint64_t, uint64_t> changed = model;
+    if (updated) changed[611 * 7] = 1;
+    for (int v = 0; v < 2; ++v) {
+      std::map<uint64_t, uint64_t> seen;
+      trie.ForEach(roots[v], [&](uint64_t k, const Value& x) { seen[k] = x.v; });
+      EXPECT_EQ(seen, v == 0 ? model : changed) << "version " << v;
+    }
+    EXPECT_TRUE(trie.CheckCounts(roots).ok()) << trie.CheckCounts(roots).ToString();
+    for (auto* root : roots) trie.Release(root, 0);
+    EXPECT_EQ(trie.live_nodes(), 0);
+  }
+}
+
 }  // namespace
 }  // namespace grove
