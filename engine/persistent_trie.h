@@ -20,7 +20,8 @@
 //
 // Invariants:
 //   1. A node's reference count equals the number of parent links plus version roots pointing
-//      at it (CheckCounts() walks it).
+//      at it (CheckCounts() walks it), outside an Update() in progress: a copied path keeps one
+//      reference of its own until the update ends (see Update()).
 //   2. A node reachable from a version is never changed unless its count is 1 and every node on
 //      the path to it is uniquely owned by that version.
 //   3. A node lives at one position (level and key prefix) only.
