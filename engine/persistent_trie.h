@@ -823,8 +823,6 @@ class PersistentTrie {
     return false;
   }
 
-  // Frees `dead` (its count has reached zero) and every node only it reached. Iterative, with a
-  // fixed stack: allocates nothing.
   // A count of references to one node, to be dropped together.
   struct Drop {
     Node* node = nullptr;
@@ -835,6 +833,8 @@ class PersistentTrie {
     if (d.node->rc.Release(d.count)) FreeDead(d.node, slot);
   }
 
+  // Frees `dead` (its count has reached zero) and every node only it reached. Iterative, with a
+  // fixed stack: allocates nothing.
   void FreeDead(Node* dead, int slot) {
     std::array<Node*, (kDegree - 1) * kMaxHeight + 1> stack;
     int top = 0;
