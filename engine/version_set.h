@@ -45,6 +45,13 @@ class VersionSet {
   Root& operator[](size_t i) { return roots_[i]; }
   Root operator[](size_t i) const { return roots_[i]; }
   std::span<Root const> roots() const { return roots_; }
+  // Version i becomes a reference to version `from`'s, dropping its own (a particle whose update
+  // would repeat another's takes that one's result instead).
+  void Adopt(size_t i, size_t from, int slot) {
+    Root old = roots_[i];
+    roots_[i] = Store::Share(roots_[from]);
+    store_->Release(old, slot);
+  }
   // Every version, to be replaced in place by a store's update of many versions at once (each
   // entry's reference moves to its new root). REQUIRES: no dead generation (after ReleaseDead).
   std::span<Root> mutable_roots() {

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "concurrency/worker_pool.h"
@@ -69,6 +70,15 @@ class AlphabetHTreeMap {
     }
     *out = before;
     return ok;
+  }
+
+  // What identifies particle i's map: two particles with equal versions hold the same map.
+  using Version = std::pair<const typename SymbolTrie::Node*, const typename FullTrie::Node*>;
+  Version version(size_t i) const { return {symbol_roots_[i], full_roots_[i]}; }
+  // Particle i's map becomes particle `from`'s (shared, as resampling shares it).
+  void Share(size_t i, size_t from, int slot) {
+    symbol_roots_.Adopt(i, from, slot);
+    full_roots_.Adopt(i, from, slot);
   }
 
   // Starts loading particle i's root node into the cache.

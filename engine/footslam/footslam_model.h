@@ -7,6 +7,11 @@
 //   2. for each hexagon edge the step crosses, in order: weight by the counters before the
 //      crossing, then count it (steps 2c and 2e);
 //   3. append the pose to the particle's history.
+// Copies of one parent cross the same edges often (a step crosses about one edge, and copies
+// differ only by this step's noise): a particle whose map is the previous particle's at the
+// start of the step and whose crossings repeat that particle's, in order, takes that particle's
+// new map and weight instead of copying the same path again (its crossings are held back until
+// they differ). Same contents, same weights: only the sharing changes.
 #ifndef GROVE_ENGINE_FOOTSLAM_FOOTSLAM_MODEL_H_
 #define GROVE_ENGINE_FOOTSLAM_FOOTSLAM_MODEL_H_
 
@@ -142,6 +147,12 @@ class FootSlamModel {
     for (int k = 0; k < kMaxBatchNormals; ++k) noise[k] = noise_block[k];
     double block_length[kNoiseBlock], block_heading[kNoiseBlock];
     double block_sin[kNoiseBlock], block_cos[kNoiseBlock];
+    // The previous particle's map at the start of the step, its crossings (count -1: not to be
+    // followed) and its weight.
+    typename Map::Version prev_version{};
+    Crossed prev_crossed[kMaxHeldCrossings], crossed[kMaxHeldCrossings];
+    int prev_count = -1;
+    double prev_lw = 0;
     for (size_t i = begin; i < end; ++i) {
       if (i + kPrefetchAhead < end) {
         if (levels == 0) map_->Prefetch(i + kPrefetchAhead);
@@ -195,6 +206,29 @@ class FootSlamModel {
       }
       double lw = 0;
       bool outside = false, too_long = false, no_memory = false;
+      // Counts a crossing in particle i's map and weights it.
+      auto cross = [&](uint64_t key, int edge) {
+        EdgeCounts before;
+        if (!map_->Cross(i, key, edge, slot, &before)) {
+          no_memory = true;
+          return false;
+        }
+        const PriorHex* prior = prior_ == nullptr ? nullptr : prior_->Find(key);
+        if (prior == nullptr) {
+          lw += LogEdge(before.edge) - LogTotal(before.total);
+        } else {
+          // The counts first, then a, as LogEdge() and LogTotal() add them: with a prior that
+          // holds whole counts this is bit for bit the weight of a map holding their sum.
+          lw += std::log(before.edge + prior->edge[edge] + config_.prior_count) + log_edge_bias_ -
+                std::log(before.total + prior->total + 6 * config_.prior_count);
+        }
+        return true;
+      };
+      // While `holding`, the crossings so far repeat the previous particle's and are not yet
+      // counted; at the first that differs they are counted, in order.
+      const typename Map::Version version = map_->version(i);
+      bool holding = prev_count >= 0 && version == prev_version;
+      int count = 0;  // crossings recorded in `crossed`; -1 past kMaxHeldCrossings
       // A particle that leaves the grid, or a step that crosses more hexagons than a straight
       // line across the first grid can, ends the run: stop walking there, so a step of any
       // length costs at most a few times the first grid's width.
@@ -209,22 +243,32 @@ class FootSlamModel {
           too_long = true;
           return false;
         }
-        EdgeCounts before;
-        if (!map_->Cross(i, key, c.edge, slot, &before)) {
-          no_memory = true;
-          return false;
+        const Crossed now{key, c.edge};
+        if (holding) {
+          if (count < prev_count && now == prev_crossed[count]) {
+            crossed[count++] = now;
+            return true;
+          }
+          holding = false;
+          for (int k = 0; k < count; ++k) {
+            if (!cross(crossed[k].key, crossed[k].edge)) return false;
+          }
         }
-        const PriorHex* prior = prior_ == nullptr ? nullptr : prior_->Find(key);
-        if (prior == nullptr) {
-          lw += LogEdge(before.edge) - LogTotal(before.total);
+        if (count >= 0 && count < kMaxHeldCrossings) {
+          crossed[count++] = now;
         } else {
-          // The counts first, then a, as LogEdge() and LogTotal() add them: with a prior that
-          // holds whole counts this is bit for bit the weight of a map holding their sum.
-          lw += std::log(before.edge + prior->edge[c.edge] + config_.prior_count) + log_edge_bias_ -
-                std::log(before.total + prior->total + 6 * config_.prior_count);
+          count = -1;
         }
-        return true;
+        return cross(key, c.edge);
       });
+      if (holding && !outside && !too_long) {
+        if (count == prev_count) {  // the same crossings: the same new map and weight
+          if (count > 0) map_->Share(i, i - 1, slot);
+          lw = prev_lw;
+        } else {  // a prefix of them
+          for (int k = 0; k < count && !no_memory; ++k) cross(crossed[k].key, crossed[k].edge);
+        }
+      }
       if (no_memory) return NoMemory(first_ + i, "map");
       if (too_long) {
         return OutOfRangeError(fmt::format(
@@ -253,6 +297,10 @@ class FootSlamModel {
       heading_unit_[i] = {cos_heading, sin_heading};
       hex_[i] = end_hex;
       key_[i] = end_key;
+      prev_version = version;
+      std::copy(crossed, crossed + std::max(count, 0), prev_crossed);
+      prev_count = count;
+      prev_lw = lw;
     }
     return Status::Ok();
   }
@@ -436,6 +484,13 @@ class FootSlamModel {
     return Status::Ok();
   }
 
+  // A crossing as a follower compares it: the hexagon's key and the edge.
+  struct Crossed {
+    uint64_t key;
+    int edge;
+    bool operator==(const Crossed&) const = default;
+  };
+
   static Status NoMemory(size_t i, const char* what) {
     return ResourceExhaustedError(fmt::format("out of memory for particle {}'s {}", i, what));
   }
@@ -453,6 +508,7 @@ class FootSlamModel {
   static constexpr int kMaxPathLevels = 8;
   static constexpr uint32_t kLogTable = 256;
   static constexpr size_t kNoiseBlock = 256;
+  static constexpr int kMaxHeldCrossings = 8;  // a particle with more is not followed
   int motion_draws_ = 0;        // normal deviates per particle-step: one per noise term in use
   int64_t max_step_crossings_;  // 8 x grid_size: more than a straight line across the first grid
   double log_edge_bias_ = 0;

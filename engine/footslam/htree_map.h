@@ -34,6 +34,12 @@ class HTreeMap {
     });
   }
 
+  // What identifies particle i's map: two particles with equal versions hold the same map.
+  using Version = const typename Trie::Node*;
+  Version version(size_t i) const { return roots_[i]; }
+  // Particle i's map becomes particle `from`'s (shared, as resampling shares it).
+  void Share(size_t i, size_t from, int slot) { roots_.Adopt(i, from, slot); }
+
   // Starts loading particle i's root node into the cache.
   void Prefetch(size_t i) const { __builtin_prefetch(roots_[i]); }
   // Starts loading the node at `depth` on particle i's path to `key` (see PersistentTrie).

@@ -34,6 +34,12 @@ class NaiveMap {
     return true;
   }
 
+  // What identifies particle i's map: every particle owns its table, so no two are equal.
+  using Version = const HexTable<Htc>*;
+  Version version(size_t i) const { return &tables_[i]; }
+  // Particle i's map becomes a copy of particle `from`'s.
+  void Share(size_t i, size_t from, int) { tables_[i] = tables_[from]; }
+
   void Prefetch(size_t) const {}
   void PrefetchPath(size_t, uint64_t, int) const {}
   int height() const { return 0; }

@@ -3,14 +3,20 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <random>
+#include <utility>
 #include <vector>
 
+#include "concurrency/worker_pool.h"
+#include "engine/footslam/alphabet.h"
+#include "engine/footslam/alphabet_htree_map.h"
 #include "engine/footslam/hex_grid.h"
 #include "engine/footslam/htree_layout.h"
 #include "engine/footslam/htree_map.h"
+#include "engine/footslam/naive_map.h"
 #include "grove/footslam.h"
 
 namespace grove::footslam {
@@ -175,6 +181,84 @@ TEST(FootSlamModelTest, ZeroNoiseMapEqualsOdometryTransitions) {
   Pose2 pose = (*slam)->HeaviestPose();
   EXPECT_NEAR(pose.x_m, x, 1e-9);
   EXPECT_NEAR(pose.y_m, y, 1e-9);
+}
+
+// Copies of a parent that cross the same edges in the same step share one new map (the
+// previous particle's) instead of copying the same path each: the weights, poses and maps stay
+// those of NaiveMap, which copies whole tables and shares nothing. Batches as the workers cut
+// them: a particle follows only the previous one of its batch.
+template <typename Map>
+void ExpectFollowersMatchNaive(const Alphabet* alphabet) {
+  FootSlamConfig config;
+  config.particles = 64;
+  config.threads = 1;
+  config.hex_radius_m = 0.5;
+  config.step_length_sigma_m = 0.02;  // small noise: many copies cross as their parent does
+  config.heading_sigma_rad = 0.02;
+  const size_t n = 64;
+  HexGrid grid(config.hex_radius_m);
+  HTreeLayout layout = *HTreeLayout::Create(256, 16);
+  Map shared(layout, 1, n, alphabet);
+  NaiveMap naive(layout, 1, n, alphabet);
+  FootSlamModel<Map> a(config, &grid, &layout, &shared, 1);
+  FootSlamModel<NaiveMap> b(config, &grid, &layout, &naive, 1);
+  ASSERT_TRUE(a.Init());
+  ASSERT_TRUE(b.Init());
+  WorkerPool workers(1);
+  std::vector<double> lw_a(n), lw_b(n);
+  std::vector<uint32_t> parents(n);
+  for (size_t i = 0; i < n; ++i) parents[i] = static_cast<uint32_t>(i / 8 * 8);
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> turn(0, 0.5);
+  double heading = 0, x = 0, y = 0;
+  int crossed = 0, followed = 0;  // particle-steps that crossed an edge; of them, shared
+  std::vector<double> lw_before(n);
+  for (uint64_t k = 0; k < 300; ++k) {
+    heading += turn(rng);
+    if (std::hypot(x, y) > 8 && std::cos(heading - std::atan2(-y, -x)) < 0) heading += M_PI;
+    const StepInput in{0.7 * std::cos(heading), 0.7 * std::sin(heading)};
+    x += in.dx_m;
+    y += in.dy_m;
+    lw_before = lw_b;
+    for (auto [begin, end] : {std::pair<size_t, size_t>{0, 27}, {27, n}}) {
+      ASSERT_TRUE(a.Advance(in, k, begin, end, 0, lw_a.data()).ok());
+      ASSERT_TRUE(b.Advance(in, k, begin, end, 0, lw_b.data()).ok());
+    }
+    for (size_t i = 0; i < n; ++i) {
+      ASSERT_EQ(lw_a[i], lw_b[i]) << "step " << k << " particle " << i;
+      ASSERT_EQ(a.x(i), b.x(i));
+      ASSERT_EQ(a.y(i), b.y(i));
+      if (lw_b[i] == lw_before[i]) continue;  // a crossing's weight is never 0
+      ++crossed;
+      followed += i != 0 && i != 27 && shared.version(i) == shared.version(i - 1);
+    }
+    if (k % 5 == 4) {
+      a.Gather(parents, workers);
+      b.Gather(parents, workers);
+      a.ReleaseDead(workers);
+      b.ReleaseDead(workers);
+    }
+  }
+  for (size_t i = 0; i < n; ++i) {
+    std::vector<std::pair<uint64_t, Htc>> got, want;
+    shared.ForEachHex(i, [&](uint64_t key, const Htc& h) { got.push_back({key, h}); });
+    naive.ForEachHex(i, [&](uint64_t key, const Htc& h) { want.push_back({key, h}); });
+    ASSERT_EQ(got.size(), want.size()) << "particle " << i;
+    for (size_t j = 0; j < got.size(); ++j) {
+      EXPECT_EQ(got[j].first, want[j].first);
+      EXPECT_TRUE(std::equal(got[j].second.c, got[j].second.c + 6, want[j].second.c));
+    }
+  }
+  EXPECT_TRUE(a.CheckCounts().ok());
+  // Without following, no two particles' new maps are one.
+  EXPECT_GT(followed, crossed / 4) << followed << " of " << crossed;
+}
+
+TEST(FootSlamModelTest, CopiesThatCrossTheSameEdgesShareOneNewMap) {
+  ExpectFollowersMatchNaive<HTreeMap<4>>(nullptr);
+  StatusOr<Alphabet> alphabet = Alphabet::Create(5);
+  ASSERT_TRUE(alphabet.ok());
+  ExpectFollowersMatchNaive<AlphabetHTreeMap<4>>(&*alphabet);
 }
 
 // ReleaseMany frees exactly what Release one by one frees, and leaves the other paths intact.
