@@ -270,9 +270,9 @@ int RunFootSlamBatch(const FootSlamConfig& base, const FootSlamBatchOptions& opt
     mine = fmt::format("ok {:08x}", crc);
   } else {
     const StatusCode c = walks.status().code();
-    mine = fmt::format("error {}", c == StatusCode::kNotFound || c == StatusCode::kIoError
-                                       ? kExitInput
-                                       : kExitUsage);
+    const int code =
+        c == StatusCode::kNotFound || c == StatusCode::kIoError ? kExitInput : kExitUsage;
+    mine = fmt::format("error {}", code);
   }
   const std::vector<std::string> readings = all_gather(mine);
   if (!walks.ok()) return Fail(std::stoi(mine.substr(6)), walks.status().message());
