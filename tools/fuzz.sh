@@ -4,13 +4,15 @@
 # written to; new inputs and crash files stay in the scratch directory).
 #
 #   tools/fuzz.sh [SECONDS [TARGET...]]
-#     SECONDS  run time per fuzzer (default 60); fuzzers run one after the other
+#     SECONDS  run time per fuzzer (default 60)
 #     TARGET   step_reader, config_json, csv_readers, checkpoint (default: all four)
 #
 # Environment: BUILD_DIR (default build-fuzz), JOBS (build jobs, default 2), WORK_DIR (scratch
 # directory, default a new one under /tmp; kept so the corpora and reproducers can be inspected).
 # CLANG_VERSION (default 19). FUZZ_RUNS=N runs N inputs per fuzzer with a fixed seed instead of
-# a time limit: the same inputs on every run, so CI is repeatable. Installs clang-N, libclang-rt-N-dev (libFuzzer) and llvm-N
+# a time limit: the same inputs on every run, so CI is repeatable; FUZZ_RUNS_<TARGET>=N (say
+# FUZZ_RUNS_CHECKPOINT) sets one fuzzer's. FUZZ_JOBS=N runs up to N fuzzers at once (default 1:
+# one after the other). Installs clang-N, libclang-rt-N-dev (libFuzzer) and llvm-N
 # (llvm-symbolizer) from Debian when missing; the project's own dependencies come from
 # tools/setup.sh.
 # Exit status: 0 when no fuzzer failed, 1 when one did (its reproducer's path is printed), 2 for a
@@ -22,6 +24,11 @@ seconds="${1:-60}"
 shift || true
 if ! [[ "$seconds" =~ ^[0-9]+$ ]] || [ "$seconds" -lt 1 ]; then
   echo "usage: tools/fuzz.sh [SECONDS [step_reader|config_json|csv_readers|checkpoint ...]]" >&2
+  exit 2
+fi
+jobs_max="${FUZZ_JOBS:-1}"
+if ! [[ "$jobs_max" =~ ^[0-9]+$ ]] || [ "$jobs_max" -lt 1 ]; then
+  echo "fuzz: FUZZ_JOBS must be a whole number >= 1, not '$jobs_max'" >&2
   exit 2
 fi
 targets=("$@")
@@ -68,30 +75,33 @@ mkdir -p "$work"
 export ASAN_OPTIONS="${ASAN_OPTIONS:-abort_on_error=1:symbolize=1}:external_symbolizer_path=$symbolizer"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 
-failed=0
-for t in "${targets[@]}"; do
-  dir="$work/$t"
-  rm -rf "$dir"
+# One fuzzer: its scratch corpus, its run, its report. A failure leaves $work/$t.failed.
+fuzz_one() {
+  local t="$1" dir="$work/$1" status=0 runs_var budget
+  rm -rf "$dir" "$work/$t.failed"
   mkdir -p "$dir/corpus" "$dir/artifacts"
   cp -R "tests/fuzz/corpus/$t/." "$dir/corpus/"
-  echo "fuzz: $t for ${seconds} s (scratch $dir)"
-  status=0
-  if [ -n "${FUZZ_RUNS:-}" ]; then
-    budget=(-runs="$FUZZ_RUNS" -seed=1)
+  runs_var="FUZZ_RUNS_${t^^}"
+  local runs_budget="${!runs_var:-${FUZZ_RUNS:-}}"
+  if [ -n "$runs_budget" ]; then
+    budget=(-runs="$runs_budget" -seed=1)
+    echo "fuzz: $t for $runs_budget inputs (scratch $dir)"
   else
     budget=(-max_total_time="$seconds")
+    echo "fuzz: $t for ${seconds} s (scratch $dir)"
   fi
   "$build_dir/tests/fuzz/${t}_fuzzer" "${budget[@]}" -max_len=4096 -timeout=10 \
     -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$dir/artifacts/" \
     "$dir/corpus" >"$dir/log" 2>&1 || status=$?
+  local done_line rate runs
   done_line="$(grep -aE '^#[0-9]+[[:space:]]+DONE' "$dir/log" | tail -n 1 || true)"
   rate="$(sed -n 's/^stat::average_exec_per_sec: *//p' "$dir/log" | tail -n 1)"
   runs="$(sed -n 's/^stat::number_of_executed_units: *//p' "$dir/log" | tail -n 1)"
   if [ "$status" -eq 0 ]; then
     echo "fuzz: $t ok: ${runs:-?} runs, ${rate:-?} exec/s; ${done_line:-no DONE line}"
-    continue
+    return 0
   fi
-  failed=1
+  touch "$work/$t.failed"
   echo "fuzz: $t FAILED (exit $status); log $dir/log" >&2
   grep -aE 'fuzz property violated|ERROR: (libFuzzer|AddressSanitizer)|runtime error|SUMMARY' \
     "$dir/log" | head -n 5 >&2 || true
@@ -99,5 +109,24 @@ for t in "${targets[@]}"; do
     [ -e "$f" ] || continue
     echo "fuzz: reproducer $f  (replay: $build_dir/tests/fuzz/${t}_fuzzer $f)" >&2
   done
+}
+
+running=0
+for t in "${targets[@]}"; do
+  if [ "$jobs_max" -eq 1 ]; then
+    fuzz_one "$t"
+    continue
+  fi
+  if [ "$running" -ge "$jobs_max" ]; then
+    wait -n || true
+    running=$((running - 1))
+  fi
+  fuzz_one "$t" &
+  running=$((running + 1))
+done
+wait || true
+failed=0
+for t in "${targets[@]}"; do
+  [ ! -e "$work/$t.failed" ] || failed=1
 done
 exit "$failed"
