@@ -186,15 +186,17 @@ TEST(FootSlamModelTest, ZeroNoiseMapEqualsOdometryTransitions) {
 // Copies of a parent that cross the same edges in the same step share one new map (the
 // previous particle's) instead of copying the same path each: the weights, poses and maps stay
 // those of NaiveMap, which copies whole tables and shares nothing. Batches as the workers cut
-// them: a particle follows only the previous one of its batch.
+// them: a particle follows only the previous one of its batch. With `with_prior`, a prior map
+// of whole counts on half the hexagons near the start, and the prior-ratio weighting.
 template <typename Map>
-void ExpectFollowersMatchNaive(const Alphabet* alphabet) {
+void ExpectFollowersMatchNaive(const Alphabet* alphabet, bool with_prior) {
   FootSlamConfig config;
   config.particles = 64;
   config.threads = 1;
   config.hex_radius_m = 0.5;
   config.step_length_sigma_m = 0.02;  // small noise: many copies cross as their parent does
   config.heading_sigma_rad = 0.02;
+  if (with_prior) config.weighting = FootSlamWeighting::kPriorRatio;
   const size_t n = 64;
   HexGrid grid(config.hex_radius_m);
   HTreeLayout layout = *HTreeLayout::Create(256, 16);
@@ -204,6 +206,24 @@ void ExpectFollowersMatchNaive(const Alphabet* alphabet) {
   FootSlamModel<NaiveMap> b(config, &grid, &layout, &naive, 1);
   ASSERT_TRUE(a.Init());
   ASSERT_TRUE(b.Init());
+  PriorMap prior;
+  if (with_prior) {
+    const Hex start = grid.HexAt(config.start_x_m, config.start_y_m);
+    for (int dq = -12; dq <= 12; ++dq) {
+      for (int dr = -12; dr <= 12; ++dr) {
+        uint64_t key;
+        if ((dq + dr) % 2 != 0 || !a.KeyOf(Hex{start.q + dq, start.r + dr}, &key)) continue;
+        PriorHex p{};
+        for (int e = 0; e < 6; ++e) {
+          p.edge[e] = (7 * dq + 3 * dr + e + 200) % 4;  // 0 to 3
+          p.total += p.edge[e];
+        }
+        prior.Insert(key, p);
+      }
+    }
+    a.set_prior(&prior);
+    b.set_prior(&prior);
+  }
   WorkerPool workers(1);
   std::vector<double> lw_a(n), lw_b(n);
   std::vector<uint32_t> parents(n);
@@ -255,10 +275,13 @@ void ExpectFollowersMatchNaive(const Alphabet* alphabet) {
 }
 
 TEST(FootSlamModelTest, CopiesThatCrossTheSameEdgesShareOneNewMap) {
-  ExpectFollowersMatchNaive<HTreeMap<4>>(nullptr);
   StatusOr<Alphabet> alphabet = Alphabet::Create(5);
   ASSERT_TRUE(alphabet.ok());
-  ExpectFollowersMatchNaive<AlphabetHTreeMap<4>>(&*alphabet);
+  for (bool with_prior : {false, true}) {
+    SCOPED_TRACE(with_prior ? "with a prior map" : "without a prior map");
+    ExpectFollowersMatchNaive<HTreeMap<4>>(nullptr, with_prior);
+    ExpectFollowersMatchNaive<AlphabetHTreeMap<4>>(&*alphabet, with_prior);
+  }
 }
 
 // ReleaseMany frees exactly what Release one by one frees, and leaves the other paths intact.
