@@ -160,10 +160,13 @@ class PersistentTrie {
   // exist) in the version *root, which it replaces (the caller's reference moves to the new
   // root). Copies only shared nodes on the path and grows the version when `key` does not fit;
   // O(height). Returns false, without calling f, when a node could not be allocated: *root is
-  // then a valid version with the same contents.
+  // then a valid version with the same contents. `own_root`: the caller holds every reference
+  // to the root (several versions that will all take this one's result), so the root is
+  // changed in place as if unique.
   template <typename F>
-  [[nodiscard]] bool Update(Node** root, uint64_t key, int slot, F&& f) {
+  [[nodiscard]] bool Update(Node** root, uint64_t key, int slot, F&& f, bool own_root = false) {
     const int need = std::max(height_, HeightFor(key, fill_));
+    const Node* owned = own_root && Height(*root) >= need ? *root : nullptr;
     if (*root == nullptr) {
       // An empty version starts at the height the key needs.
     } else {
@@ -190,7 +193,7 @@ class PersistentTrie {
       if (cur == nullptr) {
         n = NewInner(slot, level);
         if (n == nullptr) return Abandon(held, cur, slot);
-      } else if (held == nullptr && cur->rc.unique()) {
+      } else if (held == nullptr && (cur == owned || cur->rc.unique())) {
         n = static_cast<Inner*>(cur);
       } else {
         Inner* old = static_cast<Inner*>(cur);
@@ -211,7 +214,7 @@ class PersistentTrie {
     if (cur == nullptr) {
       b = NewBottom(slot);
       if (b == nullptr) return Abandon(held, cur, slot);
-    } else if (held == nullptr && cur->rc.unique()) {
+    } else if (held == nullptr && (cur == owned || cur->rc.unique())) {
       b = static_cast<Bottom*>(cur);
     } else {
       Bottom* old = static_cast<Bottom*>(cur);

@@ -36,37 +36,49 @@ class AlphabetHTreeMap {
         full_roots_(&full_, particles) {}
 
   // Returns false when out of memory; the engine is then stopped, and the two trees may
-  // disagree on the hexagon (its symbol escaped, its counters not yet moved).
-  bool Cross(size_t i, uint64_t key, int edge, int slot, EdgeCounts* out) {
+  // disagree on the hexagon (its symbol escaped, its counters not yet moved). `owners` > 1:
+  // that many particles share particle i's map and will all take its result (see htc.h).
+  bool Cross(size_t i, uint64_t key, int edge, int slot, EdgeCounts* out, uint32_t owners = 1) {
+    const bool own_symbols = Owns(symbol_roots_[i], owners);
+    const bool own_full = Owns(full_roots_[i], owners);
     EdgeCounts before{0, 0};
     bool escaped = false;
     uint16_t last_symbol = 0;
     bool escapes_now = false;
-    bool ok = symbols_.Update(&symbol_roots_[i], key, slot, [&](uint16_t& s, bool) {
-      if (s == kEscaped) {
-        escaped = true;
-        return;
-      }
-      before = {alphabet_->Count(s, edge), alphabet_->Total(s)};
-      uint16_t next = alphabet_->Next(s, edge);
-      if (next == Alphabet::kOverflow) {
-        escapes_now = true;
-        last_symbol = s;
-        s = kEscaped;
-      } else {
-        s = next;
-      }
-    });
+    bool ok = symbols_.Update(
+        &symbol_roots_[i], key, slot,
+        [&](uint16_t& s, bool) {
+          if (s == kEscaped) {
+            escaped = true;
+            return;
+          }
+          before = {alphabet_->Count(s, edge), alphabet_->Total(s)};
+          uint16_t next = alphabet_->Next(s, edge);
+          if (next == Alphabet::kOverflow) {
+            escapes_now = true;
+            last_symbol = s;
+            s = kEscaped;
+          } else {
+            s = next;
+          }
+        },
+        own_symbols);
     if (ok && escaped) {
-      ok = full_.Update(&full_roots_[i], key, slot, [&](Htc& h, bool) {
-        before = {h.c[edge], h.Total()};
-        ++h.c[edge];
-      });
+      ok = full_.Update(
+          &full_roots_[i], key, slot,
+          [&](Htc& h, bool) {
+            before = {h.c[edge], h.Total()};
+            ++h.c[edge];
+          },
+          own_full);
     } else if (ok && escapes_now) {
-      ok = full_.Update(&full_roots_[i], key, slot, [&](Htc& h, bool) {
-        alphabet_->Decode(last_symbol, h.c);
-        ++h.c[edge];
-      });
+      ok = full_.Update(
+          &full_roots_[i], key, slot,
+          [&](Htc& h, bool) {
+            alphabet_->Decode(last_symbol, h.c);
+            ++h.c[edge];
+          },
+          own_full);
     }
     *out = before;
     return ok;
@@ -205,6 +217,12 @@ class AlphabetHTreeMap {
   }
 
  private:
+  // Whether `owners` > 1 versions hold every reference to `root`.
+  template <typename Node>
+  static bool Owns(const Node* root, uint32_t owners) {
+    return owners > 1 && root != nullptr && root->rc.count() == owners;
+  }
+
   Status LoadRoots(ByteReader* r, size_t count, std::vector<typename SymbolTrie::Root>* symbols,
                    std::vector<typename FullTrie::Root>* full) {
     const int symbol_count = alphabet_->symbol_count();

@@ -153,6 +153,42 @@ class FootSlamModel {
     Crossed prev_crossed[kMaxHeldCrossings], crossed[kMaxHeldCrossings];
     int prev_count = -1;
     double prev_lw = 0;
+    // Counts crossing c in particle p's map (held by `owners` particles that all take the
+    // result) and adds its weight to *lw.
+    auto count_crossing = [&](size_t p, Crossed c, uint32_t owners, double* lw) {
+      EdgeCounts before;
+      if (!map_->Cross(p, c.key, c.edge, slot, &before, owners)) return false;
+      const PriorHex* prior = prior_ == nullptr ? nullptr : prior_->Find(c.key);
+      if (prior == nullptr) {
+        *lw += LogEdge(before.edge) - LogTotal(before.total);
+      } else {
+        // The counts first, then a, as LogEdge() and LogTotal() add them: with a prior that
+        // holds whole counts this is bit for bit the weight of a map holding their sum.
+        *lw += std::log(before.edge + prior->edge[c.edge] + config_.prior_count) + log_edge_bias_ -
+               std::log(before.total + prior->total + 6 * config_.prior_count);
+      }
+      return true;
+    };
+    // A group: particles from `leader` on whose maps are one at the start of the step. While
+    // `pending`, the leader's crossings (prev_crossed) wait and every member so far repeats
+    // them; resolve(upto) counts them once for the members [leader, upto), in place when these
+    // hold every reference to the map, and gives every member the new map and the weight.
+    size_t leader = 0;
+    bool pending = false;
+    auto resolve = [&](size_t upto) {
+      pending = false;
+      double group_lw = 0;
+      const auto owners = static_cast<uint32_t>(upto - leader);
+      for (int k = 0; k < prev_count; ++k) {
+        if (!count_crossing(leader, prev_crossed[k], owners, &group_lw)) return false;
+      }
+      for (size_t j = leader + 1; j < upto; ++j) {
+        if (map_->version(j) != map_->version(leader)) map_->Share(j, leader, slot);
+      }
+      for (size_t j = leader; j < upto; ++j) log_w[j] += group_lw;
+      prev_lw = group_lw;
+      return true;
+    };
     for (size_t i = begin; i < end; ++i) {
       if (i + kPrefetchAhead < end) {
         if (levels == 0) map_->Prefetch(i + kPrefetchAhead);
@@ -207,27 +243,19 @@ class FootSlamModel {
       double lw = 0;
       bool outside = false, too_long = false, no_memory = false;
       // Counts a crossing in particle i's map and weights it.
-      auto cross = [&](uint64_t key, int edge) {
-        EdgeCounts before;
-        if (!map_->Cross(i, key, edge, slot, &before)) {
-          no_memory = true;
-          return false;
-        }
-        const PriorHex* prior = prior_ == nullptr ? nullptr : prior_->Find(key);
-        if (prior == nullptr) {
-          lw += LogEdge(before.edge) - LogTotal(before.total);
-        } else {
-          // The counts first, then a, as LogEdge() and LogTotal() add them: with a prior that
-          // holds whole counts this is bit for bit the weight of a map holding their sum.
-          lw += std::log(before.edge + prior->edge[edge] + config_.prior_count) + log_edge_bias_ -
-                std::log(before.total + prior->total + 6 * config_.prior_count);
-        }
-        return true;
+      auto cross = [&](Crossed c) {
+        if (count_crossing(i, c, 1, &lw)) return true;
+        no_memory = true;
+        return false;
       };
-      // While `holding`, the crossings so far repeat the previous particle's and are not yet
-      // counted; at the first that differs they are counted, in order.
       const typename Map::Version version = map_->version(i);
+      if (pending && version != prev_version && !resolve(i))
+        return NoMemory(first_ + leader, "map");
+      // While `holding`, the crossings so far repeat the previous particle's and are not yet
+      // counted; at the first that differs they are counted, in order (and a pending group
+      // parts there). While `deferring`, i leads a group: the next particle's map is its.
       bool holding = prev_count >= 0 && version == prev_version;
+      bool deferring = !holding && i + 1 < end && map_->version(i + 1) == version;
       int count = 0;  // crossings recorded in `crossed`; -1 past kMaxHeldCrossings
       // A particle that leaves the grid, or a step that crosses more hexagons than a straight
       // line across the first grid can, ends the run: stop walking there, so a step of any
@@ -250,8 +278,21 @@ class FootSlamModel {
             return true;
           }
           holding = false;
+          if (pending && !resolve(i)) {
+            no_memory = true;
+            return false;
+          }
           for (int k = 0; k < count; ++k) {
-            if (!cross(crossed[k].key, crossed[k].edge)) return false;
+            if (!cross(crossed[k])) return false;
+          }
+        } else if (deferring) {
+          if (count < kMaxHeldCrossings) {
+            crossed[count++] = now;
+            return true;
+          }
+          deferring = false;
+          for (int k = 0; k < count; ++k) {
+            if (!cross(crossed[k])) return false;
           }
         }
         if (count >= 0 && count < kMaxHeldCrossings) {
@@ -259,15 +300,23 @@ class FootSlamModel {
         } else {
           count = -1;
         }
-        return cross(key, c.edge);
+        return cross(now);
       });
+      bool waits = false;  // i's weight comes when its group is resolved
       if (holding && !outside && !too_long) {
-        if (count == prev_count) {  // the same crossings: the same new map and weight
+        if (count == prev_count && pending) {  // one more member of the group
+          waits = true;
+        } else if (count == prev_count) {  // the same crossings: the same new map and weight
           if (count > 0) map_->Share(i, i - 1, slot);
           lw = prev_lw;
         } else {  // a prefix of them
-          for (int k = 0; k < count && !no_memory; ++k) cross(crossed[k].key, crossed[k].edge);
+          if (pending && !resolve(i)) no_memory = true;
+          for (int k = 0; k < count && !no_memory; ++k) cross(crossed[k]);
         }
+      } else if (deferring && !outside && !too_long) {
+        pending = true;
+        leader = i;
+        waits = true;
       }
       if (no_memory) return NoMemory(first_ + i, "map");
       if (too_long) {
@@ -290,7 +339,7 @@ class FootSlamModel {
                                                 PathPoseOf(nx, ny, heading), slot);
       if (pose == nullptr) return NoMemory(first_ + i, "path");
       history_roots_[i] = pose;
-      log_w[i] += lw;
+      if (!waits) log_w[i] += lw;
       x_[i] = nx;
       y_[i] = ny;
       heading_[i] = heading;
@@ -302,6 +351,7 @@ class FootSlamModel {
       prev_count = count;
       prev_lw = lw;
     }
+    if (pending && !resolve(end)) return NoMemory(first_ + leader, "map");
     return Status::Ok();
   }
 

@@ -1,9 +1,12 @@
 // Hexagon transition counters (the paper's HTC) and what every FootSLAM map provides.
 //
 // A map policy (HTreeMap, AlphabetHTreeMap, NaiveMap) holds the maps of all particles:
-//   bool Cross(size_t i, uint64_t key, int edge, int slot, EdgeCounts* before);
+//   bool Cross(size_t i, uint64_t key, int edge, int slot, EdgeCounts* before,
+//              uint32_t owners = 1);
 //       particle i leaves hexagon `key` across `edge`: sets the counters before the crossing
-//       and adds one; false when out of memory (the engine then stops)
+//       and adds one; false when out of memory (the engine then stops). owners > 1: that many
+//       particles hold particle i's map and the caller gives them all its result afterwards
+//       (Share), so a map whose every reference is theirs may be changed in place
 //   void Prefetch(size_t i) const;  // a hint: particle i's map will be used soon
 //   void PrefetchPath(size_t i, uint64_t key, int depth) const;
 //       a hint: load the node at `depth` (< height()) on particle i's path to `key`; the nodes

@@ -26,12 +26,16 @@ class HTreeMap {
       : trie_(layout.height(), slots, layout.fill_key(), layout.max_height()),
         roots_(&trie_, particles) {}
 
-  // Returns false when out of memory (the map is unchanged).
-  bool Cross(size_t i, uint64_t key, int edge, int slot, EdgeCounts* before) {
-    return trie_.Update(&roots_[i], key, slot, [&](Htc& h, bool) {
-      *before = {h.c[edge], h.Total()};
-      ++h.c[edge];
-    });
+  // Returns false when out of memory (the map is unchanged). `owners` > 1: that many particles
+  // share particle i's map and will all take its result (see htc.h).
+  bool Cross(size_t i, uint64_t key, int edge, int slot, EdgeCounts* before, uint32_t owners = 1) {
+    return trie_.Update(
+        &roots_[i], key, slot,
+        [&](Htc& h, bool) {
+          *before = {h.c[edge], h.Total()};
+          ++h.c[edge];
+        },
+        Owns(roots_[i], owners));
   }
 
   // What identifies particle i's map: two particles with equal versions hold the same map.
@@ -119,6 +123,11 @@ class HTreeMap {
   }
 
  private:
+  // Whether `owners` > 1 versions hold every reference to `root`.
+  static bool Owns(const typename Trie::Node* root, uint32_t owners) {
+    return owners > 1 && root != nullptr && root->rc.count() == owners;
+  }
+
   Trie trie_;
   VersionSet<Trie> roots_;
 };

@@ -27,7 +27,7 @@ class NaiveMap {
 
   // Never fails for want of a node; a table that cannot grow throws std::bad_alloc, which the
   // engine turns into ResourceExhausted.
-  bool Cross(size_t i, uint64_t key, int edge, int, EdgeCounts* before) {
+  bool Cross(size_t i, uint64_t key, int edge, int, EdgeCounts* before, uint32_t = 1) {
     Htc& h = tables_[i].FindOrInsert(key);
     *before = {h.c[edge], h.Total()};
     ++h.c[edge];
