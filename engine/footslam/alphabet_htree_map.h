@@ -7,6 +7,7 @@
 #define GROVE_ENGINE_FOOTSLAM_ALPHABET_HTREE_MAP_H_
 
 #include <algorithm>
+#include <atomic>
 #include <span>
 #include <utility>
 #include <vector>
@@ -220,7 +221,10 @@ class AlphabetHTreeMap {
   // Whether `owners` > 1 versions hold every reference to `root`.
   template <typename Node>
   static bool Owns(const Node* root, uint32_t owners) {
-    return owners > 1 && root != nullptr && root->rc.count() == owners;
+    if (owners <= 1 || root == nullptr || root->rc.count() != owners) return false;
+    // As RefCount::unique(): the other owners' last reads happen before our writes.
+    std::atomic_thread_fence(std::memory_order_acquire);
+    return true;
   }
 
   Status LoadRoots(ByteReader* r, size_t count, std::vector<typename SymbolTrie::Root>* symbols,

@@ -5,6 +5,7 @@
 #define GROVE_ENGINE_FOOTSLAM_HTREE_MAP_H_
 
 #include <algorithm>
+#include <atomic>
 #include <span>
 #include <vector>
 
@@ -125,7 +126,10 @@ class HTreeMap {
  private:
   // Whether `owners` > 1 versions hold every reference to `root`.
   static bool Owns(const typename Trie::Node* root, uint32_t owners) {
-    return owners > 1 && root != nullptr && root->rc.count() == owners;
+    if (owners <= 1 || root == nullptr || root->rc.count() != owners) return false;
+    // As RefCount::unique(): the other owners' last reads happen before our writes.
+    std::atomic_thread_fence(std::memory_order_acquire);
+    return true;
   }
 
   Trie trie_;
