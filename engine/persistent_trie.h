@@ -160,13 +160,19 @@ class PersistentTrie {
   // exist) in the version *root, which it replaces (the caller's reference moves to the new
   // root). Copies only shared nodes on the path and grows the version when `key` does not fit;
   // O(height). Returns false, without calling f, when a node could not be allocated: *root is
-  // then a valid version with the same contents. `own_root`: the caller holds every reference
-  // to the root (several versions that will all take this one's result), so the root is
-  // changed in place as if unique.
+  // then a valid version with the same contents. `holders` > 1: *root and holders - 1 other
+  // versions hold this root and will all take this update's result (the caller gives it them);
+  // when they are all its references, the root is changed in place as if unique.
   template <typename F>
-  [[nodiscard]] bool Update(Node** root, uint64_t key, int slot, F&& f, bool own_root = false) {
+  [[nodiscard]] bool Update(Node** root, uint64_t key, int slot, F&& f, uint32_t holders = 1) {
     const int need = std::max(height_, HeightFor(key, fill_));
-    const Node* owned = own_root && Height(*root) >= need ? *root : nullptr;
+    const Node* owned = nullptr;
+    if (holders > 1 && *root != nullptr && Height(*root) >= need &&
+        (*root)->rc.count() == holders) {
+      // As RefCount::unique(): the other holders' last reads happen before our writes.
+      std::atomic_thread_fence(std::memory_order_acquire);
+      owned = *root;
+    }
     if (*root == nullptr) {
       // An empty version starts at the height the key needs.
     } else {

@@ -7,7 +7,6 @@
 #define GROVE_ENGINE_FOOTSLAM_ALPHABET_HTREE_MAP_H_
 
 #include <algorithm>
-#include <atomic>
 #include <span>
 #include <utility>
 #include <vector>
@@ -40,8 +39,6 @@ class AlphabetHTreeMap {
   // disagree on the hexagon (its symbol escaped, its counters not yet moved). `owners` > 1:
   // that many particles share particle i's map and will all take its result (see htc.h).
   bool Cross(size_t i, uint64_t key, int edge, int slot, EdgeCounts* out, uint32_t owners = 1) {
-    const bool own_symbols = Owns(symbol_roots_[i], owners);
-    const bool own_full = Owns(full_roots_[i], owners);
     EdgeCounts before{0, 0};
     bool escaped = false;
     uint16_t last_symbol = 0;
@@ -63,7 +60,7 @@ class AlphabetHTreeMap {
             s = next;
           }
         },
-        own_symbols);
+        owners);
     if (ok && escaped) {
       ok = full_.Update(
           &full_roots_[i], key, slot,
@@ -71,7 +68,7 @@ class AlphabetHTreeMap {
             before = {h.c[edge], h.Total()};
             ++h.c[edge];
           },
-          own_full);
+          owners);
     } else if (ok && escapes_now) {
       ok = full_.Update(
           &full_roots_[i], key, slot,
@@ -79,7 +76,7 @@ class AlphabetHTreeMap {
             alphabet_->Decode(last_symbol, h.c);
             ++h.c[edge];
           },
-          own_full);
+          owners);
     }
     *out = before;
     return ok;
@@ -218,15 +215,6 @@ class AlphabetHTreeMap {
   }
 
  private:
-  // Whether `owners` > 1 versions hold every reference to `root`.
-  template <typename Node>
-  static bool Owns(const Node* root, uint32_t owners) {
-    if (owners <= 1 || root == nullptr || root->rc.count() != owners) return false;
-    // As RefCount::unique(): the other owners' last reads happen before our writes.
-    std::atomic_thread_fence(std::memory_order_acquire);
-    return true;
-  }
-
   Status LoadRoots(ByteReader* r, size_t count, std::vector<typename SymbolTrie::Root>* symbols,
                    std::vector<typename FullTrie::Root>* full) {
     const int symbol_count = alphabet_->symbol_count();

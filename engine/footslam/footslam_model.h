@@ -8,10 +8,13 @@
 //      crossing, then count it (steps 2c and 2e);
 //   3. append the pose to the particle's history.
 // Copies of one parent cross the same edges often (a step crosses about one edge, and copies
-// differ only by this step's noise): a particle whose map is the previous particle's at the
-// start of the step and whose crossings repeat that particle's, in order, takes that particle's
-// new map and weight instead of copying the same path again (its crossings are held back until
-// they differ). Same contents, same weights: only the sharing changes.
+// differ only by this step's noise). Consecutive particles that hold one map at the start of the
+// step form a group: the first holds its crossings back, and while the others repeat them, in
+// order, they wait too; at the group's end the crossings are counted once (in place when the
+// group holds every reference to the map) and every member takes the new map and weight. A
+// member whose crossings differ ends the waiting there (the group's map is copied as before),
+// and a particle whose map and crossings repeat the previous one's takes that one's result.
+// Same contents, same weights: only the sharing changes.
 #ifndef GROVE_ENGINE_FOOTSLAM_FOOTSLAM_MODEL_H_
 #define GROVE_ENGINE_FOOTSLAM_FOOTSLAM_MODEL_H_
 

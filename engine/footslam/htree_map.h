@@ -5,7 +5,6 @@
 #define GROVE_ENGINE_FOOTSLAM_HTREE_MAP_H_
 
 #include <algorithm>
-#include <atomic>
 #include <span>
 #include <vector>
 
@@ -36,7 +35,7 @@ class HTreeMap {
           *before = {h.c[edge], h.Total()};
           ++h.c[edge];
         },
-        Owns(roots_[i], owners));
+        owners);
   }
 
   // What identifies particle i's map: two particles with equal versions hold the same map.
@@ -124,14 +123,6 @@ class HTreeMap {
   }
 
  private:
-  // Whether `owners` > 1 versions hold every reference to `root`.
-  static bool Owns(const typename Trie::Node* root, uint32_t owners) {
-    if (owners <= 1 || root == nullptr || root->rc.count() != owners) return false;
-    // As RefCount::unique(): the other owners' last reads happen before our writes.
-    std::atomic_thread_fence(std::memory_order_acquire);
-    return true;
-  }
-
   Trie trie_;
   VersionSet<Trie> roots_;
 };

@@ -186,9 +186,9 @@ TEST(FootSlamModelTest, ZeroNoiseMapEqualsOdometryTransitions) {
 // Copies of a parent that cross the same edges in the same step share one new map (the
 // previous particle's, or their own changed in place when they hold every reference to it)
 // instead of copying the same path each: the weights, poses and maps stay those of NaiveMap,
-// which copies whole tables and shares nothing. Batches as the workers cut
-// them: a particle follows only the previous one of its batch. With `with_prior`, a prior map
-// of whole counts on half the hexagons near the start, and the prior-ratio weighting.
+// which copies whole tables and shares nothing. Batches as the workers cut them: a particle
+// follows only the previous one of its batch. With `with_prior`, a prior map of whole counts on
+// half the hexagons near the start, and the prior-ratio weighting.
 template <typename Map>
 void ExpectFollowersMatchNaive(const Alphabet* alphabet, bool with_prior) {
   FootSlamConfig config;
