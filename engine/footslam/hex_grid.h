@@ -85,8 +85,11 @@ class HexGrid {
   // REQUIRES: start == HexAt(x0, y0) (or the hexagon a previous Traverse ended in at (x0, y0)),
   // both ends within HexAt's range.
   // Allocation-free; six bisector tests per hexagon left, one distance test for the last.
+  // Always inlined: the FootSLAM model's step is one function with its crossing callback
+  // (measured 10 % faster than the call on 1 thread).
   template <typename F>
-  Hex Traverse(Hex start, double x0, double y0, double x1, double y1, F&& on_crossing) const;
+  [[gnu::always_inline]] inline Hex Traverse(Hex start, double x0, double y0, double x1, double y1,
+                                             F&& on_crossing) const;
 
   // Traverse from HexAt(x0, y0), collected; for tests and tools, not the hot path.
   std::vector<Crossing> Crossings(double x0, double y0, double x1, double y1) const;
