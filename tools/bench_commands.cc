@@ -315,6 +315,7 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
     FootSlamConfig config;
     config.particles = particles;
     config.threads = threads;
+    config.grid = options.grid == "fixed" ? FootSlamGrid::kFixed : FootSlamGrid::kGrowing;
     auto slam = FootSlam::Create(config);
     if (!slam.ok()) return slam.status();
     for (int64_t k = 0; k < steps; ++k) {
@@ -397,8 +398,8 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
                                      "peak live map MiB"};
   std::string md = fmt::format(
       "# grove bench scaling\n\nMachine: {}\n\nThe first {} steps of the paper walk (simulated "
-      "open area), H-tree s = 16, T = 5; per-phase costs in ns per particle-step.\n\n",
-      MachineDescription(), steps);
+      "open area), H-tree s = 16, T = 5, {} grid; per-phase costs in ns per particle-step.\n\n",
+      MachineDescription(), steps, options.grid);
   md += MarkdownTable(header, rows);
   const std::string& dir = options.out_dir;
   s = WriteFileAtomically(dir + "/scaling.csv", CsvTable(header, rows));

@@ -26,6 +26,9 @@ struct ScalingBenchOptions {
   int64_t steps = 300;  // first steps of the paper walk used for every point
   int64_t max_particles = 1000000;
   int64_t thread_sweep_particles = 30000;
+  // "growing" (the default configuration's grid, as every committed scaling run used) or
+  // "fixed" (the paper's 256 x 256 grid, as `bench paper` runs it).
+  std::string grid = "growing";
 };
 int ScalingBenchCommand(const ScalingBenchOptions& options);
 

@@ -264,6 +264,12 @@ int Main(int argc, char** argv) {
   scaling->add_option("--max-particles", scaling_options.max_particles)
       ->capture_default_str()
       ->check(CLI::Range(int64_t{1}, int64_t{1} << 31));
+  scaling
+      ->add_option("--grid", scaling_options.grid,
+                   "growing (the default configuration's grid) or fixed (the paper's, as "
+                   "bench paper runs it)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"fixed", "growing"}));
 
   CLI::App* ranks_bench = bench->add_subcommand(
       "ranks", "One filter across MPI ranks on the paper walk: time, communication, digest");
