@@ -7,7 +7,8 @@
 //   2. normalise: log-sum-exp over fixed blocks, then the effective sample size 1 / sum(w^2);
 //   3. resample when ESS / N < threshold (threshold 1 resamples every step): parents are drawn
 //      (systematic by default, in parallel), the model gathers the new generation (O(1) per
-//      particle: maps are shared) and releases the dead one, both in parallel;
+//      particle: maps are shared) and releases the dead one, both in parallel (a
+//      PieceReleasingModel in a filter alone releases it during the next advance instead);
 //   4. complete (optional): a model whose weights do not depend on what it draws (FastSLAM
 //      2.0) draws and updates after resampling, in parallel over batches;
 //   5. population (optional): a model that needs the whole population once its particles are
@@ -80,7 +81,7 @@ struct PhaseTimes {
   double advance_s = 0;    // propagate, weight and update maps
   double normalize_s = 0;  // log-sum-exp and ESS
   double resample_s = 0;   // drawing parents and gathering the new generation
-  double release_s = 0;    // freeing the dead generation
+  double release_s = 0;    // freeing the dead generation (in advance_s when freed in pieces)
 };
 
 // What a model provides (checked where a filter is instantiated).
@@ -92,6 +93,18 @@ concept FilterModel = requires(M& m, const M& cm, std::span<const uint32_t> pare
   { m.Gather(parents, workers) } -> std::same_as<void>;
   // Frees what only the previous generation reached.
   { m.ReleaseDead(workers) } -> std::same_as<void>;
+};
+
+// A model that can free its dead generation in pieces: ReleaseDeadRange(lo, hi, slot) releases
+// what the previous generation's particles [lo, min(hi, its size)) held, DeadReleased() ends
+// that generation once every piece is released. The filter then frees the dead generation
+// during the next advance, each batch first releasing the dead particles among its own
+// particles' parents (their relatives, whose nodes it is about to touch): the release's cache
+// misses overlap the motion's arithmetic, and the separate release loop and its join go.
+template <typename M>
+concept PieceReleasingModel = requires(M& m, size_t lo, size_t hi, int slot) {
+  { m.ReleaseDeadRange(lo, hi, slot) } -> std::same_as<void>;
+  { m.DeadReleased() } -> std::same_as<void>;
 };
 
 // A model whose particles can move between ranks: Export() writes particles `which` (local
@@ -185,9 +198,17 @@ class ParticleFilter {
       options_checked_ = true;
       GROVE_RETURN_IF_ERROR(CheckOptions());
     }
+    const bool release = release_pending_;
     Status status = ForBatches([&](int slot, size_t begin, size_t end) {
+      if constexpr (PieceReleasingModel<Model>) {
+        if (release) model_->ReleaseDeadRange(DeadFrom(begin), DeadFrom(end), slot);
+      }
       return model_->Advance(input, step_, begin, end, slot, log_w_.data());
     });
+    if constexpr (PieceReleasingModel<Model>) {
+      if (release) model_->DeadReleased();
+    }
+    release_pending_ = false;
     if constexpr (PopulationModel<Model, Input> && !CompletingModel<Model, Input>) {
       if (status.ok()) status = model_->Population(input, step_, *workers_);
     }
@@ -241,6 +262,7 @@ class ParticleFilter {
   template <typename Input>
   requires PredictingModel<Model, Input> Status Predict(const Input& input) {
     auto t0 = std::chrono::steady_clock::now();
+    FinishRelease();
     Status status = ForBatches([&](int slot, size_t begin, size_t end) {
       return model_->Predict(input, step_, begin, end, slot);
     });
@@ -348,6 +370,22 @@ class ParticleFilter {
   Status ForBatches(F&& body) {
     return RunInBatches(*workers_, log_w_.size(), options_.batch, &batch_status_,
                         std::forward<F>(body));
+  }
+
+  // The first particle of the previous generation whose dead references the batch starting at
+  // new particle k releases: the dead among its particles' parents (and, for the first batch,
+  // those before them; for the last, those after). parents_ is nondecreasing, so the batches'
+  // pieces partition the previous generation.
+  size_t DeadFrom(size_t k) const {
+    if (k == 0) return 0;
+    return k < parents_.size() ? parents_[k] : std::numeric_limits<size_t>::max();
+  }
+
+  // Releases a dead generation the next advance has not (before a step without one).
+  void FinishRelease() {
+    if (!release_pending_) return;
+    model_->ReleaseDead(*workers_);
+    release_pending_ = false;
   }
 
   Status Normalize() {
@@ -530,9 +568,16 @@ class ParticleFilter {
   // becomes 1 / N. The resample phase is timed from t0.
   void TakeGeneration(std::chrono::steady_clock::time_point t0) {
     using Clock = std::chrono::steady_clock;
+    FinishRelease();  // (an advance always comes between two resamplings)
     model_->Gather(parents_, *workers_);
     auto t1 = Clock::now();
-    model_->ReleaseDead(*workers_);
+    // Alone (parents_ then nondecreasing), a piece-releasing model frees the dead generation in
+    // the next advance.
+    if (PieceReleasingModel<Model> && options_.collective == nullptr && options_.islands <= 1) {
+      release_pending_ = true;
+    } else {
+      model_->ReleaseDead(*workers_);
+    }
     auto t2 = Clock::now();
     std::fill(log_w_.begin(), log_w_.end(), -std::log(static_cast<double>(total_)));
     ++resamplings_;
@@ -787,6 +832,7 @@ class ParticleFilter {
   uint64_t sent_particles_ = 0;
   double migrate_s_ = 0;
   bool options_checked_ = false;
+  bool release_pending_ = false;  // the dead generation waits for the next advance
   std::vector<Status> batch_status_;
   size_t heaviest_ = 0;
   uint64_t step_ = 0;

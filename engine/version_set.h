@@ -14,6 +14,7 @@
 #ifndef GROVE_ENGINE_VERSION_SET_H_
 #define GROVE_ENGINE_VERSION_SET_H_
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <utility>
@@ -53,9 +54,13 @@ class VersionSet {
     store_->Release(old, slot);
   }
   // Every version, to be replaced in place by a store's update of many versions at once (each
-  // entry's reference moves to its new root). REQUIRES: no dead generation (after ReleaseDead).
+  // entry's reference moves to its new root). A dead generation still held is released first
+  // (on the calling thread, slot 0).
   std::span<Root> mutable_roots() {
-    GROVE_DCHECK(dead_.empty());
+    if (!dead_.empty()) {
+      store_->ReleaseMany(dead_, 0);
+      DeadReleased();
+    }
     return roots_;
   }
 
@@ -83,8 +88,19 @@ class VersionSet {
     workers.ParallelFor(dead_.size(), 1024, [&](int slot, size_t b, size_t e) {
       store_->ReleaseMany(std::span<Root const>(dead_).subspan(b, e - b), slot);
     });
-    // The released buffer is the next Gather's output.
-    spare_.swap(dead_);
+    DeadReleased();
+  }
+
+  // ReleaseDead() in pieces, for a caller that frees the dead generation during the next step's
+  // advance: the references of the previous generation's particles [lo, min(hi, its size))
+  // from worker slot `slot`. The pieces must not overlap, and together cover the generation
+  // before DeadReleased() ends it.
+  void ReleaseDeadRange(size_t lo, size_t hi, int slot) {
+    hi = std::min(hi, dead_.size());
+    if (lo < hi) store_->ReleaseMany(std::span<Root const>(dead_).subspan(lo, hi - lo), slot);
+  }
+  void DeadReleased() {
+    spare_.swap(dead_);  // the released buffer is the next Gather's output
     dead_.clear();
   }
 

@@ -116,6 +116,14 @@ class AlphabetHTreeMap {
     symbol_roots_.ReleaseDead(workers);
     full_roots_.ReleaseDead(workers);
   }
+  void ReleaseDeadRange(size_t lo, size_t hi, int slot) {
+    symbol_roots_.ReleaseDeadRange(lo, hi, slot);
+    full_roots_.ReleaseDeadRange(lo, hi, slot);
+  }
+  void DeadReleased() {
+    symbol_roots_.DeadReleased();
+    full_roots_.DeadReleased();
+  }
 
   template <typename F>
   void ForEachHex(size_t i, F&& f) const {

@@ -374,6 +374,15 @@ class FootSlamModel {
     history_roots_.ReleaseDead(workers);
     map_->ReleaseDead(workers);
   }
+  // ReleaseDead() in pieces during the next advance (ParticleFilter's PieceReleasingModel).
+  void ReleaseDeadRange(size_t lo, size_t hi, int slot) {
+    history_roots_.ReleaseDeadRange(lo, hi, slot);
+    map_->ReleaseDeadRange(lo, hi, slot);
+  }
+  void DeadReleased() {
+    history_roots_.DeadReleased();
+    map_->DeadReleased();
+  }
 
   // The expensive invariant walk of every shared node: histories and maps (tests).
   Status CheckCounts() const {

@@ -14,6 +14,8 @@
 //   int height() const;  // levels PrefetchPath walks (0: none)
 //   void Gather(std::span<const uint32_t> parents, WorkerPool&);  // next generation
 //   void ReleaseDead(WorkerPool&);                                  // frees the previous one
+//   void ReleaseDeadRange(size_t lo, size_t hi, int slot);  // ReleaseDead() of [lo, hi) only
+//   void DeadReleased();  // ends the previous generation, every piece of it released
 //   void ForEachHex(size_t i, F f) const;  // f(key, const Htc&) in key order
 //   void Cumulative(std::span<const uint64_t> weights, F f) const;
 //       f(key, const Htc&, uint64_t weight) once per (distinct node, hexagon); summing

@@ -63,6 +63,8 @@ class HTreeMap {
     roots_.Gather(parents, workers);
   }
   void ReleaseDead(WorkerPool& workers) { roots_.ReleaseDead(workers); }
+  void ReleaseDeadRange(size_t lo, size_t hi, int slot) { roots_.ReleaseDeadRange(lo, hi, slot); }
+  void DeadReleased() { roots_.DeadReleased(); }
 
   template <typename F>
   void ForEachHex(size_t i, F&& f) const {

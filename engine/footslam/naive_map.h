@@ -74,6 +74,10 @@ class NaiveMap {
     });
     dead_.clear();
   }
+  void ReleaseDeadRange(size_t lo, size_t hi, int) {
+    for (size_t k = lo; k < std::min(hi, dead_.size()); ++k) dead_[k] = HexTable<Htc>();
+  }
+  void DeadReleased() { dead_.clear(); }
 
   template <typename F>
   void ForEachHex(size_t i, F&& f) const {

@@ -2,10 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <map>
+#include <mutex>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "concurrency/random_stream.h"
@@ -75,10 +79,47 @@ class ToyModel {
   Trie& trie() { return trie_; }
   Status CheckCounts() const { return trie_.CheckCounts(roots_.AllReferences()); }
 
- private:
+ protected:
   Trie trie_;
   std::vector<double> x_;
   VersionSet<Trie> roots_;
+};
+
+// The toy model freeing its dead generation in pieces (PieceReleasingModel), which it checks:
+// every generation's pieces must partition it, each piece released once.
+class PieceToyModel : public ToyModel {
+ public:
+  using ToyModel::ToyModel;
+  void ReleaseDeadRange(size_t lo, size_t hi, int slot) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      pieces_.emplace_back(lo, hi);
+    }
+    roots_.ReleaseDeadRange(lo, hi, slot);
+  }
+  void DeadReleased() {
+    std::sort(pieces_.begin(), pieces_.end());
+    size_t next = 0;
+    for (const auto& [lo, hi] : pieces_) {
+      if (lo != next || hi < lo) ++bad_partitions_;
+      next = hi;
+    }
+    if (pieces_.empty() || next < size()) ++bad_partitions_;
+    pieces_.clear();
+    ++generations_;
+    roots_.DeadReleased();
+  }
+  void ReleaseDead(WorkerPool& workers) {
+    ++whole_releases_;
+    ToyModel::ReleaseDead(workers);
+  }
+  int bad_partitions_ = 0;
+  int generations_ = 0;  // released in pieces
+  int whole_releases_ = 0;
+
+ private:
+  std::mutex mu_;
+  std::vector<std::pair<size_t, size_t>> pieces_;
 };
 
 struct RunResult {
@@ -88,20 +129,22 @@ struct RunResult {
   uint64_t resamplings;
 };
 
+template <typename Model = ToyModel>
 RunResult RunToy(int threads, ResamplingScheme scheme, double threshold) {
   WorkerPool workers(threads);
-  ToyModel model(3000, workers.num_slots());
+  Model model(3000, workers.num_slots());
   FilterOptions options;
   options.resampling = scheme;
   options.resample_threshold = threshold;
   options.batch = 37;
   options.seed = 5;
-  ParticleFilter<ToyModel> filter(&model, &workers, options);
+  ParticleFilter<Model> filter(&model, &workers, options);
   for (int step = 0; step < 60; ++step) {
     double drift = step % 20 < 10 ? 0.7 : -0.7;  // back and forth: revisits
     EXPECT_TRUE(filter.Update(drift).ok());
   }
   auto lw = filter.log_weights();
+  EXPECT_TRUE(model.CheckCounts().ok()) << model.CheckCounts().ToString();
   return {std::vector<double>(lw.begin(), lw.end()), model.x(), model.Maps(), filter.resamplings()};
 }
 
@@ -120,6 +163,47 @@ TEST(ParticleFilterTest, SameSeedIsBitIdenticalAtAnyThreadCount) {
       }
     }
   }
+}
+
+// Freeing the dead generation in pieces during the next advance changes what is shared when,
+// never the results.
+TEST(ParticleFilterTest, ReleasingInPiecesGivesTheSameResults) {
+  for (ResamplingScheme scheme : {ResamplingScheme::kSystematic, ResamplingScheme::kResidual,
+                                  ResamplingScheme::kMultinomial}) {
+    for (double threshold : {0.5, 1.0}) {
+      SCOPED_TRACE(testing::Message() << ResamplingSchemeName(scheme) << " " << threshold);
+      RunResult whole = RunToy(1, scheme, threshold);
+      for (int threads : {1, 2, 4}) {
+        RunResult pieces = RunToy<PieceToyModel>(threads, scheme, threshold);
+        EXPECT_EQ(pieces.log_w, whole.log_w) << "threads " << threads;
+        EXPECT_EQ(pieces.x, whole.x) << "threads " << threads;
+        EXPECT_EQ(pieces.maps, whole.maps) << "threads " << threads;
+        EXPECT_EQ(pieces.resamplings, whole.resamplings);
+      }
+    }
+  }
+}
+
+// Each batch of the next advance releases a piece; the pieces partition the dead generation.
+// Between steps the dead generation is still held (and counted), and a step without an advance
+// (Predict) releases it whole first.
+TEST(ParticleFilterTest, TheNextAdvanceReleasesTheDeadGenerationInPieces) {
+  WorkerPool workers(2);
+  PieceToyModel model(2000, workers.num_slots());
+  FilterOptions options;
+  options.resample_threshold = 1.0;
+  options.batch = 64;
+  ParticleFilter<PieceToyModel> filter(&model, &workers, options);
+  for (int step = 0; step < 20; ++step) {
+    ASSERT_TRUE(filter.Update(0.5).ok());
+    ASSERT_TRUE(model.CheckCounts().ok()) << model.CheckCounts().ToString();
+  }
+  EXPECT_EQ(model.generations_, 19);  // the 20th waits for the next advance
+  EXPECT_EQ(model.whole_releases_, 0);
+  EXPECT_EQ(model.bad_partitions_, 0);
+  ASSERT_TRUE(filter.Predict(Shift{1.0}).ok());
+  EXPECT_EQ(model.whole_releases_, 1);
+  ASSERT_TRUE(model.CheckCounts().ok()) << model.CheckCounts().ToString();
 }
 
 TEST(ParticleFilterTest, WeightsAreNormalisedAndThresholdOneResamplesEveryStep) {
@@ -322,6 +406,31 @@ class OriginModel {
   std::vector<double> value_;
   std::set<uint32_t> seen_;
 };
+
+// Island mode (whose exchanges put migrants among an island's own copies, so parents are not one
+// nondecreasing list) releases the dead generation whole even for a model that could take it in
+// pieces.
+class PieceOriginModel : public OriginModel {
+ public:
+  using OriginModel::OriginModel;
+  void ReleaseDead(WorkerPool&) { ++whole_releases_; }
+  void ReleaseDeadRange(size_t, size_t, int) { ++pieces_; }
+  void DeadReleased() {}
+  int whole_releases_ = 0;
+  std::atomic<int> pieces_{0};
+};
+
+TEST(ParticleFilterTest, IslandsReleaseTheDeadGenerationWhole) {
+  WorkerPool workers(2);
+  PieceOriginModel model(4 * kSumBlock, kSumBlock);
+  FilterOptions options;
+  options.resample_threshold = 1.0;
+  options.islands = 4;
+  ParticleFilter<PieceOriginModel> filter(&model, &workers, options);
+  for (int step = 0; step < 5; ++step) ASSERT_TRUE(filter.Update(0.0).ok());
+  EXPECT_EQ(model.whole_releases_, 5);
+  EXPECT_EQ(model.pieces_.load(), 0);
+}
 
 struct IslandRun {
   Status status;
