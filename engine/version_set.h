@@ -78,7 +78,9 @@ class VersionSet {
   // adjacent in `parents` (as in any nondecreasing list).
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     GROVE_DCHECK(dead_.empty());
-    GatherShared(parents, &roots_, workers, &Store::Share, &spare_);
+    // A lambda, not &Store::Share: a function pointer would stay an indirect call per copy.
+    GatherShared(
+        parents, &roots_, workers, [](Root r) { return Store::Share(r); }, &spare_);
     dead_.swap(roots_);
     roots_.swap(spare_);
   }
