@@ -655,6 +655,7 @@ TEST_F(CliTest, OutOfRangeValuesAreRefusedNamingTheOption) {
       {"bench paper --only bogus --out " + (dir_ / "b").string(),
        "--only = \"bogus\": must be one of", 2},
       {"bench scaling --steps 0 --out " + (dir_ / "b").string(), "--steps", 2},
+      {"bench scaling --grid round --out " + (dir_ / "b").string(), "--grid", 2},
       {"bench paper --naive-limit -1 --out " + (dir_ / "b").string(), "--naive-limit", 2},
       {"bench paper --repeat 0 --out " + (dir_ / "b").string(), "--repeat", 2},
   };
@@ -665,6 +666,20 @@ TEST_F(CliTest, OutOfRangeValuesAreRefusedNamingTheOption) {
   }
   EXPECT_FALSE(fs::exists(dir_ / "out"));
   EXPECT_FALSE(fs::exists(dir_ / "s" / "steps.csv"));
+}
+
+// bench scaling takes --grid (growing by default) and names the grid in its report.
+TEST_F(CliTest, BenchScalingNamesTheGridInItsReport) {
+  for (const char* grid : {"", "fixed", "growing"}) {
+    const fs::path out = dir_ / (std::string("scaling-") + grid);
+    std::string args = "bench scaling --steps 2 --max-particles 1000 --out " + out.string();
+    if (*grid != '\0') args += std::string(" --grid ") + grid;
+    Outcome o = Grove(args);
+    ASSERT_EQ(o.exit_code, 0) << args << ": " << o.err;
+    const std::string md = Slurp(out / "scaling.md");
+    const std::string named = std::string(*grid == '\0' ? "growing" : grid) + " grid";
+    EXPECT_NE(md.find(named), std::string::npos) << args << ":\n" << md;
+  }
 }
 
 // 12, 17: hostile configuration files get short one-line errors.
