@@ -87,9 +87,8 @@ class VersionSet {
 
   // Frees the dead generation's references (what no live version shares), in parallel.
   void ReleaseDead(WorkerPool& workers) {
-    workers.ParallelFor(dead_.size(), 1024, [&](int slot, size_t b, size_t e) {
-      store_->ReleaseMany(std::span<Root const>(dead_).subspan(b, e - b), slot);
-    });
+    workers.ParallelFor(dead_.size(), 1024,
+                        [&](int slot, size_t b, size_t e) { ReleaseDeadRange(b, e, slot); });
     DeadReleased();
   }
 

@@ -69,10 +69,9 @@ class NaiveMap {
   }
 
   void ReleaseDead(WorkerPool& workers) {
-    workers.ParallelFor(dead_.size(), 256, [&](int, size_t b, size_t e) {
-      for (size_t k = b; k < e; ++k) dead_[k] = HexTable<Htc>();
-    });
-    dead_.clear();
+    workers.ParallelFor(dead_.size(), 256,
+                        [&](int slot, size_t b, size_t e) { ReleaseDeadRange(b, e, slot); });
+    DeadReleased();
   }
   void ReleaseDeadRange(size_t lo, size_t hi, int) {
     for (size_t k = lo; k < std::min(hi, dead_.size()); ++k) dead_[k] = HexTable<Htc>();
