@@ -429,24 +429,28 @@ class ParticleFilter {
       }
     }
     if (!std::isfinite(max)) return Degenerate("every particle weight is zero or infinite");
+    // The normalised weights are kept: resampling draws from them. They are the scaled weights
+    // exp(log w_i - max) over their sum: one exponential per particle.
+    weights_.resize(n);
     std::vector<double> sums =
         workers_->MapBlocks<double>(n, kSumBlock, [&](size_t, size_t begin, size_t end) {
           double s = 0;
-          for (size_t i = begin; i < end; ++i) s += std::exp(log_w_[i] - max);
+          for (size_t i = begin; i < end; ++i) {
+            weights_[i] = std::exp(log_w_[i] - max);
+            s += weights_[i];
+          }
           return s;
         });
     GROVE_RETURN_IF_ERROR(GatherBlocks(&sums));
     double total = 0;
     for (double s : sums) total += s;
     const double log_total = max + std::log(total);
-    // The normalised weights are kept: resampling draws from them.
-    weights_.resize(n);
     std::vector<double> squares =
         workers_->MapBlocks<double>(n, kSumBlock, [&](size_t, size_t begin, size_t end) {
           double s = 0;
           for (size_t i = begin; i < end; ++i) {
             log_w_[i] -= log_total;
-            double w = std::exp(log_w_[i]);
+            double w = weights_[i] / total;
             weights_[i] = w;
             s += w * w;
           }
