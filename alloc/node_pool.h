@@ -49,10 +49,14 @@ namespace grove {
 inline constexpr int kForeignSlot = -1;
 
 struct PoolStats {
-  int64_t node_bytes = 0;       // size of one node
-  int64_t live_nodes = 0;       // allocated and not yet freed
-  int64_t peak_live_nodes = 0;  // highest live_nodes seen (sampled at page refills and Stats())
-  int64_t reserved_bytes = 0;   // memory obtained from the system (slabs)
+  int64_t node_bytes = 0;  // size of one node
+  int64_t live_nodes = 0;  // allocated and not yet freed
+  // The highest live_nodes seen: the count at each Stats() call, or the sum of each slot's own
+  // highest count (sampled at its page refills) when that is higher. With one slot it is the
+  // peak sampled at refills; with several it can exceed the true peak (the slots' highs need
+  // not coincide), and is close to it when the slots grow and shrink together.
+  int64_t peak_live_nodes = 0;
+  int64_t reserved_bytes = 0;  // memory obtained from the system (slabs)
   int64_t live_bytes() const { return live_nodes * node_bytes; }
   int64_t peak_live_bytes() const { return peak_live_nodes * node_bytes; }
 };

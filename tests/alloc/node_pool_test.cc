@@ -25,6 +25,25 @@ TEST(NodePoolTest, LiveCountFollowsAllocationsAndFrees) {
   EXPECT_EQ(pool.Stats().live_nodes, 0);
 }
 
+// The peak is sampled as nodes are allocated, without a Stats() call (pooled: each slot's own
+// count at its page refills). Two slots that grow together and then free everything report
+// the sum of their highs, short by at most the page each allocated from after its last refill.
+TEST(NodePoolTest, PeakCountsEverySlotsHighWithoutStatsCalls) {
+  NodePool pool(48, 2);
+  std::vector<void*> nodes[2];
+  for (int i = 0; i < 20000; ++i) {
+    for (int slot = 0; slot < 2; ++slot) nodes[slot].push_back(pool.Allocate(slot));
+  }
+  for (int slot = 0; slot < 2; ++slot) {
+    for (void* p : nodes[slot]) pool.Free(p, slot);
+  }
+  const PoolStats stats = pool.Stats();
+  EXPECT_EQ(stats.live_nodes, 0);
+  const int64_t page_nodes = (64 << 10) / 48;
+  EXPECT_GE(stats.peak_live_nodes, 40000 - 2 * page_nodes);
+  EXPECT_LE(stats.peak_live_nodes, 40000);
+}
+
 TEST(NodePoolTest, NodesAreDistinctAlignedAndWritable) {
   NodePool pool(40, 1);
   std::set<void*> seen;
