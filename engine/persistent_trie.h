@@ -5,11 +5,17 @@
 // A version is a root pointer (nullptr: the empty map) that owns one reference. Copying a
 // version is one increment; Update() copies only the nodes on the key's path that other
 // versions share and mutates uniquely owned nodes in place (immer's `update() &&`).
-// Leaf payloads live inline in the bottom nodes: kDegree of them per node, with a presence mask.
+// Leaf payloads live inline in the bottom nodes, with a presence mask.
 //
 // Node layout: every node records its level, counted from the bottom (0: a bottom node holding
-// leaves; k > 0: an inner node of kDegree children at level k - 1). Key digit k (base kDegree,
-// digit 0 the least significant) picks the child of a level-k node. A version is at least
+// leaves; k > 0: an inner node of kDegree children at level k - 1). Key digit k (digit 0 the
+// least significant) picks the child of a level-k node: digit 0 is the key's low
+// log2(kBottomDegree) bits, every other digit log2(kDegree) bits. A bottom node wider than an
+// inner one (kBottomDegree > kDegree: a sparse map whose keys cluster, such as a walked area)
+// stores only its present leaves, in digit order, and comes in a few size classes: it grows into
+// the next class when a leaf is added to a full one. A path is then one level shorter and its
+// copy counts fewer children, and a sparse block costs one small node instead of an inner node
+// and several mostly empty bottom ones. A version is at least
 // min_height() levels high and grows by new roots on top when a key does not fit. The levels a
 // version lacks stand for the digits of a fill key at those levels: a version h levels high holds
 // the keys whose digits at levels h and above are the fill key's, and growing puts the old root
@@ -40,6 +46,7 @@
 #include <bit>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <new>
 #include <span>
 #include <string>
@@ -52,23 +59,49 @@
 #include "alloc/node_pool.h"
 #include "concurrency/ref_count.h"
 #include "engine/checkpoint_io.h"
+#include "engine/memory_use.h"
 
 namespace grove {
 
-template <typename Leaf, int kLog2Degree>
+// The leaves each size class of a trie's bottom nodes holds (see PersistentTrie): nodes of 64,
+// 128, 256, ... bytes while they hold fewer than half the digits, then one that holds them all.
+// Only one class (every digit) when `wide` is false.
+struct TrieBottomClasses {
+  int count = 0;
+  std::array<int, 8> capacity{};
+};
+constexpr TrieBottomClasses MakeTrieBottomClasses(size_t leaf_offset, size_t leaf_bytes, int degree,
+                                                  bool wide) {
+  TrieBottomClasses c;
+  for (size_t bytes = 64; wide && c.count < 7; bytes *= 2) {
+    if (bytes < leaf_offset + leaf_bytes) continue;
+    const int capacity = static_cast<int>((bytes - leaf_offset) / leaf_bytes);
+    if (2 * capacity >= degree) break;
+    c.capacity[c.count++] = capacity;
+  }
+  c.capacity[c.count++] = degree;
+  return c;
+}
+
+template <typename Leaf, int kLog2Degree, int kLog2BottomDegree = kLog2Degree>
 class PersistentTrie {
   static_assert(kLog2Degree >= 1 && kLog2Degree <= 8, "degree must be 2 .. 256");
+  static_assert(kLog2BottomDegree >= kLog2Degree && kLog2BottomDegree <= 8,
+                "a bottom node holds degree .. 256 leaves");
   static_assert(std::is_trivially_copyable_v<Leaf> && std::is_trivially_destructible_v<Leaf>,
                 "leaves are copied with memcpy when a bottom node is copied");
+  static_assert(alignof(Leaf) <= 16, "nodes are 16-byte aligned");
 
  public:
   static constexpr int kDegree = 1 << kLog2Degree;
+  static constexpr int kBottomDegree = 1 << kLog2BottomDegree;
   // Levels that hold every 64-bit key.
-  static constexpr int kMaxHeight = (64 + kLog2Degree - 1) / kLog2Degree;
+  static constexpr int kMaxHeight = 1 + (64 - kLog2BottomDegree + kLog2Degree - 1) / kLog2Degree;
 
   struct Node {
     RefCount rc;
-    uint8_t level;  // 0: bottom; in the padding after the count
+    uint8_t level;       // 0: bottom; in the padding after the count
+    uint8_t size_class;  // a bottom node's size class; 0 for an inner node
   };
   using Root = Node*;
 
@@ -79,13 +112,14 @@ class PersistentTrie {
   PersistentTrie(int min_height, int slots, uint64_t fill = 0, int max_height = kMaxHeight)
       : height_(min_height),
         max_height_(max_height),
-        fill_(min_height * kLog2Degree >= 64
-                  ? 0
-                  : fill >> (min_height * kLog2Degree) << (min_height * kLog2Degree)),
+        fill_(SpanBits(min_height) >= 64 ? 0
+                                         : fill >> SpanBits(min_height) << SpanBits(min_height)),
         inner_pool_(sizeof(Inner), slots),
-        bottom_pool_(sizeof(Bottom), slots),
         release_scratch_(slots) {
     GROVE_CHECK(min_height >= 1 && min_height <= max_height && max_height <= kMaxHeight);
+    for (int c = 0; c < kClasses.count; ++c) {
+      bottom_pools_[c] = std::make_unique<NodePool>(BottomBytes(c), slots);
+    }
   }
   PersistentTrie(const PersistentTrie&) = delete;
   PersistentTrie& operator=(const PersistentTrie&) = delete;
@@ -99,13 +133,19 @@ class PersistentTrie {
   // Levels a version needs to hold `key` under the fill key `fill`: at least 1 (the levels up to
   // the highest digit where the two differ).
   static int HeightFor(uint64_t key, uint64_t fill = 0) {
-    const uint64_t differ = key ^ fill;
-    return differ == 0 ? 1 : (std::bit_width(differ) + kLog2Degree - 1) / kLog2Degree;
+    const int bits = std::bit_width(key ^ fill);
+    return bits <= kLog2BottomDegree
+               ? 1
+               : 1 + (bits - kLog2BottomDegree + kLog2Degree - 1) / kLog2Degree;
   }
-  // Keys a version of min_height() holds without growing, kDegree^min_height (0 when that does
-  // not fit in 64 bits: every key).
+  // Keys a version of min_height() holds without growing, 2^SpanBits(min_height()) (0 when that
+  // does not fit in 64 bits: every key).
   uint64_t key_count() const {
-    return height_ * kLog2Degree >= 64 ? 0 : uint64_t{1} << (height_ * kLog2Degree);
+    return SpanBits(height_) >= 64 ? 0 : uint64_t{1} << SpanBits(height_);
+  }
+  // Bits of the keys a version `height` levels high spans: those of its digits.
+  static constexpr int SpanBits(int height) {
+    return height == 0 ? 0 : kLog2BottomDegree + kLog2Degree * (height - 1);
   }
 
   // Returns the leaf stored under `key`, or nullptr. The pointer is valid while the version is.
@@ -117,8 +157,8 @@ class PersistentTrie {
     }
     if (cur == nullptr) return nullptr;
     const Bottom* b = static_cast<const Bottom*>(cur);
-    int d = Digit(key, 0);
-    return b->Has(d) ? &b->leaf[d] : nullptr;
+    const int d = BottomDigit(key);
+    return Has(b, d) ? &Leaves(b)[SlotOf(b, d)] : nullptr;
   }
 
   // Starts loading the node at `depth` (0 = the root) on the path to `key`: its count and the
@@ -141,8 +181,11 @@ class PersistentTrie {
     __builtin_prefetch(cur);
     if (level > 0) {
       __builtin_prefetch(&static_cast<const Inner*>(cur)->child[Digit(key, level)]);
+    } else if constexpr (kPacked) {
+      // Where the leaf sits depends on the presence words not yet loaded: the second line.
+      __builtin_prefetch(reinterpret_cast<const char*>(cur) + 64);
     } else {
-      __builtin_prefetch(&static_cast<const Bottom*>(cur)->leaf[Digit(key, 0)]);
+      __builtin_prefetch(&Leaves(static_cast<const Bottom*>(cur))[BottomDigit(key)]);
     }
   }
 
@@ -215,28 +258,46 @@ class PersistentTrie {
       link = &n->child[d];
       cur = n->child[d];
     }
-    int d = Digit(key, 0);
+    const int d = BottomDigit(key);
     Bottom* b;
+    bool existed = false;
     if (cur == nullptr) {
-      b = NewBottom(slot);
+      b = NewBottom(slot, 0);
       if (b == nullptr) return Abandon(held, cur, slot);
-    } else if (held == nullptr && (cur == owned || cur->rc.unique())) {
-      b = static_cast<Bottom*>(cur);
     } else {
       Bottom* old = static_cast<Bottom*>(cur);
-      b = NewBottom(slot);
-      if (b == nullptr) return Abandon(held, cur, slot);
-      std::memcpy(b->present, old->present, sizeof(b->present));
-      std::memcpy(static_cast<void*>(b->leaf), old->leaf, sizeof(b->leaf));
-      if (held == nullptr) held = old;
+      existed = Has(old, d);
+      const bool mine = held == nullptr && (cur == owned || cur->rc.unique());
+      const int count = kPacked ? LeafCount(old) : kBottomDegree;
+      const int need = count + (kPacked && !existed ? 1 : 0);
+      if (mine && need <= kClasses.capacity[old->size_class]) {
+        b = old;
+      } else {
+        // A shared node is copied; a node of ours too small for a new leaf, moved to a larger
+        // class (our reference to it dropped: it is freed unless other holders take it).
+        b = NewBottom(slot, kPacked ? ClassFor(need) : 0);
+        if (b == nullptr) return Abandon(held, cur, slot);
+        std::memcpy(b->present, old->present, sizeof(b->present));
+        std::memcpy(static_cast<void*>(Leaves(b)), Leaves(old), count * sizeof(Leaf));
+        if (mine) {
+          Release(old, slot);
+        } else if (held == nullptr) {
+          held = old;
+        }
+      }
     }
     Release(held, slot);
-    bool existed = b->Has(d);
+    Leaf* leaf = Leaves(b);
+    const int at = SlotOf(b, d);
     if (!existed) {
-      b->leaf[d] = Leaf{};
+      if constexpr (kPacked) {
+        std::memmove(static_cast<void*>(leaf + at + 1), leaf + at,
+                     (LeafCount(b) - at) * sizeof(Leaf));
+      }
+      leaf[at] = Leaf{};
       b->present[d >> 6] |= uint64_t{1} << (d & 63);
     }
-    f(b->leaf[d], existed);
+    f(leaf[at], existed);
     *link = b;
     return true;
   }
@@ -256,7 +317,13 @@ class PersistentTrie {
       link = &static_cast<Inner*>(*link)->child[Digit(key, (*link)->level)];
     }
     Bottom* b = static_cast<Bottom*>(*link);
-    const int d = Digit(key, 0);
+    const int d = BottomDigit(key);
+    if constexpr (kPacked) {
+      Leaf* leaf = Leaves(b);
+      const int at = SlotOf(b, d);
+      std::memmove(static_cast<void*>(leaf + at), leaf + at + 1,
+                   (LeafCount(b) - at - 1) * sizeof(Leaf));
+    }
     b->present[d >> 6] &= ~(uint64_t{1} << (d & 63));
     for (uint64_t w : b->present) {
       if (w != 0) return true;
@@ -374,7 +441,7 @@ class PersistentTrie {
       }
     }
     inner_pool_.Flush(slot);
-    bottom_pool_.Flush(slot);
+    for (int c = 0; c < kClasses.count; ++c) bottom_pools_[c]->Flush(slot);
   }
 
   // Calls f(key, const Leaf&) for every leaf of one version in increasing key order.
@@ -398,10 +465,9 @@ class PersistentTrie {
           }
         }
       } else {
-        const Bottom* b = static_cast<const Bottom*>(item.node);
-        for (int i = 0; i < kDegree; ++i) {
-          if (b->Has(i)) f((item.prefix << kLog2Degree) | i, b->leaf[i]);
-        }
+        ForEachLeaf(static_cast<const Bottom*>(item.node), [&](int d, const Leaf& leaf) {
+          f((item.prefix << kLog2BottomDegree) | d, leaf);
+        });
       }
     }
   }
@@ -420,8 +486,8 @@ class PersistentTrie {
     };
     std::array<Item, (kDegree - 1) * kMaxHeight + 1> stack;
     int top = 0;
-    auto admits = [&](uint64_t prefix, int level) {
-      const int shift = kLog2Degree * level;
+    auto admits = [&](uint64_t prefix, int height) {
+      const int shift = SpanBits(height);
       const uint64_t lo = shift >= 64 ? 0 : prefix << shift;
       const uint64_t span = shift >= 64 ? ~uint64_t{0} : (uint64_t{1} << shift) - 1;
       return may_contain(lo, lo + span);
@@ -440,10 +506,9 @@ class PersistentTrie {
           }
         }
       } else {
-        const Bottom* b = static_cast<const Bottom*>(item.node);
-        for (int i = 0; i < kDegree; ++i) {
-          if (b->Has(i)) f((item.prefix << kLog2Degree) | i, b->leaf[i]);
-        }
+        ForEachLeaf(static_cast<const Bottom*>(item.node), [&](int d, const Leaf& leaf) {
+          f((item.prefix << kLog2BottomDegree) | d, leaf);
+        });
       }
     }
   }
@@ -463,36 +528,41 @@ class PersistentTrie {
     return VisitDistinctFrom<W>(roots, prefixes, weights, on_leaf);
   }
 
-  // VisitDistinct() of one subtree of every version: the node at `level` whose keys have the
-  // digits `prefix` above it (key >> (log2(degree) * (level + 1)) == prefix). Versions without
-  // it count for nothing. REQUIRES: level < min_height() - 1 (the subtree is below every root).
+  // A block: the keys whose bits above the lowest `bits` are `prefix` (key >> bits == prefix),
+  // in every version. REQUIRES of the block functions below: bits < SpanBits(min_height()) (the
+  // block is below every root) and bits on a digit boundary, or within the bottom digit (a block
+  // smaller than a bottom node: the leaves of some of its digits).
+
+  // VisitDistinct() of one block of every version. Versions without it count for nothing.
   template <typename W, typename F>
-  size_t VisitSubtreeDistinct(std::span<Node* const> roots, std::span<const W> weights, int level,
+  size_t VisitSubtreeDistinct(std::span<Node* const> roots, std::span<const W> weights, int bits,
                               uint64_t prefix, F&& on_leaf) const {
-    GROVE_CHECK(roots.size() == weights.size() && level < height_ - 1);
-    std::vector<Node*> blocks;
+    const BlockAt block = Locate(bits, prefix);
+    std::vector<Node*> nodes;
     std::vector<uint64_t> prefixes;
-    std::vector<W> block_weights;
+    std::vector<W> node_weights;
     for (size_t i = 0; i < roots.size(); ++i) {
-      Node* block = SubtreeOf(roots[i], level, prefix);
-      if (block == nullptr) continue;
-      blocks.push_back(block);
-      prefixes.push_back(prefix);
-      block_weights.push_back(weights[i]);
+      Node* node = SubtreeOf(roots[i], block.level, block.prefix);
+      if (node == nullptr) continue;
+      nodes.push_back(node);
+      prefixes.push_back(block.prefix);
+      node_weights.push_back(weights[i]);
     }
-    return VisitDistinctFrom<W>(blocks, prefixes, block_weights, on_leaf);
+    if (bits >= kLog2BottomDegree) {
+      return VisitDistinctFrom<W>(nodes, prefixes, node_weights, on_leaf);
+    }
+    auto in_block = [&](uint64_t key, const Leaf& leaf, W w) {
+      if ((key >> bits) == prefix) on_leaf(key, leaf, w);
+    };
+    return VisitDistinctFrom<W>(nodes, prefixes, node_weights, in_block);
   }
 
-  // The prefixes (as VisitSubtreeDistinct) of the subtrees at `level` that any version in
-  // `roots` holds, in increasing order, each once. Cost: the distinct nodes above `level`.
-  // REQUIRES: level < min_height() - 1.
-  std::vector<uint64_t> SubtreePrefixes(std::span<Node* const> roots, int level) const {
-    GROVE_CHECK(level < height_ - 1);
-    struct Item {
-      const Inner* node;
-      uint64_t prefix;
-    };
-    std::vector<Item> stack;
+  // The prefixes of the blocks of `bits` that any version in `roots` holds, in increasing order,
+  // each once. Cost: the distinct nodes above the blocks (and the bottom nodes, for blocks
+  // within them).
+  std::vector<uint64_t> SubtreePrefixes(std::span<Node* const> roots, int bits) const {
+    const BlockAt block = Locate(bits, 0);
+    const bool within = bits < kLog2BottomDegree;
     // The nodes visited: an open-addressing set (power-of-two capacity, at most half full), no
     // allocation per node.
     std::vector<const Node*> seen(64, nullptr);
@@ -509,24 +579,33 @@ class PersistentTrie {
       seen_count += added ? 1 : 0;
       return added;
     };
-    for (const Node* root : roots) {
-      if (root != nullptr && first_visit(root)) {
-        stack.push_back({static_cast<const Inner*>(root), FillPrefix(Height(root))});
-      }
-    }
+    struct Item {
+      const Inner* node;
+      uint64_t prefix;
+    };
+    std::vector<Item> stack;
     std::vector<uint64_t> out;
+    // A node at the blocks' level (prefix: the digits above it) or above it.
+    auto reach = [&](const Node* n, uint64_t prefix) {
+      if (n->level > block.level) {
+        if (first_visit(n)) stack.push_back({static_cast<const Inner*>(n), prefix});
+      } else if (!within) {
+        out.push_back(prefix);
+      } else if (first_visit(n)) {
+        ForEachLeaf(static_cast<const Bottom*>(n), [&](int d, const Leaf&) {
+          out.push_back((prefix << (kLog2BottomDegree - bits)) | static_cast<uint64_t>(d >> bits));
+        });
+      }
+    };
+    for (const Node* root : roots) {
+      if (root != nullptr) reach(root, FillPrefix(Height(root)));
+    }
     while (!stack.empty()) {
       const Item item = stack.back();
       stack.pop_back();
       for (int i = 0; i < kDegree; ++i) {
         const Node* child = item.node->child[i];
-        if (child == nullptr) continue;
-        const uint64_t prefix = (item.prefix << kLog2Degree) | static_cast<uint64_t>(i);
-        if (child->level == level) {
-          out.push_back(prefix);
-        } else if (first_visit(child)) {
-          stack.push_back({static_cast<const Inner*>(child), prefix});
-        }
+        if (child != nullptr) reach(child, (item.prefix << kLog2Degree) | static_cast<uint64_t>(i));
       }
     }
     std::sort(out.begin(), out.end());
@@ -534,24 +613,24 @@ class PersistentTrie {
     return out;
   }
 
-  // Removes the subtree at `level` with key digits `prefix` above it (as VisitSubtreeDistinct)
-  // from every version in `roots`, replacing each root. Each distinct node on the paths to it is
-  // copied once however many versions share it, so the versions keep their sharing; nodes the
-  // removal empties are dropped (a version left empty becomes nullptr); the subtree's nodes are
-  // freed when no other reference remains. Cost: the distinct nodes on the paths, not versions x
-  // height. Returns false when a node could not be allocated: every version is then unchanged.
-  // REQUIRES: level < min_height() - 1; no other thread uses these versions.
-  [[nodiscard]] bool DropSubtree(std::span<Node*> roots, int level, uint64_t prefix, int slot) {
-    GROVE_CHECK(level < height_ - 1);
+  // Removes one block from every version in `roots`, replacing each root. Each distinct node on
+  // the paths to it (and each bottom node it is part of) is copied once however many versions
+  // share it, so the versions keep their sharing; nodes the removal empties are dropped (a
+  // version left empty becomes nullptr); the block's nodes are freed when no other reference
+  // remains. Cost: the distinct nodes on the paths, not versions x height. Returns false when a
+  // node could not be allocated: every version is then unchanged. REQUIRES: no other thread
+  // uses these versions.
+  [[nodiscard]] bool DropSubtree(std::span<Node*> roots, int bits, uint64_t prefix, int slot) {
+    const BlockAt block = Locate(bits, prefix);
     std::unordered_map<const Node*, Node*> replaced;  // old node: its copy (itself if unchanged)
     std::vector<Node*> next(roots.size(), nullptr);
     bool ok = true;
     for (size_t i = 0; i < roots.size() && ok; ++i) {
       Node* root = roots[i];
-      if (root == nullptr || !HoldsSubtree(root, level, prefix)) {
+      if (root == nullptr || !HoldsSubtree(root, block.level, block.prefix)) {
         next[i] = Share(root);
       } else {
-        next[i] = Without(root, level, prefix, slot, &replaced, &ok);
+        next[i] = Without(root, block, slot, &replaced, &ok);
       }
     }
     if (!ok) {
@@ -621,8 +700,8 @@ class PersistentTrie {
   // Writes the distinct nodes reachable from `roots`, each once and children before parents,
   // then the roots as node indices: Load() rebuilds the same sharing, so the size follows the
   // distinct nodes, not roots x map size. Levels are written from the top of the highest root
-  // H: u32 H, then per node u8 (H - 1 - level), the presence words, then a u32 child index
-  // (inner) or the leaf bytes (bottom) for each present digit.
+  // H: u32 H, then per node u8 (H - 1 - level), the presence words (of kDegree or kBottomDegree
+  // bits), then a u32 child index (inner) or the leaf bytes (bottom) for each present digit.
   void Save(std::span<Node* const> roots, ByteWriter* w) const {
     std::unordered_map<const Node*, uint32_t> index;
     int top = height_;
@@ -667,9 +746,7 @@ class PersistentTrie {
         } else {
           const Bottom* b = static_cast<const Bottom*>(done.node);
           w->PutBytes(b->present, sizeof(b->present));
-          for (int d = 0; d < kDegree; ++d) {
-            if (b->Has(d)) w->Put(b->leaf[d]);
-          }
+          ForEachLeaf(b, [&](int, const Leaf& leaf) { w->Put(leaf); });
         }
       }
     }
@@ -706,18 +783,21 @@ class PersistentTrie {
     };
     for (uint64_t k = 0; k < count; ++k) {
       uint8_t depth = 0;
-      uint64_t present[kWords];
+      uint64_t present[kBottomWords];
       Status s = r->Get("trie node level", &depth);
       if (s.ok() && depth >= top) {
         s = r->Error("trie node level",
                      std::to_string(depth) + " is not below the height " + std::to_string(top));
       }
-      if (s.ok()) s = r->GetBytes("trie node presence", present, sizeof(present));
-      if (s.ok() && kDegree % 64 != 0 && (present[kWords - 1] >> (kDegree % 64)) != 0) {
+      if (!s.ok()) return fail(s);
+      const int level = static_cast<int>(top) - 1 - depth;
+      const int degree = level > 0 ? kDegree : kBottomDegree;
+      const int words = (degree + 63) / 64;
+      s = r->GetBytes("trie node presence", present, words * sizeof(uint64_t));
+      if (s.ok() && degree % 64 != 0 && (present[words - 1] >> (degree % 64)) != 0) {
         s = r->Error("trie node presence", "a digit beyond the degree is marked present");
       }
       if (!s.ok()) return fail(s);
-      const int level = static_cast<int>(top) - 1 - depth;
       auto has = [&](int d) { return (present[d >> 6] >> (d & 63)) & 1; };
       if (level > 0) {
         Inner* n = NewInner(slot, level);
@@ -737,15 +817,19 @@ class PersistentTrie {
           ++refs[c];
         }
       } else {
-        Bottom* b = NewBottom(slot);
+        int leaves = 0;
+        for (uint64_t word : present) leaves += std::popcount(word);
+        Bottom* b = NewBottom(slot, kPacked ? ClassFor(leaves) : 0);
         if (b == nullptr) return fail(ResourceExhaustedError("out of memory loading a trie"));
         nodes.push_back(b);
         refs.push_back(0);
         std::memcpy(b->present, present, sizeof(present));
-        for (int d = 0; d < kDegree; ++d) {
+        Leaf* leaf = Leaves(b);
+        for (int d = 0, at = 0; d < kBottomDegree; ++d) {
           if (!has(d)) continue;
-          s = r->GetBytes("trie leaf", &b->leaf[d], sizeof(Leaf));
-          if (s.ok() && !valid_leaf(b->leaf[d])) s = r->Error("trie leaf", "impossible value");
+          Leaf* to = &leaf[kPacked ? at++ : d];
+          s = r->GetBytes("trie leaf", to, sizeof(Leaf));
+          if (s.ok() && !valid_leaf(*to)) s = r->Error("trie leaf", "impossible value");
           if (!s.ok()) return fail(s);
         }
       }
@@ -766,32 +850,97 @@ class PersistentTrie {
     return s;
   }
 
-  PoolStats inner_stats() const { return inner_pool_.Stats(); }
-  PoolStats bottom_stats() const { return bottom_pool_.Stats(); }
-  int64_t live_nodes() const { return inner_stats().live_nodes + bottom_stats().live_nodes; }
-  int64_t live_bytes() const { return inner_stats().live_bytes() + bottom_stats().live_bytes(); }
-  static constexpr size_t kInnerNodeBytes = sizeof(Node) + kDegree * sizeof(Node*);
-  static constexpr size_t kBottomNodeBytes =
-      sizeof(Node) + ((kDegree + 63) / 64) * 8 + kDegree * sizeof(Leaf);
+  // Adds the nodes and bytes of the trie's pools to *m.
+  void AddMemory(MemoryUse* m) const {
+    AddPoolStats(inner_pool_.Stats(), m);
+    for (int c = 0; c < kClasses.count; ++c) AddPoolStats(bottom_pools_[c]->Stats(), m);
+  }
+  int64_t live_nodes() const {
+    MemoryUse m;
+    AddMemory(&m);
+    return m.live_nodes;
+  }
 
  private:
   struct Inner : Node {
     Node* child[kDegree];
   };
-  static constexpr int kWords = (kDegree + 63) / 64;  // presence words of a node
+  static constexpr int kWords = (kDegree + 63) / 64;              // presence words of a node
+  static constexpr int kBottomWords = (kBottomDegree + 63) / 64;  // of a bottom node
+  // A bottom node: the presence words, then (at kLeafOffset) the leaves, kBottomDegree of them
+  // indexed by digit, or (kPacked) as many as the size class holds, the present ones in digit
+  // order.
   struct Bottom : Node {
-    uint64_t present[kWords];
-    Leaf leaf[kDegree];
-    bool Has(int d) const { return (present[d >> 6] >> (d & 63)) & 1; }
+    uint64_t present[kBottomWords];
   };
+  static constexpr size_t kLeafOffset =
+      (sizeof(Bottom) + alignof(Leaf) - 1) / alignof(Leaf) * alignof(Leaf);
+  static constexpr TrieBottomClasses kClasses = MakeTrieBottomClasses(
+      kLeafOffset, sizeof(Leaf), kBottomDegree, kLog2BottomDegree > kLog2Degree);
+  static constexpr bool kPacked = kClasses.count > 1;
 
-  // Digit `level` of `key` (0: the least significant): the child of a level-`level` node.
+ public:
+  static constexpr size_t kInnerNodeBytes = sizeof(Inner);
+  // Bytes of a bottom node of size class c (a node that holds every digit: the last class).
+  static constexpr size_t BottomBytes(int c) {
+    return kLeafOffset + static_cast<size_t>(kClasses.capacity[c]) * sizeof(Leaf);
+  }
+  static constexpr size_t kBottomNodeBytes = kLeafOffset + kBottomDegree * sizeof(Leaf);
+  // Bytes of the smallest bottom node that holds `leaves` leaves.
+  static constexpr size_t BottomBytesFor(int leaves) { return BottomBytes(ClassFor(leaves)); }
+
+ private:
+  static constexpr int ClassFor(int leaves) {
+    int c = 0;
+    while (kClasses.capacity[c] < leaves) ++c;
+    return c;
+  }
+  static Leaf* Leaves(Bottom* b) {
+    return reinterpret_cast<Leaf*>(reinterpret_cast<char*>(b) + kLeafOffset);
+  }
+  static const Leaf* Leaves(const Bottom* b) {
+    return reinterpret_cast<const Leaf*>(reinterpret_cast<const char*>(b) + kLeafOffset);
+  }
+  static bool Has(const Bottom* b, int d) { return (b->present[d >> 6] >> (d & 63)) & 1; }
+  static int LeafCount(const Bottom* b) {
+    int count = 0;
+    for (uint64_t word : b->present) count += std::popcount(word);
+    return count;
+  }
+  // Where digit d's leaf sits: at d, or (kPacked) after the leaves of the present digits below d.
+  static int SlotOf(const Bottom* b, int d) {
+    if constexpr (!kPacked) return d;
+    int rank = 0;
+    for (int w = 0; w < (d >> 6); ++w) rank += std::popcount(b->present[w]);
+    return rank + std::popcount(b->present[d >> 6] & ((uint64_t{1} << (d & 63)) - 1));
+  }
+  // Calls f(digit, const Leaf&) for each leaf of b in digit order.
+  template <typename F>
+  static void ForEachLeaf(const Bottom* b, F&& f) {
+    const Leaf* leaf = Leaves(b);
+    int at = 0;
+    for (int w = 0; w < kBottomWords; ++w) {
+      for (uint64_t bits = b->present[w]; bits != 0; bits &= bits - 1) {
+        const int d = w * 64 + std::countr_zero(bits);
+        f(d, leaf[kPacked ? at++ : d]);
+      }
+    }
+  }
+
+  // Digit `level` > 0 of `key`: the child of a level-`level` node.
   static int Digit(uint64_t key, int level) {
-    return static_cast<int>((key >> (kLog2Degree * level)) & (kDegree - 1));
+    return static_cast<int>((key >> (kLog2Degree * (level - 1) + kLog2BottomDegree)) &
+                            (kDegree - 1));
+  }
+  // Digit 0 of `key`: its leaf in a bottom node.
+  static int BottomDigit(uint64_t key) { return static_cast<int>(key & (kBottomDegree - 1)); }
+  // Inner digit k of a key prefix (a key shifted right by SpanBits(level) for some level > 0).
+  static int PrefixDigit(uint64_t prefix, int k) {
+    return static_cast<int>((prefix >> (kLog2Degree * k)) & (kDegree - 1));
   }
   // The digits of the fill key above a version `height` levels high: the key prefix of its root.
   uint64_t FillPrefix(int height) const {
-    return kLog2Degree * height >= 64 ? 0 : fill_ >> (kLog2Degree * height);
+    return SpanBits(height) >= 64 ? 0 : fill_ >> SpanBits(height);
   }
 
   // A new node, or nullptr when the pool has no memory.
@@ -800,22 +949,28 @@ class PersistentTrie {
     if (p == nullptr) return nullptr;
     Inner* n = new (p) Inner;
     n->level = static_cast<uint8_t>(level);
+    n->size_class = 0;
     std::memset(n->child, 0, sizeof(n->child));
     return n;
   }
-  Bottom* NewBottom(int slot) {
-    void* p = bottom_pool_.Allocate(slot);
+  // A new bottom node of size class c (its leaves zeroed unless kPacked: a packed node reads
+  // only the leaves it holds).
+  Bottom* NewBottom(int slot, int c) {
+    void* p = bottom_pools_[c]->Allocate(slot);
     if (p == nullptr) return nullptr;
     Bottom* b = new (p) Bottom;
     b->level = 0;
+    b->size_class = static_cast<uint8_t>(c);
     std::memset(b->present, 0, sizeof(b->present));
-    std::memset(static_cast<void*>(b->leaf), 0, sizeof(b->leaf));
+    if constexpr (!kPacked)
+      std::memset(static_cast<void*>(Leaves(b)), 0, kBottomDegree * sizeof(Leaf));
     return b;
   }
   void FreeNode(Node* n, int slot) {
     if (n->level == 0) {
+      const int c = n->size_class;
       static_cast<Bottom*>(n)->~Bottom();
-      bottom_pool_.Free(n, slot);
+      bottom_pools_[c]->Free(n, slot);
     } else {
       static_cast<Inner*>(n)->~Inner();
       inner_pool_.Free(n, slot);
@@ -903,10 +1058,9 @@ class PersistentTrie {
       distinct += level_nodes.size();
     }
     for (size_t k = 0; k < level_nodes.size(); ++k) {
-      const Bottom* b = static_cast<const Bottom*>(level_nodes[k]);
-      for (int i = 0; i < kDegree; ++i) {
-        if (b->Has(i)) on_leaf((level_prefix[k] << kLog2Degree) | i, b->leaf[i], level_weight[k]);
-      }
+      ForEachLeaf(static_cast<const Bottom*>(level_nodes[k]), [&](int d, const Leaf& leaf) {
+        on_leaf((level_prefix[k] << kLog2BottomDegree) | d, leaf, level_weight[k]);
+      });
     }
     return distinct;
   }
@@ -930,10 +1084,28 @@ class PersistentTrie {
     while (h > top && !top_height_.compare_exchange_weak(top, h, std::memory_order_relaxed)) {
     }
   }
-  // Whether version `root` (higher than level + 1) can hold the subtree at (level, prefix): the
-  // prefix's digits above the version are the fill key's.
+  // Where a block (see VisitSubtreeDistinct) lives: the node at `level` with the digits `prefix`
+  // above it (key >> SpanBits(level + 1) == prefix), or, for a block within a bottom node, that
+  // node (level 0) and the block's digits of it: those d with d >> bits == low.
+  struct BlockAt {
+    int level;
+    uint64_t prefix;
+    int bits;
+    int low;
+  };
+  BlockAt Locate(int bits, uint64_t prefix) const {
+    GROVE_CHECK(bits >= 0 && bits < SpanBits(height_) &&
+                (bits < kLog2BottomDegree || (bits - kLog2BottomDegree) % kLog2Degree == 0));
+    if (bits >= kLog2BottomDegree) {
+      return {(bits - kLog2BottomDegree) / kLog2Degree, prefix, bits, 0};
+    }
+    const int shift = kLog2BottomDegree - bits;
+    return {0, prefix >> shift, bits, static_cast<int>(prefix & ((uint64_t{1} << shift) - 1))};
+  }
+  // Whether version `root` can hold the node at (level, prefix): the prefix's digits above the
+  // version are the fill key's.
   bool HoldsSubtree(const Node* root, int level, uint64_t prefix) const {
-    const int shift = kLog2Degree * (level + 1);
+    const int shift = SpanBits(level + 1);
     if (shift >= 64) return false;
     const uint64_t low = prefix << shift;
     return (low >> shift) == prefix && HeightFor(low, fill_) <= Height(root);
@@ -943,29 +1115,30 @@ class PersistentTrie {
     if (root == nullptr || !HoldsSubtree(root, level, prefix)) return nullptr;
     Node* cur = root;
     for (int l = root->level; cur != nullptr && l > level; --l) {
-      cur = static_cast<Inner*>(cur)->child[Digit(prefix, l - level - 1)];
+      cur = static_cast<Inner*>(cur)->child[PrefixDigit(prefix, l - level - 1)];
     }
     return cur;
   }
-  // The replacement of `n` (an inner node above `level` on the path to the subtree) without the
-  // subtree, as a new reference: `n` itself when the subtree is not under it, nullptr when
-  // nothing else is. Memoised in *replaced, so a node is copied once. Sets *ok = false (and
-  // returns nullptr, holding nothing) when out of memory.
-  Node* Without(Node* n, int level, uint64_t prefix, int slot,
+  // The replacement of `n` (a node on the path to the block: above it, or the bottom node it is
+  // part of) without the block, as a new reference: `n` itself when the block is not under it,
+  // nullptr when nothing else is. Memoised in *replaced, so a node is copied once. Sets *ok =
+  // false (and returns nullptr, holding nothing) when out of memory.
+  Node* Without(Node* n, const BlockAt& block, int slot,
                 std::unordered_map<const Node*, Node*>* replaced, bool* ok) {
     if (auto it = replaced->find(n); it != replaced->end()) {
       if (it->second != nullptr) it->second->rc.Acquire();
       return it->second;
     }
+    if (n->level == 0) return BottomWithout(static_cast<Bottom*>(n), block, slot, replaced, ok);
     Inner* old = static_cast<Inner*>(n);
-    const int d = Digit(prefix, old->level - level - 1);
+    const int d = PrefixDigit(block.prefix, old->level - block.level - 1);
     Node* child = old->child[d];
     Node* kept = nullptr;  // the replacement of the path child: a reference we own, or nullptr
-    if (child != nullptr && old->level - 1 > level) {
-      kept = Without(child, level, prefix, slot, replaced, ok);
+    if (child != nullptr && (old->level - 1 > block.level || block.bits < kLog2BottomDegree)) {
+      kept = Without(child, block, slot, replaced, ok);
       if (!*ok) return nullptr;
     }
-    if (child == nullptr || kept == child) {          // the subtree is not under n: n is unchanged
+    if (child == nullptr || kept == child) {          // the block is not under n: n is unchanged
       if (kept != nullptr) (void)kept->rc.Release();  // n holds it too: never the last one
       n->rc.Acquire();
       replaced->emplace(n, n);
@@ -991,13 +1164,47 @@ class PersistentTrie {
     replaced->emplace(n, copy);
     return copy;
   }
+  // Without() of the bottom node a block within a bottom node is part of.
+  Node* BottomWithout(Bottom* old, const BlockAt& block, int slot,
+                      std::unordered_map<const Node*, Node*>* replaced, bool* ok) {
+    uint64_t keep[kBottomWords];
+    int kept = 0;
+    for (int w = 0; w < kBottomWords; ++w) {
+      keep[w] = 0;
+      for (uint64_t bits = old->present[w]; bits != 0; bits &= bits - 1) {
+        const int d = w * 64 + std::countr_zero(bits);
+        if ((d >> block.bits) != block.low) keep[w] |= uint64_t{1} << (d & 63);
+      }
+      kept += std::popcount(keep[w]);
+    }
+    Node* result = nullptr;
+    if (kept == LeafCount(old)) {  // no leaf of the block: unchanged
+      old->rc.Acquire();
+      result = old;
+    } else if (kept > 0) {
+      Bottom* copy = NewBottom(slot, kPacked ? ClassFor(kept) : 0);
+      if (copy == nullptr) {
+        *ok = false;
+        return nullptr;
+      }
+      Leaf* to = Leaves(copy);
+      int at = 0;
+      ForEachLeaf(old, [&](int d, const Leaf& leaf) {
+        if ((keep[d >> 6] >> (d & 63)) & 1) to[kPacked ? at++ : d] = leaf;
+      });
+      std::memcpy(copy->present, keep, sizeof(keep));
+      result = copy;
+    }
+    replaced->emplace(old, result);
+    return result;
+  }
 
   int height_;
   int max_height_;
   uint64_t fill_;
   std::atomic<int> top_height_{height_};
   NodePool inner_pool_;
-  NodePool bottom_pool_;
+  std::array<std::unique_ptr<NodePool>, kClasses.count> bottom_pools_;
   // ReleaseMany's queues, per worker slot (reused: no allocation per call once grown).
   struct alignas(kFalseSharingBytes) ReleaseScratch {
     std::vector<Drop> drop;

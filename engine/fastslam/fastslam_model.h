@@ -544,8 +544,7 @@ class FastSlamModel {
 
   MemoryUse map_memory() const {
     MemoryUse m;
-    AddPoolStats(trie_.inner_stats(), &m);
-    AddPoolStats(trie_.bottom_stats(), &m);
+    trie_.AddMemory(&m);
     return m;
   }
   MemoryUse path_memory() const {

@@ -2,7 +2,9 @@
 // are one 16-bit symbol while each is at most T, and a symbol's successor for each edge is a
 // table lookup. A hexagon whose counter passes T is marked escaped in the symbol tree and its
 // full counters move to a second H-tree of full counters; both trees are versions shared the
-// same way, so a bottom node of symbols is 2 bytes per hexagon instead of 24.
+// same way, so a bottom node of symbols is 2 bytes per hexagon instead of 24. Up to s = 16 a
+// bottom node of symbols spans two H-tree levels and stores only the symbols present (see
+// PersistentTrie): a walk fills its 16 x 16 hexagons sparsely, and paths are a level shorter.
 #ifndef GROVE_ENGINE_FOOTSLAM_ALPHABET_HTREE_MAP_H_
 #define GROVE_ENGINE_FOOTSLAM_ALPHABET_HTREE_MAP_H_
 
@@ -23,17 +25,25 @@ namespace grove::footslam {
 template <int kLog2Degree>
 class AlphabetHTreeMap {
  public:
-  using SymbolTrie = PersistentTrie<uint16_t, kLog2Degree>;
+  // H-tree levels a bottom node of the symbol tree spans: two up to s = 16 (16 x 16 hexagons at
+  // s = 16, which a walk fills sparsely: its nodes store only the symbols present), one above.
+  static constexpr int kBottomLevels = kLog2Degree <= 4 ? 2 : 1;
+  using SymbolTrie = PersistentTrie<uint16_t, kLog2Degree, kLog2Degree * kBottomLevels>;
   using FullTrie = PersistentTrie<Htc, kLog2Degree>;
   // Marks a hexagon whose counters live in the full tree. Never a symbol: S <= 6^6 < 0xFFFF.
   static constexpr uint16_t kEscaped = 0xFFFF;
 
   AlphabetHTreeMap(const HTreeLayout& layout, int slots, size_t particles, const Alphabet* alphabet)
       : alphabet_(alphabet),
-        symbols_(layout.height(), slots, layout.fill_key(), layout.max_height()),
+        layout_height_(layout.height()),
+        symbols_(SymbolHeight(layout.height()), slots, layout.fill_key(),
+                 SymbolHeight(layout.max_height())),
         full_(layout.height(), slots, layout.fill_key(), layout.max_height()),
         symbol_roots_(&symbols_, particles),
         full_roots_(&full_, particles) {}
+
+  // The symbol tree's height for an H-tree of `height` levels.
+  static int SymbolHeight(int height) { return std::max(1, height - (kBottomLevels - 1)); }
 
   // Returns false when out of memory; the engine is then stopped, and the two trees may
   // disagree on the hexagon (its symbol escaped, its counters not yet moved). `owners` > 1:
@@ -102,8 +112,10 @@ class AlphabetHTreeMap {
   // The levels of the highest particle's map: the grid the walk has grown to. (A hexagon's
   // symbol stays in the symbol tree when its counters escape.)
   int grown_height() const {
-    int h = symbols_.min_height();
-    for (const auto* root : symbol_roots_.roots()) h = std::max(h, SymbolTrie::Height(root));
+    int h = layout_height_;
+    for (const auto* root : symbol_roots_.roots()) {
+      h = std::max(h, SymbolTrie::Height(root) + kBottomLevels - 1);
+    }
     return h;
   }
 
@@ -158,25 +170,26 @@ class AlphabetHTreeMap {
   // Storage of diversity, as HTreeMap's. A hexagon whose counters escaped keeps its symbol in
   // the symbol tree, so the symbol tree's blocks are every block.
   std::vector<uint64_t> Blocks(int level) const {
-    return symbols_.SubtreePrefixes(symbol_roots_.roots(), level);
+    return symbols_.SubtreePrefixes(symbol_roots_.roots(), BlockBits(level));
   }
   template <typename F>
   void FoldBlock(int level, uint64_t prefix, std::span<const uint64_t> weights, F&& f) const {
     symbols_.template VisitSubtreeDistinct<uint64_t>(
-        symbol_roots_.roots(), weights, level, prefix,
+        symbol_roots_.roots(), weights, BlockBits(level), prefix,
         [&](uint64_t key, const uint16_t& s, uint64_t w) {
           if (s == kEscaped) return;
           Htc h;
           alphabet_->Decode(s, h.c);
           f(key, h, w);
         });
-    full_.template VisitSubtreeDistinct<uint64_t>(full_roots_.roots(), weights, level, prefix, f);
+    full_.template VisitSubtreeDistinct<uint64_t>(full_roots_.roots(), weights, BlockBits(level),
+                                                  prefix, f);
   }
   // False when out of memory; the engine is then stopped, and the full tree may still hold the
   // block (never read again).
   bool DropBlock(int level, uint64_t prefix, int slot) {
-    return symbols_.DropSubtree(symbol_roots_.mutable_roots(), level, prefix, slot) &&
-           full_.DropSubtree(full_roots_.mutable_roots(), level, prefix, slot);
+    return symbols_.DropSubtree(symbol_roots_.mutable_roots(), BlockBits(level), prefix, slot) &&
+           full_.DropSubtree(full_roots_.mutable_roots(), BlockBits(level), prefix, slot);
   }
 
   void Save(ByteWriter* w) const {
@@ -215,10 +228,8 @@ class AlphabetHTreeMap {
 
   MemoryUse memory() const {
     MemoryUse m;
-    AddPoolStats(symbols_.inner_stats(), &m);
-    AddPoolStats(symbols_.bottom_stats(), &m);
-    AddPoolStats(full_.inner_stats(), &m);
-    AddPoolStats(full_.bottom_stats(), &m);
+    symbols_.AddMemory(&m);
+    full_.AddMemory(&m);
     return m;
   }
 
@@ -235,7 +246,11 @@ class AlphabetHTreeMap {
     return Status::Ok();
   }
 
+  // The key bits below an H-tree level's digits: a block at `level` holds the keys that agree
+  // above them.
+  static int BlockBits(int level) { return kLog2Degree * (level + 1); }
   const Alphabet* alphabet_;
+  int layout_height_;
   SymbolTrie symbols_;
   FullTrie full_;
   VersionSet<SymbolTrie> symbol_roots_;

@@ -77,21 +77,22 @@ class HTreeMap {
   }
 
   // Storage of diversity: a block is the subtree of the H-tree at `level` whose keys have the
-  // digits `prefix` above it (PersistentTrie::VisitSubtreeDistinct). REQUIRES: level <
-  // layout height - 1.
+  // digits `prefix` above it (key >> (log2(degree) * (level + 1)) == prefix; see
+  // PersistentTrie::VisitSubtreeDistinct). REQUIRES: level < layout height - 1.
   // The blocks any particle's map holds, in increasing order.
   std::vector<uint64_t> Blocks(int level) const {
-    return trie_.SubtreePrefixes(roots_.roots(), level);
+    return trie_.SubtreePrefixes(roots_.roots(), kLog2Degree * (level + 1));
   }
   // f(key, const Htc&, weight) for each hexagon of each distinct version of the block, weight
   // the sum of weights[i] over the particles whose maps hold that version.
   template <typename F>
   void FoldBlock(int level, uint64_t prefix, std::span<const uint64_t> weights, F&& f) const {
-    trie_.template VisitSubtreeDistinct<uint64_t>(roots_.roots(), weights, level, prefix, f);
+    trie_.template VisitSubtreeDistinct<uint64_t>(roots_.roots(), weights,
+                                                  kLog2Degree * (level + 1), prefix, f);
   }
   // Removes the block from every particle's map; false when out of memory (maps unchanged).
   bool DropBlock(int level, uint64_t prefix, int slot) {
-    return trie_.DropSubtree(roots_.mutable_roots(), level, prefix, slot);
+    return trie_.DropSubtree(roots_.mutable_roots(), kLog2Degree * (level + 1), prefix, slot);
   }
 
   void Save(ByteWriter* w) const { trie_.Save(roots_.roots(), w); }
@@ -119,8 +120,7 @@ class HTreeMap {
 
   MemoryUse memory() const {
     MemoryUse m;
-    AddPoolStats(trie_.inner_stats(), &m);
-    AddPoolStats(trie_.bottom_stats(), &m);
+    trie_.AddMemory(&m);
     return m;
   }
 

@@ -253,13 +253,13 @@ TEST_F(CorruptCheckpointTest, OtherFilesAndVersionsAreRefused) {
   EXPECT_NE(s.message().find("not a grove checkpoint"), std::string::npos) << s.ToString();
   // Another format version (the header's u32 at offset 8, outside the body's checksum), newer
   // or older, is refused once the kind shows it is FootSLAM's.
-  for (uint8_t version : {4, 6}) {
+  for (uint8_t version : {5, 7}) {
     std::string other = good_;
     other[8] = static_cast<char>(version);
     s = ResumeStatus(other, config_);
     EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
     EXPECT_NE(s.message().find("FootSLAM checkpoint format version " + std::to_string(version) +
-                               " cannot be read by this grove, which reads version 5"),
+                               " cannot be read by this grove, which reads version 6"),
               std::string::npos)
         << s.ToString();
   }

@@ -22,11 +22,12 @@ struct Value {
 
 // Random operations on a handful of live versions, each checked against a std::map copy
 // (immer's model-based fuzzing).
-template <int kLog2Degree>
+template <int kLog2Degree, int kLog2BottomDegree = kLog2Degree>
 void RunModelCheck(int height, uint64_t seed, int ops, uint64_t key_space) {
   SCOPED_TRACE(testing::Message() << "seed " << seed << " degree " << (1 << kLog2Degree)
-                                  << " height " << height);
-  using Trie = PersistentTrie<Value, kLog2Degree>;
+                                  << " bottom degree " << (1 << kLog2BottomDegree) << " height "
+                                  << height);
+  using Trie = PersistentTrie<Value, kLog2Degree, kLog2BottomDegree>;
   Trie trie(height, 1);
   constexpr int kVersions = 8;
   std::vector<typename Trie::Root> roots(kVersions, nullptr);
@@ -67,6 +68,14 @@ void RunModelCheck(int height, uint64_t seed, int ops, uint64_t key_space) {
         }
         break;
       }
+      case 4: {  // erase a key, present or not
+        const uint64_t k = models[v].empty() || rng() % 2 == 0
+                               ? rng() % limit
+                               : std::next(models[v].begin(), rng() % models[v].size())->first;
+        ASSERT_TRUE(trie.Erase(&roots[v], k, 0));
+        models[v].erase(k);
+        break;
+      }
       default: {  // update
         uint64_t k = rng() % limit;
         uint64_t add = rng() % 1000 + 1;
@@ -104,6 +113,29 @@ TEST(PersistentTrieTest, MatchesReferenceMapDegree256) { RunModelCheck<8>(2, 12,
 TEST(PersistentTrieTest, MatchesReferenceMapHeightOne) { RunModelCheck<4>(1, 13, 5000, 16); }
 TEST(PersistentTrieTest, MatchesReferenceMapFullWidthKeys) {
   RunModelCheck<4>(16, 14, 20000, ~uint64_t{0});
+}
+// Bottom nodes wider than inner ones store their leaves packed, in size classes (for these
+// 8-byte leaves: 3, 11, 27, 59, 123 and all 256 at 256 digits; 6 and 16 at 16; 6, 14, 30 and 64
+// at 64), moved to a larger class as keys arrive.
+TEST(PersistentTrieTest, WideBottomNodesComeInSizeClassesOfWholeLines) {
+  using Wide = PersistentTrie<Value, 4, 8>;
+  EXPECT_EQ(Wide::BottomBytesFor(1), 64u);
+  EXPECT_EQ(Wide::BottomBytesFor(3), 64u);
+  EXPECT_EQ(Wide::BottomBytesFor(4), 128u);
+  EXPECT_EQ(Wide::BottomBytesFor(123), 1024u);
+  EXPECT_EQ(Wide::BottomBytesFor(124), 40u + 256 * 8);  // presence words and every digit
+  EXPECT_EQ(Wide::kBottomNodeBytes, 40u + 256 * 8);
+  // A bottom node as wide as an inner one holds every digit: one class, as before.
+  using Narrow = PersistentTrie<Value, 4>;
+  EXPECT_EQ(Narrow::BottomBytesFor(1), 16u + 16 * 8);
+}
+TEST(PersistentTrieTest, MatchesReferenceMapWideBottoms) {
+  for (uint64_t seed = 1; seed <= 3; ++seed) RunModelCheck<4, 8>(3, seed, 20000, 1 << 16);
+  RunModelCheck<4, 8>(2, 4, 20000, 2000);  // dense: full bottom nodes
+  RunModelCheck<2, 4>(4, 5, 20000, 300);
+  RunModelCheck<2, 6>(2, 6, 20000, 256);
+  RunModelCheck<4, 8>(1, 7, 5000, 256);  // height one: the root is a bottom node
+  RunModelCheck<4, 8>(15, 8, 20000, ~uint64_t{0});
 }
 
 TEST(PersistentTrieTest, UpdateDoesNotChangeOtherVersions) {
@@ -157,21 +189,21 @@ TEST(PersistentTrieTest, SharedVersionCopiesOnlyThePath) {
 // ReleaseMany frees exactly what Release one by one frees: two tries built by the same random
 // updates and shares, one released each way, keep the same live nodes and the same contents.
 // With more than one slot ReleaseMany sums drops of one node first, with one it does not: both.
+template <typename Trie = PersistentTrie<Value, 4>>
 void CheckReleaseManyFreesWhatReleaseFrees(int slots) {
   SCOPED_TRACE(testing::Message() << slots << " slots");
-  using Trie = PersistentTrie<Value, 4>;
   const int last = slots - 1;
   Trie one(4, slots), many(4, slots);
   constexpr int kVersions = 300;
-  std::vector<Trie::Root> a(kVersions, nullptr), b(kVersions, nullptr);
+  std::vector<typename Trie::Root> a(kVersions, nullptr), b(kVersions, nullptr);
   std::mt19937_64 rng(21);
   for (int round = 0; round < 6; ++round) {
     for (int op = 0; op < 4000; ++op) {
       int v = rng() % kVersions;
       if (rng() % 4 == 0) {
         int from = rng() % kVersions;
-        Trie::Root ca = Trie::Share(a[from]);
-        Trie::Root cb = Trie::Share(b[from]);
+        typename Trie::Root ca = Trie::Share(a[from]);
+        typename Trie::Root cb = Trie::Share(b[from]);
         one.Release(a[v], 0);
         many.Release(b[v], 0);
         a[v] = ca;
@@ -184,7 +216,7 @@ void CheckReleaseManyFreesWhatReleaseFrees(int slots) {
       }
     }
     // Release a random half (and some nullptr entries), in two spans, from the last slot.
-    std::vector<Trie::Root> dead_a, dead_b;
+    std::vector<typename Trie::Root> dead_a, dead_b;
     for (int v = 0; v < kVersions; ++v) {
       if (rng() % 2 == 0) {
         dead_a.push_back(a[v]);
@@ -192,8 +224,8 @@ void CheckReleaseManyFreesWhatReleaseFrees(int slots) {
         a[v] = b[v] = nullptr;
       }
     }
-    for (Trie::Root r : dead_a) one.Release(r, last);
-    std::span<Trie::Root const> all(dead_b);
+    for (typename Trie::Root r : dead_a) one.Release(r, last);
+    std::span<typename Trie::Root const> all(dead_b);
     many.ReleaseMany(all.first(all.size() / 2), last);
     many.ReleaseMany(all.subspan(all.size() / 2), last);
     ASSERT_EQ(one.live_nodes(), many.live_nodes()) << "round " << round;
@@ -205,7 +237,7 @@ void CheckReleaseManyFreesWhatReleaseFrees(int slots) {
     }
   }
   many.ReleaseMany(b, 0);
-  for (Trie::Root r : a) one.Release(r, 0);
+  for (typename Trie::Root r : a) one.Release(r, 0);
   EXPECT_EQ(one.live_nodes(), 0);
   EXPECT_EQ(many.live_nodes(), 0);
 }
@@ -213,6 +245,7 @@ void CheckReleaseManyFreesWhatReleaseFrees(int slots) {
 TEST(PersistentTrieTest, ReleaseManyFreesWhatReleaseFrees) {
   CheckReleaseManyFreesWhatReleaseFrees(1);
   CheckReleaseManyFreesWhatReleaseFrees(2);
+  CheckReleaseManyFreesWhatReleaseFrees<PersistentTrie<Value, 4, 8>>(2);
 }
 
 TEST(PersistentTrieTest, DistinctVisitSumsEqualBruteForce) {
@@ -433,13 +466,14 @@ void GrowFamily(Trie* trie, std::vector<typename Trie::Root>* roots,
 // heights, and match std::map over full 64-bit keys. Keys are drawn as the fill key with its low
 // bits changed, so versions of every height meet; the distinct visit sums what every version's
 // own walk sums, and save and load keep every version and its sharing.
+template <typename Trie = PersistentTrie<Value, 4>>
 void RunGrowthCheck(int min_height, uint64_t fill, uint64_t seed) {
-  SCOPED_TRACE(testing::Message() << "min height " << min_height << " fill " << fill);
-  using Trie = PersistentTrie<Value, 4>;
+  SCOPED_TRACE(testing::Message() << "min height " << min_height << " fill " << fill << " bottom "
+                                  << Trie::kBottomDegree);
   Trie trie(min_height, 1, fill);
   std::mt19937_64 rng(seed);
   constexpr int kVersions = 6;
-  std::vector<Trie::Root> roots(kVersions, nullptr);
+  std::vector<typename Trie::Root> roots(kVersions, nullptr);
   std::vector<std::map<uint64_t, uint64_t>> models(kVersions);
   // Keys of every size: small changes keep low versions low, large ones grow them.
   GrowFamily(&trie, &roots, &models, &rng, 20000, 8,
@@ -462,7 +496,7 @@ void RunGrowthCheck(int min_height, uint64_t fill, uint64_t seed) {
     EXPECT_EQ(seen, models[v]) << "version " << v;
   }
   std::map<uint64_t, uint64_t> distinct;
-  trie.VisitDistinct<uint64_t>(
+  trie.template VisitDistinct<uint64_t>(
       roots, weights, [&](uint64_t k, const Value& x, uint64_t w) { distinct[k] += x.v * w; });
   EXPECT_EQ(distinct, brute);
   EXPECT_TRUE(trie.CheckCounts(roots).ok()) << trie.CheckCounts(roots).ToString();
@@ -470,7 +504,7 @@ void RunGrowthCheck(int min_height, uint64_t fill, uint64_t seed) {
   trie.Save(roots, &w);
   const std::string bytes = w.Take();
   Trie copy(min_height, 1, fill);
-  std::vector<Trie::Root> loaded;
+  std::vector<typename Trie::Root> loaded;
   ByteReader r(bytes, "t");
   ASSERT_TRUE(copy.Load(
                       &r, roots.size(), 0, [](const Value&) { return true; }, &loaded)
@@ -496,6 +530,8 @@ TEST(PersistentTrieGrowthTest, VersionsGrowPastAnyPresetHeightAndStayShared) {
 TEST(PersistentTrieGrowthTest, VersionsGrowAroundANonZeroFillKey) {
   RunGrowthCheck(1, 0x0123456789abcdefULL, 22);
   RunGrowthCheck(3, 0xfedcba9876543210ULL, 23);
+  RunGrowthCheck<PersistentTrie<Value, 4, 8>>(1, 0x0123456789abcdefULL, 24);
+  RunGrowthCheck<PersistentTrie<Value, 4, 8>>(2, 0xfedcba9876543210ULL, 25);
 }
 
 TEST(PersistentTrieGrowthTest, TheFillKeysDigitsNameTheOldRootsPlace) {
@@ -538,27 +574,30 @@ TEST(PersistentTrieGrowthTest, SmallKeysOfATallVersionAreFoundAndLargeKeysOfALow
 // Versions sharing nodes in every way, some grown above the minimum height around a fill key;
 // drops one subtree from all of them and checks every version against its model, the counts,
 // that no node leaked, and that the drop adds fewer nodes than a path copy per version.
+template <int kLog2BottomDegree = 2>
 void RunDropCheck(uint64_t fill, uint64_t seed) {
-  SCOPED_TRACE(testing::Message() << "fill " << fill << " seed " << seed);
-  using Trie = PersistentTrie<Value, 2>;
-  constexpr int kMin = 4;  // keys below 4^4 fit every version
+  SCOPED_TRACE(testing::Message() << "fill " << fill << " seed " << seed << " bottom degree "
+                                  << (1 << kLog2BottomDegree));
+  using Trie = PersistentTrie<Value, 2, kLog2BottomDegree>;
+  constexpr int kMin = 1 + (8 - kLog2BottomDegree) / 2;  // keys below 2^8 fit every version
   Trie trie(kMin, 1, fill);
   std::mt19937_64 rng(seed);
   constexpr int kVersions = 12;
-  std::vector<Trie::Root> roots(kVersions, nullptr);
+  std::vector<typename Trie::Root> roots(kVersions, nullptr);
   std::vector<std::map<uint64_t, uint64_t>> models(kVersions);
   // Mostly keys of the minimum height, a few that grow a version.
   GrowFamily(&trie, &roots, &models, &rng, 3000, 6,
              [&] { return trie.fill() ^ (rng() % 50 == 0 ? rng() % 4096 : rng() % 256); });
-  for (int level : {0, 1, 2}) {
-    SCOPED_TRACE(testing::Message() << "level " << level);
-    const int shift = 2 * (level + 1);
+  // Blocks of one digit, part of a bottom node when it is wider, and of 1, 2 and 3 levels.
+  for (int shift : {0, 2, 4, 6}) {
+    if (shift >= kLog2BottomDegree && (shift - kLog2BottomDegree) % 2 != 0) continue;
+    SCOPED_TRACE(testing::Message() << "block bits " << shift);
     // The blocks some version holds, listed once each in key order.
     std::set<uint64_t> blocks;
     for (const auto& model : models) {
       for (const auto& kv : model) blocks.insert(kv.first >> shift);
     }
-    EXPECT_EQ(trie.SubtreePrefixes(roots, level),
+    EXPECT_EQ(trie.SubtreePrefixes(roots, shift),
               std::vector<uint64_t>(blocks.begin(), blocks.end()));
     // A block some version holds: the one of a key of version 0.
     ASSERT_FALSE(models[0].empty());
@@ -572,13 +611,13 @@ void RunDropCheck(uint64_t fill, uint64_t seed) {
         if ((k >> shift) == prefix) brute[k] += x * weights[v];
       }
     }
-    trie.VisitSubtreeDistinct<uint64_t>(
-        roots, weights, level, prefix,
+    trie.template VisitSubtreeDistinct<uint64_t>(
+        roots, weights, shift, prefix,
         [&](uint64_t k, const Value& x, uint64_t w) { distinct[k] += x.v * w; });
     ASSERT_FALSE(brute.empty());
     EXPECT_EQ(distinct, brute);
     const int64_t before = trie.live_nodes();
-    ASSERT_TRUE(trie.DropSubtree(roots, level, prefix, 0));
+    ASSERT_TRUE(trie.DropSubtree(roots, shift, prefix, 0));
     for (int v = 0; v < kVersions; ++v) {
       std::erase_if(models[v], [&](const auto& kv) { return (kv.first >> shift) == prefix; });
       std::map<uint64_t, uint64_t> seen;
@@ -598,6 +637,9 @@ TEST(PersistentTrieDropTest, ASubtreeLeavesEveryVersionAndTheirSharingStays) {
   RunDropCheck(0, 1);
   RunDropCheck(0, 2);
   RunDropCheck(0x9c5u << 8, 3);  // a fill key: versions grown around it
+  RunDropCheck<4>(0, 4);
+  RunDropCheck<4>(0x9c5u << 8, 5);
+  RunDropCheck<6>(0, 6);  // a bottom node of 64 under each root
 }
 
 // Dropping a subtree shared by many identical versions copies each path node once.
@@ -612,7 +654,7 @@ TEST(PersistentTrieDropTest, SharedPathsAreCopiedOnce) {
   for (auto& r : roots) r = Trie::Share(base);
   trie.Release(base, 0);
   const int64_t before = trie.live_nodes();
-  ASSERT_TRUE(trie.DropSubtree(roots, 0, 0x12, 0));  // the bottom node of keys 0x120..0x12f
+  ASSERT_TRUE(trie.DropSubtree(roots, 4, 0x12, 0));  // the bottom node of keys 0x120..0x12f
   // One new root and one new level-1 node, the old two and the bottom node freed.
   EXPECT_EQ(trie.live_nodes(), before - 1);
   for (Trie::Root r : roots) ASSERT_EQ(r, roots[0]);
@@ -626,8 +668,11 @@ TEST(PersistentTrieDropTest, SharedPathsAreCopiedOnce) {
 TEST(PersistentTrieFaultTest, AFailedDropLeavesEveryVersionIntact) {
   using Trie = PersistentTrie<Value, 2>;
   int failures = 0;
-  for (int64_t fail_after = 0; fail_after < 12; ++fail_after) {
-    SCOPED_TRACE(testing::Message() << "fail after " << fail_after);
+  // Keys 48..63, and key 50 alone (a block within a bottom node).
+  for (int64_t attempt = 0; attempt < 24; ++attempt) {
+    const int64_t fail_after = attempt % 12;
+    const int bits = attempt < 12 ? 4 : 0;
+    SCOPED_TRACE(testing::Message() << "fail after " << fail_after << " bits " << bits);
     Trie trie(4, 1);
     std::vector<Trie::Root> roots(6, nullptr);
     std::mt19937_64 rng(7);
@@ -648,7 +693,7 @@ TEST(PersistentTrieFaultTest, AFailedDropLeavesEveryVersionIntact) {
     const int64_t nodes = trie.live_nodes();
     const std::vector<Trie::Root> old = roots;
     FailAllocationsAfter(fail_after);
-    const bool dropped = trie.DropSubtree(roots, 1, 3, 0);  // keys 48..63
+    const bool dropped = trie.DropSubtree(roots, bits, 50 >> bits, 0);
     FailAllocationsAfter(-1);
     failures += !dropped;
     if (!dropped) {
@@ -669,12 +714,12 @@ TEST(PersistentTrieFaultTest, AFailedDropLeavesEveryVersionIntact) {
 
 // Every allocation of a run of updates fails in turn: the update reports it, the version keeps
 // its contents, no count is wrong and nothing leaks.
-TEST(PersistentTrieFaultTest, AFailedAllocationLeavesEveryVersionIntactAndLeaksNothing) {
-  using Trie = PersistentTrie<Value, 2>;
+template <typename Trie>
+void CheckFailedAllocations() {
   for (int64_t fail_after = 0; fail_after < 400; fail_after += 3) {
     SCOPED_TRACE(testing::Message() << "fail after " << fail_after);
     Trie trie(1, 1);
-    std::vector<Trie::Root> roots(3, nullptr);
+    std::vector<typename Trie::Root> roots(3, nullptr);
     std::vector<std::map<uint64_t, uint64_t>> models(3);
     std::mt19937_64 rng(fail_after);
     // Shared versions first, so failures hit copies as well as new nodes and growth.
@@ -707,6 +752,12 @@ TEST(PersistentTrieFaultTest, AFailedAllocationLeavesEveryVersionIntactAndLeaksN
   }
 }
 
+TEST(PersistentTrieFaultTest, AFailedAllocationLeavesEveryVersionIntactAndLeaksNothing) {
+  CheckFailedAllocations<PersistentTrie<Value, 2>>();
+  // Wide bottom nodes: a failure can also hit the move of a full node to a larger class.
+  CheckFailedAllocations<PersistentTrie<Value, 2, 6>>();
+}
+
 // A shared path whose copy runs out of memory at each of its levels in turn: the first copy
 // keeps the old path alive until the whole path is copied and the copies do not count their path
 // children, so a copy abandoned part way must count the link it left and drop the old path.
@@ -737,6 +788,46 @@ TEST(PersistentTrieFaultTest, ACopyAbandonedAtAnyLevelOfASharedPathKeepsEveryCou
     for (auto* root : roots) trie.Release(root, 0);
     EXPECT_EQ(trie.live_nodes(), 0);
   }
+}
+
+// A wide bottom node that must move to a larger class for a new leaf: unique, it is replaced
+// and freed; held by several versions that all take the update (`holders`), it is copied and
+// the old node stays until the last of them lets it go.
+TEST(PersistentTrieTest, AFullWideBottomNodeMovesToALargerClass) {
+  using Trie = PersistentTrie<Value, 4, 8>;  // classes of 3, 11, ... leaves
+  Trie trie(1, 1);
+  Trie::Root root = nullptr;
+  for (uint64_t k : {10, 20, 30}) {
+    root = TrieUpdated(trie, root, k, 0, [&](Value& x, bool) { x.v = k; });
+  }
+  EXPECT_EQ(trie.live_nodes(), 1);
+  root = TrieUpdated(trie, root, 15, 0, [&](Value& x, bool) { x.v = 15; });  // a fourth leaf
+  EXPECT_EQ(trie.live_nodes(), 1);                                           // the full node freed
+  std::map<uint64_t, uint64_t> seen;
+  trie.ForEach(root, [&](uint64_t k, const Value& x) { seen[k] = x.v; });
+  EXPECT_EQ(seen, (std::map<uint64_t, uint64_t>{{10, 10}, {15, 15}, {20, 20}, {30, 30}}));
+
+  // Fill the second class (11 leaves), then let two holders take a twelfth.
+  for (uint64_t k = 100; k < 107; ++k) {
+    root = TrieUpdated(trie, root, k, 0, [&](Value& x, bool) { x.v = k; });
+  }
+  Trie::Root other = Trie::Share(root);
+  Trie::Root full = root;
+  ASSERT_TRUE(trie.Update(
+      &root, 5, 0, [](Value& x, bool) { x.v = 5; }, 2));
+  EXPECT_NE(root, full);
+  EXPECT_EQ(trie.live_nodes(), 2);
+  EXPECT_EQ(trie.Find(other, 5), nullptr);  // the old node, intact until its holder lets go
+  EXPECT_EQ(trie.Find(other, 106)->v, 106u);
+  trie.Release(other, 0);  // the second holder takes the result
+  other = Trie::Share(root);
+  EXPECT_EQ(trie.live_nodes(), 1);
+  EXPECT_EQ(trie.Find(other, 5)->v, 5u);
+  std::vector<Trie::Root> all{root, other};
+  EXPECT_TRUE(trie.CheckCounts(all).ok()) << trie.CheckCounts(all).ToString();
+  trie.Release(root, 0);
+  trie.Release(other, 0);
+  EXPECT_EQ(trie.live_nodes(), 0);
 }
 
 }  // namespace
