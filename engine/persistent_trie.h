@@ -538,6 +538,7 @@ class PersistentTrie {
   template <typename W, typename F>
   size_t VisitSubtreeDistinct(std::span<Node* const> roots, std::span<const W> weights, int bits,
                               uint64_t prefix, F&& on_leaf) const {
+    GROVE_CHECK(roots.size() == weights.size());
     const BlockAt block = Locate(bits, prefix);
     std::vector<Node*> nodes;
     std::vector<uint64_t> prefixes;
@@ -983,8 +984,9 @@ class PersistentTrie {
     b->size_class = static_cast<uint8_t>(c);
     b->leaves = 0;
     std::memset(b->present, 0, sizeof(b->present));
-    if constexpr (!kPacked)
+    if constexpr (!kPacked) {
       std::memset(static_cast<void*>(Leaves(b)), 0, kBottomDegree * sizeof(Leaf));
+    }
     return b;
   }
   void FreeNode(Node* n, int slot) {

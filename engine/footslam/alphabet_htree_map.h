@@ -114,7 +114,9 @@ class AlphabetHTreeMap {
   int grown_height() const {
     int h = layout_height_;
     for (const auto* root : symbol_roots_.roots()) {
-      h = std::max(h, SymbolTrie::Height(root) + kBottomLevels - 1);
+      // Above the first grid every level of a symbol version is one H-tree level.
+      const int height = SymbolTrie::Height(root);
+      if (height > symbols_.min_height()) h = std::max(h, height + kBottomLevels - 1);
     }
     return h;
   }

@@ -242,6 +242,14 @@ TEST(FootSlamGridTest, TheSummaryReportsTheGridTheMapsGrewTo) {
   for (const Step& s : Walk(500, 3, 60)) ASSERT_TRUE((*slam)->Step(s.t, s.dx, s.dy).ok());
   // 16 hexagons nest in 64, then 256: the walk reaches 70 hexagons from the start.
   EXPECT_EQ((*slam)->Summary().grid_size, 256);
+  // A first grid of one level, 4 x 4 hexagons, inside one bottom node of the alphabet's symbol
+  // tree (16 x 16 at s = 16): a step into the next hexagon stays in it.
+  c.grid_size = 4;
+  auto small = FootSlam::Create(c);
+  ASSERT_TRUE(small.ok());
+  ASSERT_TRUE((*small)->Step(1, 0.9, 0).ok());  // one hexagon east: a crossing
+  EXPECT_GT((*small)->Summary().map_memory.live_nodes, 0);
+  EXPECT_EQ((*small)->Summary().grid_size, 4);
 }
 
 // A growing grid bounds the work of one step instead: a step may not cross more hexagons than
