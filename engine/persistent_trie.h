@@ -269,7 +269,7 @@ class PersistentTrie {
       Bottom* old = static_cast<Bottom*>(cur);
       existed = Has(old, d);
       const bool mine = held == nullptr && (cur == owned || cur->rc.unique());
-      const int count = kPacked ? LeafCount(old) : kBottomDegree;
+      const int count = kPacked ? old->leaves : kBottomDegree;
       const int need = count + (kPacked && !existed ? 1 : 0);
       if (mine && need <= kClasses.capacity[old->size_class]) {
         b = old;
@@ -293,8 +293,7 @@ class PersistentTrie {
     const int at = SlotOf(b, d);
     if (!existed) {
       if constexpr (kPacked) {
-        std::memmove(static_cast<void*>(leaf + at + 1), leaf + at,
-                     (LeafCount(b) - at) * sizeof(Leaf));
+        std::memmove(static_cast<void*>(leaf + at + 1), leaf + at, (b->leaves - at) * sizeof(Leaf));
       }
       leaf[at] = Leaf{};
       b->present[d >> 6] |= uint64_t{1} << (d & 63);
@@ -325,7 +324,7 @@ class PersistentTrie {
       Leaf* leaf = Leaves(b);
       const int at = SlotOf(b, d);
       std::memmove(static_cast<void*>(leaf + at), leaf + at + 1,
-                   (LeafCount(b) - at - 1) * sizeof(Leaf));
+                   (b->leaves - at - 1) * sizeof(Leaf));
     }
     b->present[d >> 6] &= ~(uint64_t{1} << (d & 63));
     if (--b->leaves != 0) return true;
@@ -897,7 +896,6 @@ class PersistentTrie {
   static constexpr size_t BottomBytes(int c) {
     return kLeafOffset + static_cast<size_t>(kClasses.capacity[c]) * sizeof(Leaf);
   }
-  static constexpr size_t kBottomNodeBytes = kLeafOffset + kBottomDegree * sizeof(Leaf);
   // Bytes of the smallest bottom node that holds `leaves` leaves.
   static constexpr size_t BottomBytesFor(int leaves) { return BottomBytes(ClassFor(leaves)); }
 
@@ -914,7 +912,6 @@ class PersistentTrie {
     return reinterpret_cast<const Leaf*>(reinterpret_cast<const char*>(b) + kLeafOffset);
   }
   static bool Has(const Bottom* b, int d) { return (b->present[d >> 6] >> (d & 63)) & 1; }
-  static int LeafCount(const Bottom* b) { return b->leaves; }
   // std::popcount without a call: baseline x86-64 has no POPCNT instruction, and GCC then calls
   // libgcc's __popcountdi2 (4.4 % of the 1-thread paper walk's samples when SlotOf used it).
   static int PopCount(uint64_t x) {
@@ -1201,7 +1198,7 @@ class PersistentTrie {
       kept += PopCount(keep[w]);
     }
     Node* result = nullptr;
-    if (kept == LeafCount(old)) {  // no leaf of the block: unchanged
+    if (kept == old->leaves) {  // no leaf of the block: unchanged
       old->rc.Acquire();
       result = old;
     } else if (kept > 0) {

@@ -171,27 +171,26 @@ class AlphabetHTreeMap {
 
   // Storage of diversity, as HTreeMap's. A hexagon whose counters escaped keeps its symbol in
   // the symbol tree, so the symbol tree's blocks are every block.
-  std::vector<uint64_t> Blocks(int level) const {
-    return symbols_.SubtreePrefixes(symbol_roots_.roots(), BlockBits(level));
+  std::vector<uint64_t> Blocks(int bits) const {
+    return symbols_.SubtreePrefixes(symbol_roots_.roots(), bits);
   }
   template <typename F>
-  void FoldBlock(int level, uint64_t prefix, std::span<const uint64_t> weights, F&& f) const {
+  void FoldBlock(int bits, uint64_t prefix, std::span<const uint64_t> weights, F&& f) const {
     symbols_.template VisitSubtreeDistinct<uint64_t>(
-        symbol_roots_.roots(), weights, BlockBits(level), prefix,
+        symbol_roots_.roots(), weights, bits, prefix,
         [&](uint64_t key, const uint16_t& s, uint64_t w) {
           if (s == kEscaped) return;
           Htc h;
           alphabet_->Decode(s, h.c);
           f(key, h, w);
         });
-    full_.template VisitSubtreeDistinct<uint64_t>(full_roots_.roots(), weights, BlockBits(level),
-                                                  prefix, f);
+    full_.template VisitSubtreeDistinct<uint64_t>(full_roots_.roots(), weights, bits, prefix, f);
   }
   // False when out of memory; the engine is then stopped, and the full tree may still hold the
   // block (never read again).
-  bool DropBlock(int level, uint64_t prefix, int slot) {
-    return symbols_.DropSubtree(symbol_roots_.mutable_roots(), BlockBits(level), prefix, slot) &&
-           full_.DropSubtree(full_roots_.mutable_roots(), BlockBits(level), prefix, slot);
+  bool DropBlock(int bits, uint64_t prefix, int slot) {
+    return symbols_.DropSubtree(symbol_roots_.mutable_roots(), bits, prefix, slot) &&
+           full_.DropSubtree(full_roots_.mutable_roots(), bits, prefix, slot);
   }
 
   void Save(ByteWriter* w) const {
@@ -248,9 +247,6 @@ class AlphabetHTreeMap {
     return Status::Ok();
   }
 
-  // The key bits below an H-tree level's digits: a block at `level` holds the keys that agree
-  // above them.
-  static int BlockBits(int level) { return kLog2Degree * (level + 1); }
   const Alphabet* alphabet_;
   int layout_height_;
   SymbolTrie symbols_;

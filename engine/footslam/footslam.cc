@@ -148,10 +148,12 @@ class Engine final : public FootSlam::Impl {
     // root (Validate() asks for a first grid of at least two levels).
     const double hex_width = std::sqrt(3.0) * config.hex_radius_m;
     const int side_bits = layout_.log2_degree() / 2;
-    while (store_level_ + 1 <= layout_.height() - 2 &&
-           std::ldexp(hex_width, side_bits * (store_level_ + 2)) <= config.store_distance_m) {
-      ++store_level_;
+    int level = 0;
+    while (level + 1 <= layout_.height() - 2 &&
+           std::ldexp(hex_width, side_bits * (level + 2)) <= config.store_distance_m) {
+      ++level;
     }
+    store_bits_ = layout_.log2_degree() * (level + 1);
   }
 
   Status Init() override {
@@ -458,13 +460,13 @@ class Engine final : public FootSlam::Impl {
       box.hi_y = std::max(box.hi_y, b.hi_y);
     }
     // The blocks any particle's map holds, in increasing order.
-    StatusOr<std::vector<uint64_t>> blocks = Gathered(map_.Blocks(store_level_));
+    StatusOr<std::vector<uint64_t>> blocks = Gathered(map_.Blocks(store_bits_));
     if (!blocks.ok()) return blocks.status();
     std::sort(blocks->begin(), blocks->end());
     blocks->erase(std::unique(blocks->begin(), blocks->end()), blocks->end());
     // A block's box: its corner hexagons' centres, widened by a hexagon's width (the odd rows
     // are offset by half of one) and its circumradius.
-    const int shift = layout_.log2_degree() * (store_level_ + 1);
+    const int shift = store_bits_;
     const double margin = (std::sqrt(3.0) + 1) * config_.hex_radius_m;
     std::vector<uint64_t> far;
     for (uint64_t prefix : *blocks) {
@@ -528,7 +530,7 @@ class Engine final : public FootSlam::Impl {
     std::vector<Fold> mine;
     for (uint32_t b = 0; b < far.size(); ++b) {
       std::map<uint64_t, Fold> folds;
-      map_.FoldBlock(store_level_, far[b], weights, [&](uint64_t key, const Htc& h, uint64_t wk) {
+      map_.FoldBlock(store_bits_, far[b], weights, [&](uint64_t key, const Htc& h, uint64_t wk) {
         auto [it, inserted] = folds.try_emplace(key);
         Fold& f = it->second;
         if (inserted) {
@@ -571,7 +573,7 @@ class Engine final : public FootSlam::Impl {
       if (combined != nullptr) combined->total = EdgeSum(*combined);
     }
     for (size_t b = 0; b < far.size(); ++b) {
-      if (!map_.DropBlock(store_level_, far[b], 0)) {
+      if (!map_.DropBlock(store_bits_, far[b], 0)) {
         return ResourceExhaustedError("out of memory while dropping a stored map block");
       }
       ++stored_blocks_;
@@ -795,11 +797,12 @@ class Engine final : public FootSlam::Impl {
   // The user's prior map (times the confidence); empty: none.
   PriorMap user_prior_;
   int64_t prior_outside_ = 0;
-  // Storage of diversity: the blocks' level, the stored map (the folded blocks' weighted mean
-  // counters, summed over every time a block was stored), its sum with the user's prior map
-  // (only while both are non-empty) and the statistics.
+  // Storage of diversity: the key bits below a block (a block's keys agree above them), the
+  // stored map (the folded blocks' weighted mean counters, summed over every time a block was
+  // stored), its sum with the user's prior map (only while both are non-empty) and the
+  // statistics.
   static constexpr bool kCanStore = requires(Map & m) { m.DropBlock(0, uint64_t{0}, 0); };
-  int store_level_ = 0;
+  int store_bits_ = 0;
   PriorMap stored_;
   PriorMap combined_;
   int64_t stored_blocks_ = 0;

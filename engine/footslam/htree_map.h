@@ -76,23 +76,22 @@ class HTreeMap {
     trie_.template VisitDistinct<uint64_t>(roots_.roots(), weights, f);
   }
 
-  // Storage of diversity: a block is the subtree of the H-tree at `level` whose keys have the
-  // digits `prefix` above it (key >> (log2(degree) * (level + 1)) == prefix; see
-  // PersistentTrie::VisitSubtreeDistinct). REQUIRES: level < layout height - 1.
+  // Storage of diversity: a block is a subtree of the H-tree, the keys with the digits `prefix`
+  // above their lowest `bits` (key >> bits == prefix; see PersistentTrie::VisitSubtreeDistinct).
+  // REQUIRES: bits a multiple of log2(degree), below those of the first grid.
   // The blocks any particle's map holds, in increasing order.
-  std::vector<uint64_t> Blocks(int level) const {
-    return trie_.SubtreePrefixes(roots_.roots(), kLog2Degree * (level + 1));
+  std::vector<uint64_t> Blocks(int bits) const {
+    return trie_.SubtreePrefixes(roots_.roots(), bits);
   }
   // f(key, const Htc&, weight) for each hexagon of each distinct version of the block, weight
   // the sum of weights[i] over the particles whose maps hold that version.
   template <typename F>
-  void FoldBlock(int level, uint64_t prefix, std::span<const uint64_t> weights, F&& f) const {
-    trie_.template VisitSubtreeDistinct<uint64_t>(roots_.roots(), weights,
-                                                  kLog2Degree * (level + 1), prefix, f);
+  void FoldBlock(int bits, uint64_t prefix, std::span<const uint64_t> weights, F&& f) const {
+    trie_.template VisitSubtreeDistinct<uint64_t>(roots_.roots(), weights, bits, prefix, f);
   }
   // Removes the block from every particle's map; false when out of memory (maps unchanged).
-  bool DropBlock(int level, uint64_t prefix, int slot) {
-    return trie_.DropSubtree(roots_.mutable_roots(), kLog2Degree * (level + 1), prefix, slot);
+  bool DropBlock(int bits, uint64_t prefix, int slot) {
+    return trie_.DropSubtree(roots_.mutable_roots(), bits, prefix, slot);
   }
 
   void Save(ByteWriter* w) const { trie_.Save(roots_.roots(), w); }

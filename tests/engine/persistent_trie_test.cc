@@ -124,7 +124,6 @@ TEST(PersistentTrieTest, WideBottomNodesComeInSizeClassesOfWholeLines) {
   EXPECT_EQ(Wide::BottomBytesFor(4), 128u);
   EXPECT_EQ(Wide::BottomBytesFor(123), 1024u);
   EXPECT_EQ(Wide::BottomBytesFor(124), 40u + 256 * 8);  // presence words and every digit
-  EXPECT_EQ(Wide::kBottomNodeBytes, 40u + 256 * 8);
   // A bottom node as wide as an inner one holds every digit: one class, as before.
   using Narrow = PersistentTrie<Value, 4>;
   EXPECT_EQ(Narrow::BottomBytesFor(1), 16u + 16 * 8);
