@@ -66,13 +66,12 @@ void FailAllocationsAfter(int64_t allocations) {
 constexpr int kMaxWords = static_cast<int>(kPageBytes / kNodeAlign / 64);
 
 struct NodePool::Page {
-  // Set when the page is carved, never changed, and alone on their lines: another slot's free
-  // reads them, and from the line the owner writes at every allocation and free that read took
-  // the line out of the owner's cache (2 threads, the paper walk: -3 to -4 %; bench/results,
-  // session 24).
-  Heap* owner;
-  int owner_slot;
-  char padding_owner[kFalseSharingBytes - sizeof(Heap*) - sizeof(int)];
+  // The owner's slot: set when the page is carved and never changed. Alone on its lines, so
+  // another slot's free reads it without taking from the owner's cache the line the owner writes
+  // at every allocation and free (2 threads, the paper walk: -3 to -4 %; bench/results, session
+  // 24).
+  int owner;
+  char padding_owner[kFalseSharingBytes - sizeof(int)];
   Page* next_avail;
   uint32_t free_count;  // set bits in `free` (owner only)
   uint32_t in_avail;    // 1 while on the owner's list of pages with free nodes
@@ -168,8 +167,8 @@ void* NodePool::Allocate(int slot) {
 
 void NodePool::Free(void* p, int slot) {
   Page* page = reinterpret_cast<Page*>(reinterpret_cast<uintptr_t>(p) & ~(kPageBytes - 1));
-  Heap* owner = page->owner;
-  if (slot == page->owner_slot) {
+  Heap* owner = heaps_[page->owner].get();
+  if (slot == page->owner) {
     LocalFree(owner, page, p);
     owner->live.store(owner->live.load(std::memory_order_relaxed) - 1, std::memory_order_relaxed);
     return;
@@ -179,7 +178,7 @@ void NodePool::Free(void* p, int slot) {
     return;
   }
   Heap* heap = heaps_[slot].get();
-  RemoteBatch*& batch = heap->outgoing[page->owner_slot];
+  RemoteBatch*& batch = heap->outgoing[page->owner];
   if (batch == nullptr) {
     batch = new (std::nothrow) RemoteBatch;
     if (batch == nullptr) {
@@ -317,8 +316,7 @@ NodePool::Page* NodePool::Refill(Heap* heap) {
   }
   Page* page = reinterpret_cast<Page*>(heap->slab_cursor);
   heap->slab_cursor += kPageBytes;
-  page->owner = heap;
-  page->owner_slot = heap->slot;
+  page->owner = heap->slot;
   page->next_avail = nullptr;
   page->in_avail = 0;
   page->first_word = 0;
