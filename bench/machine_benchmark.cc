@@ -35,6 +35,11 @@ uint64_t Mix(uint64_t x) {
   return x ^ (x >> 31);
 }
 
+// Each thread's random stream starts far from the others'.
+uint64_t ThreadSeed(const benchmark::State& state) {
+  return static_cast<uint64_t>(state.thread_index()) << 40;
+}
+
 struct alignas(64) Line {
   uint64_t word[8];
 };
@@ -51,7 +56,8 @@ class Set {
       : lines_(static_cast<size_t>(state.range(0)) * 1024 / sizeof(Line)) {
     const size_t bytes = lines_ * sizeof(Line);
     const size_t huge = size_t{2} << 20;
-    lines_ptr_.reset(static_cast<Line*>(std::aligned_alloc(huge, (bytes + huge - 1) / huge * huge)));
+    lines_ptr_.reset(
+        static_cast<Line*>(std::aligned_alloc(huge, (bytes + huge - 1) / huge * huge)));
 #ifdef MADV_HUGEPAGE
     madvise(lines_ptr_.get(), bytes, MADV_HUGEPAGE);
 #endif
@@ -66,7 +72,7 @@ class Set {
 };
 
 void BM_MachineArithmetic(benchmark::State& state) {
-  uint64_t x = static_cast<uint64_t>(state.thread_index()) + 1;
+  uint64_t x = ThreadSeed(state) + 1;
   for (auto _ : state) {
     for (int i = 0; i < kAccessesPerIteration; ++i) x = Mix(x);
     benchmark::DoNotOptimize(x);
@@ -80,7 +86,7 @@ void BM_MachineRandomRead(benchmark::State& state) {
   Set set(state);
   const size_t lines = set.lines();
   for (size_t i = 0; i < lines; ++i) set[i].word[0] = i;
-  uint64_t seed = static_cast<uint64_t>(state.thread_index()) << 40;
+  uint64_t seed = ThreadSeed(state);
   uint64_t sum = 0;
   for (auto _ : state) {
     for (int i = 0; i < kAccessesPerIteration; ++i) sum += set[Mix(seed++) & (lines - 1)].word[0];
@@ -96,7 +102,7 @@ void BM_MachinePointerChase(benchmark::State& state) {
   const size_t lines = set.lines();
   std::vector<uint64_t> order(lines);
   std::iota(order.begin(), order.end(), uint64_t{0});
-  uint64_t seed = static_cast<uint64_t>(state.thread_index()) << 40;
+  uint64_t seed = ThreadSeed(state);
   for (size_t i = lines - 1; i > 0; --i) std::swap(order[i], order[Mix(seed++) % i]);
   for (size_t i = 0; i < lines; ++i) set[order[i]].word[0] = order[(i + 1) % lines];
   uint64_t at = order[0];
@@ -112,7 +118,7 @@ void BM_MachinePointerChase(benchmark::State& state) {
 void BM_MachineRandomIncrement(benchmark::State& state) {
   Set set(state);
   const size_t lines = set.lines();
-  uint64_t seed = static_cast<uint64_t>(state.thread_index()) << 40;
+  uint64_t seed = ThreadSeed(state);
   for (auto _ : state) {
     for (int i = 0; i < kAccessesPerIteration; ++i) ++set[Mix(seed++) & (lines - 1)].word[0];
     benchmark::ClobberMemory();
@@ -121,17 +127,20 @@ void BM_MachineRandomIncrement(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * kAccessesPerIteration);
 }
 
+// One iteration's locked increments of random lines of `set`.
+void LockedIncrements(Set& set, uint64_t* seed) {
+  const size_t lines = set.lines();
+  for (int i = 0; i < kAccessesPerIteration; ++i) {
+    std::atomic_ref<uint64_t>(set[Mix((*seed)++) & (lines - 1)].word[0])
+        .fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
 // Independent random locked increments, each thread on its own set: the lock prefix's price.
 void BM_MachineAtomicIncrement(benchmark::State& state) {
   Set set(state);
-  const size_t lines = set.lines();
-  uint64_t seed = static_cast<uint64_t>(state.thread_index()) << 40;
-  for (auto _ : state) {
-    for (int i = 0; i < kAccessesPerIteration; ++i) {
-      std::atomic_ref<uint64_t>(set[Mix(seed++) & (lines - 1)].word[0])
-          .fetch_add(1, std::memory_order_relaxed);
-    }
-  }
+  uint64_t seed = ThreadSeed(state);
+  for (auto _ : state) LockedIncrements(set, &seed);
   state.SetItemsProcessed(state.iterations() * kAccessesPerIteration);
 }
 
@@ -144,14 +153,8 @@ void BM_MachineSharedAtomicIncrement(benchmark::State& state) {
   // Thread 0 sets the set up before, and frees it after, the loop; every thread meets the others
   // at the loop's start and end.
   if (state.thread_index() == 0) shared_set = std::make_unique<Set>(state);
-  uint64_t seed = static_cast<uint64_t>(state.thread_index()) << 40;
-  for (auto _ : state) {
-    const size_t lines = shared_set->lines();
-    for (int i = 0; i < kAccessesPerIteration; ++i) {
-      std::atomic_ref<uint64_t>((*shared_set)[Mix(seed++) & (lines - 1)].word[0])
-          .fetch_add(1, std::memory_order_relaxed);
-    }
-  }
+  uint64_t seed = ThreadSeed(state);
+  for (auto _ : state) LockedIncrements(*shared_set, &seed);
   state.SetItemsProcessed(state.iterations() * kAccessesPerIteration);
   if (state.thread_index() == 0) shared_set.reset();
 }
