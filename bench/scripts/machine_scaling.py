@@ -2,8 +2,9 @@
 """How much faster two threads run than one, on this machine, in paired rounds: every round runs
 each case on 1 thread and on 2, back to back (the order swapped every round), so a pair sees the
 same host load and the speedup of a round is the ratio within the pair. The cases are
-grove_machine_benchmark's (work that shares nothing: the machine's ceiling) and, with --grove, the
-engine itself on the paper walk (`grove bench paper --only 'htree s=16 T=5'`, one run a round).
+grove_machine_benchmark's (work that shares nothing, and locked increments on one shared set) and,
+with --grove, the engine itself on the paper walk (`grove bench paper --only 'htree s=16 T=5'`, one
+run a round).
 Prints a Markdown table: per case the median 1- and 2-thread rate, the median speedup over rounds
 and its range, the rounds reaching 1.85x, and the 2-thread run's CPU time per unit of work over
 the 1-thread run's (1.00: no CPU lost to sharing; issue 13's target 2 asks <= 1.05 and >= 1.85x).
