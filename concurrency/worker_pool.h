@@ -16,7 +16,9 @@
 #include <oneapi/tbb/task_arena.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -30,6 +32,18 @@ class WorkerPool {
   explicit WorkerPool(int threads);
   WorkerPool(const WorkerPool&) = delete;
   WorkerPool& operator=(const WorkerPool&) = delete;
+
+  // Where the loops' time went, since the pool was made: `loop_s`, the driving thread's wall time
+  // inside ParallelFor; `busy_s`, the time threads spent running loop bodies (their own and
+  // others' chunks), summed over threads. num_threads() * loop_s - busy_s is the time threads
+  // waited inside loops: arriving late, or done before the others. (Two clock reads per thread
+  // per loop.)
+  struct Usage {
+    double loop_s = 0;
+    double busy_s = 0;
+    uint64_t loops = 0;
+  };
+  Usage usage() const;
 
   int num_threads() const { return threads_; }
   // Slots are numbered 0 .. num_slots() - 1; the driving thread outside loops uses slot 0.
@@ -45,8 +59,13 @@ class WorkerPool {
     if (n == 0) return;
     if (grain == 0) grain = 1;
     const size_t chunks = (n + grain - 1) / grain;
+    const int64_t start = Now();
     if (threads_ == 1 || chunks == 1) {
       for (size_t b = 0; b < n; b += grain) body(0, b, b + grain < n ? b + grain : n);
+      const int64_t t = Now() - start;
+      loop_ns_ += t;
+      busy_[0].ns.fetch_add(t, std::memory_order_relaxed);
+      ++loops_;
       return;
     }
     const size_t slots = static_cast<size_t>(threads_);
@@ -71,12 +90,17 @@ class WorkerPool {
       tbb::parallel_for(
           size_t{0}, slots,
           [&](size_t) {
+            const int64_t begin = Now();
             const int slot = tbb::this_task_arena::current_thread_index();
             run_home(static_cast<size_t>(slot), slot);
             for (size_t k = 1; k < slots; ++k) run_home((slot + k) % slots, slot);
+            // Relaxed: only this slot adds to its counter; usage() reads between loops.
+            busy_[slot].ns.fetch_add(Now() - begin, std::memory_order_relaxed);
           },
           tbb::simple_partitioner());
     });
+    loop_ns_ += Now() - start;
+    ++loops_;
   }
 
   // Splits [0, n) into fixed blocks of `block` items, computes f(block_index, begin, end) -> T for
@@ -97,8 +121,21 @@ class WorkerPool {
   }
 
  private:
+  static int64_t Now() {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(
+               std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+  }
+
+  struct alignas(kFalseSharingBytes) Busy {
+    std::atomic<int64_t> ns{0};
+  };
+
   int threads_;
   std::unique_ptr<tbb::task_arena> arena_;
+  std::unique_ptr<Busy[]> busy_;  // per slot
+  int64_t loop_ns_ = 0;
+  uint64_t loops_ = 0;
 };
 
 }  // namespace grove

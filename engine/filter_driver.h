@@ -197,6 +197,10 @@ class FilterDriver {
     s.sent_particles = static_cast<int64_t>(filter_.sent_particles());
     s.sent_bytes = static_cast<int64_t>(filter_.sent_bytes());
     s.migrate_s = filter_.migrate_seconds();
+    const WorkerPool::Usage usage = workers_->usage();
+    s.loop_s = usage.loop_s;
+    s.loop_busy_s = usage.busy_s;
+    s.loops = static_cast<int64_t>(usage.loops);
     return s;
   }
 

@@ -310,6 +310,13 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
     int64_t particles;
     int threads;
     FootSlamSummary summary;
+    double cpu_s;  // the process's, over the run
+  };
+  auto process_cpu_s = [] {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+           1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
   };
   auto run = [&](int64_t particles, int threads) -> StatusOr<FootSlamSummary> {
     FootSlamConfig config;
@@ -327,15 +334,17 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
   std::vector<Point> points;
   const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   for (int t = 1; t <= cores; ++t) {
+    const double cpu0 = process_cpu_s();
     auto r = run(options.thread_sweep_particles, t);
     if (!r.ok()) return Fail(kExitRun, r.status().message());
-    points.push_back({options.thread_sweep_particles, t, *r});
+    points.push_back({options.thread_sweep_particles, t, *r, process_cpu_s() - cpu0});
   }
   for (int64_t n : {1000, 3000, 10000, 30000, 100000, 300000, 1000000}) {
     if (n > options.max_particles) break;
+    const double cpu0 = process_cpu_s();
     auto r = run(n, cores);
     if (!r.ok()) return Fail(kExitRun, r.status().message());
-    points.push_back({n, cores, *r});
+    points.push_back({n, cores, *r, process_cpu_s() - cpu0});
   }
   std::vector<std::vector<std::string>> rows;
   Chart threads_chart{.title = "Throughput against threads",
@@ -366,6 +375,10 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
                     fmt::format("{:.1f}", m.resample_s * 1e9 / ps),
                     fmt::format("{:.1f}", m.release_s * 1e9 / ps),
                     fmt::format("{:.1f}", m.bookkeeping_s * 1e9 / ps),
+                    fmt::format("{:.1f}", p.cpu_s * 1e9 / ps),
+                    fmt::format("{:.1f}", m.loop_busy_s * 1e9 / ps),
+                    fmt::format("{:.1f}", (m.threads_used * m.loop_s - m.loop_busy_s) * 1e9 / ps),
+                    fmt::format("{:.1f}", (total - m.loop_s) * 1e9 / ps),
                     fmt::format("{:.1f}", m.map_memory.peak_live_bytes / 1048576.0)});
     if (thread_sweep) {
       tp.x.push_back(p.threads);
@@ -395,10 +408,18 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
                                      "resample ns",
                                      "release ns",
                                      "bookkeeping ns",
+                                     "process CPU ns",
+                                     "loop bodies ns",
+                                     "waiting in loops ns",
+                                     "outside loops ns",
                                      "peak live map MiB"};
   std::string md = fmt::format(
       "# grove bench scaling\n\nMachine: {}\n\nThe first {} steps of the paper walk (simulated "
-      "open area), H-tree s = 16, T = 5, {} grid; per-phase costs in ns per particle-step.\n\n",
+      "open area), H-tree s = 16, T = 5, {} grid; per-phase costs in ns per particle-step. Process "
+      "CPU: user + system time of every thread over the run (including setting up); loop bodies: "
+      "the threads' time running the parallel loops' work; waiting in loops: the threads' time "
+      "inside a loop without work (arriving late or done early); outside loops: the driving "
+      "thread's wall time between the loops (the other threads spin or sleep then).\n\n",
       MachineDescription(), steps, options.grid);
   md += MarkdownTable(header, rows);
   const std::string& dir = options.out_dir;

@@ -44,7 +44,8 @@ nlohmann::json FilterSummaryJson(const FilterSummary& s) {
           {"mean_ess", s.mean_ess},
           {"sent_particles", s.sent_particles},
           {"sent_bytes", s.sent_bytes},
-          {"migrate_s", s.migrate_s}};
+          {"migrate_s", s.migrate_s},
+          {"loops", {{"count", s.loops}, {"wall_s", s.loop_s}, {"busy_s", s.loop_busy_s}}}};
 }
 
 }  // namespace grove::tools

@@ -488,6 +488,9 @@ py::dict FilterSummaryDict(const FilterSummary& s) {
   d["release_s"] = s.release_s;
   d["bookkeeping_s"] = s.bookkeeping_s;
   d["filter_s"] = s.filter_s();
+  d["loops"] = s.loops;
+  d["loop_s"] = s.loop_s;
+  d["loop_busy_s"] = s.loop_busy_s;
   return d;
 }
 

@@ -89,6 +89,31 @@ TEST(WorkerPoolTest, BlockSumsDoNotDependOnThreadCount) {
   }
 }
 
+// The usage accounting: every loop counted (an empty one is not a loop), one thread's body time
+// is exactly its loop time, and no thread is busy for longer than the loop it works in.
+TEST(WorkerPoolTest, UsageCountsLoopsAndBoundsBusyTime) {
+  for (int threads : {1, 2, 4}) {
+    WorkerPool pool(threads);
+    EXPECT_EQ(pool.usage().loops, 0u);
+    std::vector<double> v(100000, 1.0);
+    pool.ParallelFor(0, 16, [](int, size_t, size_t) {});
+    for (int k = 0; k < 5; ++k) {
+      pool.ParallelFor(v.size(), 1000, [&](int, size_t b, size_t e) {
+        for (size_t i = b; i < e; ++i) v[i] = std::sqrt(v[i] + 1.0);
+      });
+    }
+    WorkerPool::Usage u = pool.usage();
+    EXPECT_EQ(u.loops, 5u) << threads;
+    EXPECT_GT(u.loop_s, 0) << threads;
+    EXPECT_GT(u.busy_s, 0) << threads;
+    if (threads == 1) {
+      EXPECT_DOUBLE_EQ(u.busy_s, u.loop_s);
+    } else {
+      EXPECT_LE(u.busy_s, threads * u.loop_s * (1 + 1e-12)) << threads;
+    }
+  }
+}
+
 TEST(RandomStreamTest, SameKeyGivesSameDrawsDifferentKeysDiffer) {
   RandomStream a(42, 7, 1000), b(42, 7, 1000), c(42, 7, 1001), d(42, 8, 1000), e(43, 7, 1000),
       f(42, 7, 1000, 1);

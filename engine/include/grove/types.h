@@ -56,6 +56,13 @@ struct GROVE_EXPORT FilterSummary {
   int64_t sent_particles = 0;
   int64_t sent_bytes = 0;
   double migrate_s = 0;
+  // The parallel loops of this process's run (not kept in checkpoints): the driving thread's wall
+  // time inside them, the threads' time running their bodies (summed over threads) and how many
+  // ran. threads_used * loop_s - loop_busy_s is the time threads waited inside loops (arriving
+  // late or done early); filter_s() - loop_s ran on the driving thread alone.
+  double loop_s = 0;
+  double loop_busy_s = 0;
+  int64_t loops = 0;
   double filter_s() const {
     return advance_s + normalize_s + resample_s + release_s + bookkeeping_s;
   }
