@@ -21,21 +21,32 @@ namespace grove {
 template <typename Handle, typename Share>
 void GatherShared(std::span<const uint32_t> parents, std::vector<Handle>* current,
                   WorkerPool& workers, Share share, std::vector<Handle>* next_out) {
-  next_out->resize(parents.size());
+  constexpr size_t kGrain = 2048;
+  const size_t n = parents.size();
+  next_out->resize(n);
   std::vector<Handle>& next = *next_out;
   auto first = [&](size_t k) { return k == 0 || parents[k - 1] != parents[k]; };
-  workers.ParallelFor(parents.size(), 2048, [&](int, size_t b, size_t e) {
+  workers.ParallelFor(n, kGrain, [&](int, size_t b, size_t e) {
+    // A parent's entry must stay readable until all of its copies are made: the chunk that
+    // makes them all clears it after the last; one whose copies cross into another chunk is
+    // cleared after the loop.
+    bool whole = false;  // the current parent's first copy is in this chunk
     for (size_t k = b; k < e; ++k) {
-      Handle h = (*current)[parents[k]];
-      next[k] = first(k) ? h : share(h);
+      const uint32_t p = parents[k];
+      Handle h = (*current)[p];
+      if (first(k)) {
+        whole = true;
+        next[k] = h;
+      } else {
+        next[k] = share(h);
+      }
+      if (whole && (k + 1 == n || parents[k + 1] != p)) (*current)[p] = nullptr;
     }
   });
-  // A second pass: a parent's entry must stay readable until all of its copies are made.
-  workers.ParallelFor(parents.size(), 2048, [&](int, size_t b, size_t e) {
-    for (size_t k = b; k < e; ++k) {
-      if (first(k)) (*current)[parents[k]] = nullptr;
-    }
-  });
+  // Chunk c is [c * kGrain, (c + 1) * kGrain) (WorkerPool::ParallelFor).
+  for (size_t b = kGrain; b < n; b += kGrain) {
+    if (parents[b - 1] == parents[b]) (*current)[parents[b]] = nullptr;
+  }
 }
 
 // The next generation of a per-particle value (a pose, an error state): (*v)[k] becomes the old
@@ -56,6 +67,28 @@ template <typename T>
 void GatherValues(std::span<const uint32_t> parents, WorkerPool& workers, std::vector<T>* v) {
   std::vector<T> next;
   GatherValues(parents, workers, v, &next);
+}
+
+// A per-particle value and the buffer its next generation is gathered into (as GatherValues'
+// `spare`).
+template <typename T>
+struct Gathered {
+  std::vector<T>* values;
+  std::vector<T>* spare;
+};
+
+// GatherValues of several values in one parallel loop: one join instead of one per value.
+template <typename... T>
+void GatherValuesTogether(std::span<const uint32_t> parents, WorkerPool& workers,
+                          Gathered<T>... v) {
+  (v.spare->resize(parents.size()), ...);
+  workers.ParallelFor(parents.size(), 4096, [&](int, size_t b, size_t e) {
+    auto gather = [&](auto& g) {
+      for (size_t k = b; k < e; ++k) (*g.spare)[k] = (*g.values)[parents[k]];
+    };
+    (gather(v), ...);
+  });
+  (v.values->swap(*v.spare), ...);
 }
 
 }  // namespace grove

@@ -146,12 +146,18 @@ concept PopulationModel = requires(M& m, const Input& in, uint64_t step, WorkerP
 // threads at 64 and 36); returns the error of the lowest failing batch, which is the error of the
 // lowest failing particle whatever the batches when a batch stops at its first. `status` is
 // scratch space (one entry per batch), kept by the caller to avoid an allocation per loop.
-template <typename F>
-Status RunInBatches(WorkerPool& workers, size_t n, size_t max_batch, std::vector<Status>* status,
-                    F&& body) {
+// RunInBatches' batch size: batch b is particles [b * size, (b + 1) * size).
+inline size_t BatchSize(const WorkerPool& workers, size_t n, size_t max_batch) {
   const size_t threads = static_cast<size_t>(workers.num_threads());
   size_t batch = std::max<size_t>(max_batch, 1);
   if (threads > 1) batch = std::clamp<size_t>((n + 4 * threads - 1) / (4 * threads), 1, batch);
+  return batch;
+}
+
+template <typename F>
+Status RunInBatches(WorkerPool& workers, size_t n, size_t max_batch, std::vector<Status>* status,
+                    F&& body) {
+  const size_t batch = BatchSize(workers, n, max_batch);
   status->assign((n + batch - 1) / batch, Status::Ok());
   workers.ParallelFor(n, batch, [&](int slot, size_t begin, size_t end) {
     (*status)[begin / batch] = body(slot, begin, end);
@@ -199,11 +205,16 @@ class ParticleFilter {
       GROVE_RETURN_IF_ERROR(CheckOptions());
     }
     const bool release = release_pending_;
+    // Each batch also finds its heaviest particle, for Normalize(): no loop of its own.
+    const size_t batch = BatchSize(*workers_, log_w_.size(), options_.batch);
+    maxes_.assign((log_w_.size() + batch - 1) / batch, MaxPart{});
     Status status = ForBatches([&](int slot, size_t begin, size_t end) {
       if constexpr (PieceReleasingModel<Model>) {
         if (release) model_->ReleaseDeadRange(DeadFrom(begin), DeadFrom(end), slot);
       }
-      return model_->Advance(input, step_, begin, end, slot, log_w_.data());
+      Status s = model_->Advance(input, step_, begin, end, slot, log_w_.data());
+      if (s.ok()) maxes_[begin / batch] = MaxOf(begin, end);
+      return s;
     });
     if constexpr (PieceReleasingModel<Model>) {
       if (release) model_->DeadReleased();
@@ -388,29 +399,32 @@ class ParticleFilter {
     release_pending_ = false;
   }
 
+  // The heaviest of particles [begin, end) (the first on ties), and whether any weight is NaN.
+  struct MaxPart {
+    double max = -std::numeric_limits<double>::infinity();
+    size_t argmax = 0;
+    bool nan = false;
+  };
+  MaxPart MaxOf(size_t begin, size_t end) const {
+    MaxPart p;
+    for (size_t i = begin; i < end; ++i) {
+      if (std::isnan(log_w_[i])) p.nan = true;
+      if (log_w_[i] > p.max) {
+        p.max = log_w_[i];
+        p.argmax = i;
+      }
+    }
+    return p;
+  }
+
+  // Normalises the weights from the advance's per-batch maxima (maxes_, in batch order).
   Status Normalize() {
     const size_t n = log_w_.size();
-    struct Partial {
-      double max = -std::numeric_limits<double>::infinity();
-      size_t argmax = 0;
-      bool nan = false;
-    };
-    std::vector<Partial> maxes =
-        workers_->MapBlocks<Partial>(n, kSumBlock, [&](size_t, size_t begin, size_t end) {
-          Partial p;
-          for (size_t i = begin; i < end; ++i) {
-            if (std::isnan(log_w_[i])) p.nan = true;
-            if (log_w_[i] > p.max) {
-              p.max = log_w_[i];
-              p.argmax = i;
-            }
-          }
-          return p;
-        });
+    std::vector<MaxPart>& maxes = maxes_;
     if (options_.collective != nullptr) {
       // One partial per rank, combined in rank order as the blocks are: the same first maximum.
-      Partial mine;
-      for (const Partial& p : maxes) {
+      MaxPart mine;
+      for (const MaxPart& p : maxes) {
         mine.nan = mine.nan || p.nan;
         if (p.max > mine.max) {
           mine.max = p.max;
@@ -418,10 +432,10 @@ class ParticleFilter {
         }
       }
       GROVE_RETURN_IF_ERROR(
-          AllGatherValues<Partial>(*options_.collective, std::span(&mine, 1), &maxes));
+          AllGatherValues<MaxPart>(*options_.collective, std::span(&mine, 1), &maxes));
     }
     double max = -std::numeric_limits<double>::infinity();
-    for (const Partial& p : maxes) {
+    for (const MaxPart& p : maxes) {
       if (p.nan) return Degenerate("a particle weight is NaN");
       if (p.max > max) {
         max = p.max;
@@ -445,17 +459,29 @@ class ParticleFilter {
     double total = 0;
     for (double s : sums) total += s;
     const double log_total = max + std::log(total);
-    std::vector<double> squares =
-        workers_->MapBlocks<double>(n, kSumBlock, [&](size_t, size_t begin, size_t end) {
-          double s = 0;
+    // The blocks' sums of the normalised weights come out too: resampling starts from them
+    // (BlockSums(weights_), added in the same order: the same bits).
+    struct Sums {
+      double squares = 0, weights = 0;
+    };
+    std::vector<Sums> block =
+        workers_->MapBlocks<Sums>(n, kSumBlock, [&](size_t, size_t begin, size_t end) {
+          Sums s;
           for (size_t i = begin; i < end; ++i) {
             log_w_[i] -= log_total;
             double w = weights_[i] / total;
             weights_[i] = w;
-            s += w * w;
+            s.squares += w * w;
+            s.weights += w;
           }
           return s;
         });
+    std::vector<double> squares(block.size());
+    block_sums_.resize(block.size());
+    for (size_t b = 0; b < block.size(); ++b) {
+      squares[b] = block[b].squares;
+      block_sums_[b] = block[b].weights;
+    }
     GROVE_RETURN_IF_ERROR(GatherBlocks(&squares));
     double sum_sq = 0;
     for (double s : squares) sum_sq += s;
@@ -559,7 +585,8 @@ class ParticleFilter {
   void Resample() {
     using Clock = std::chrono::steady_clock;
     auto t0 = Clock::now();
-    grove::Resample(options_.resampling, weights_, options_.seed, step_, *workers_, parents_);
+    grove::Resample(options_.resampling, weights_, options_.seed, step_, *workers_, parents_,
+                    block_sums_);
     // Systematic and residual resampling always copy it (its weight is at least 1/N); the
     // other schemes may not, and then its successor in index order stands in.
     heaviest_ = static_cast<size_t>(
@@ -604,7 +631,7 @@ class ParticleFilter {
       const size_t n = log_w_.size();
       std::vector<double> block_sums;
       GROVE_RETURN_IF_ERROR(
-          AllGatherValues<double>(c, BlockSums(weights_, *workers_), &block_sums));
+          AllGatherValues<double>(c, std::span<const double>(block_sums_), &block_sums));
       slots_.resize(n + 1);
       SystematicSlots(weights_, first_ / kSumBlock, block_sums, total_,
                       SystematicUniform(options_.seed, step_), *workers_, slots_);
@@ -825,7 +852,9 @@ class ParticleFilter {
   uint64_t total_;  // particles in the whole filter
   uint64_t first_;  // this rank's first particle
   std::vector<double> log_w_;
-  std::vector<double> weights_;  // exp(log_w_) after the last normalisation
+  std::vector<double> weights_;     // exp(log_w_) after the last normalisation
+  std::vector<double> block_sums_;  // BlockSums(weights_) after the last normalisation
+  std::vector<MaxPart> maxes_;      // the last advance's batches' heaviest particles
   std::vector<uint32_t> parents_;
   std::vector<uint64_t> slots_;   // across ranks: each particle's first copy
   std::vector<double> island_w_;  // island mode: an island's weights over its heaviest

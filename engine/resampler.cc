@@ -4,6 +4,7 @@
 #include <cmath>
 #include <vector>
 
+#include "alloc/check.h"
 #include "concurrency/random_stream.h"
 
 namespace grove {
@@ -44,10 +45,12 @@ std::vector<double> BlockPrefix(std::span<const double> block_sum) {
 }  // namespace
 
 void SystematicResample(std::span<const double> weights, double u, WorkerPool& workers,
-                        std::span<uint32_t> parents) {
+                        std::span<uint32_t> parents, std::span<const double> block_sums) {
   const size_t n_in = weights.size();
   const size_t n_out = parents.size();
-  std::vector<double> prefix = BlockPrefix(BlockSums(weights, workers));
+  GROVE_DCHECK(block_sums.empty() || block_sums.size() == (n_in + kSumBlock - 1) / kSumBlock);
+  std::vector<double> prefix =
+      block_sums.empty() ? BlockPrefix(BlockSums(weights, workers)) : BlockPrefix(block_sums);
   workers.ParallelFor(prefix.size() - 1, 1, [&](int, size_t b0, size_t b1) {
     for (size_t b = b0; b < b1; ++b) {
       size_t begin = b * kSumBlock;
@@ -145,9 +148,10 @@ bool ParseResamplingScheme(std::string_view name, ResamplingScheme* scheme) {
 }
 
 void Resample(ResamplingScheme scheme, std::span<const double> weights, uint64_t seed,
-              uint64_t step, WorkerPool& workers, std::span<uint32_t> parents) {
+              uint64_t step, WorkerPool& workers, std::span<uint32_t> parents,
+              std::span<const double> block_sums) {
   if (scheme == ResamplingScheme::kSystematic) {
-    SystematicResample(weights, SystematicUniform(seed, step), workers, parents);
+    SystematicResample(weights, SystematicUniform(seed, step), workers, parents, block_sums);
     return;
   }
   RandomStream stream(seed, step, kResampleParticle, StreamPurpose::kResample);

@@ -20,9 +20,12 @@ namespace grove {
 // Fills parents[k], k in [0, parents.size()), with the index of the particle that slot k of the
 // next generation copies; parents come out in nondecreasing order. Draws come from the stream
 // (seed, step, purpose "resample"), so the result does not depend on the thread count.
+// `block_sums`, when not empty, holds BlockSums(weights) (a caller that has them spares systematic
+// resampling a pass over the weights).
 // REQUIRES: weights non-negative and finite with a positive sum; parents.size() >= 1.
 void Resample(ResamplingScheme scheme, std::span<const double> weights, uint64_t seed,
-              uint64_t step, WorkerPool& workers, std::span<uint32_t> parents);
+              uint64_t step, WorkerPool& workers, std::span<uint32_t> parents,
+              std::span<const double> block_sums = {});
 
 // Fixed block size for sums over particles: results are independent of the thread count.
 inline constexpr size_t kSumBlock = 4096;
@@ -36,7 +39,7 @@ double SystematicUniform(uint64_t seed, uint64_t step);
 // Systematic resampling with the uniform u: fills parents (nondecreasing) as Resample() does.
 // `weights` need not sum to 1. REQUIRES: as Resample().
 void SystematicResample(std::span<const double> weights, double u, WorkerPool& workers,
-                        std::span<uint32_t> parents);
+                        std::span<uint32_t> parents, std::span<const double> block_sums = {});
 
 // The uniform of island `island`'s draw `draw` (0: its next generation, 1: the particles it
 // sends) at `step`.

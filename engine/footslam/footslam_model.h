@@ -360,12 +360,12 @@ class FootSlamModel {
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     n_ = parents.size();
-    for (std::vector<double>* v : {&x_, &y_, &heading_, &heading_error_, &scale_}) {
-      GatherValues(parents, workers, v, &spare_.doubles);
-    }
-    GatherValues(parents, workers, &heading_unit_, &spare_.units);
-    GatherValues(parents, workers, &hex_, &spare_.hexes);
-    GatherValues(parents, workers, &key_, &spare_.keys);
+    GatherValuesTogether(
+        parents, workers, Gathered<double>{&x_, &spare_.x}, Gathered<double>{&y_, &spare_.y},
+        Gathered<double>{&heading_, &spare_.heading},
+        Gathered<double>{&heading_error_, &spare_.heading_error},
+        Gathered<double>{&scale_, &spare_.scale}, Gathered<Unit>{&heading_unit_, &spare_.units},
+        Gathered<Hex>{&hex_, &spare_.hexes}, Gathered<uint64_t>{&key_, &spare_.keys});
     history_roots_.Gather(parents, workers);
     map_->Gather(parents, workers);
   }
@@ -586,7 +586,7 @@ class FootSlamModel {
   std::vector<uint64_t> key_;  // KeyOf(hex_[i]): the H-tree key of the particle's hexagon
   // Gather's buffers, kept between generations.
   struct {
-    std::vector<double> doubles;
+    std::vector<double> x, y, heading, heading_error, scale;
     std::vector<Unit> units;
     std::vector<Hex> hexes;
     std::vector<uint64_t> keys;

@@ -14,6 +14,7 @@
 
 #include "concurrency/random_stream.h"
 #include "engine/checkpoint_io.h"
+#include "engine/generation.h"
 #include "engine/persistent_trie.h"
 #include "engine/version_set.h"
 
@@ -330,6 +331,77 @@ TEST(ParticleFilterTest, PopulationPhaseRunsAfterTheDraw) {
     ASSERT_TRUE(filter.Update(0).ok());
     EXPECT_EQ(model.events_, (std::vector<std::string>{"gather", "population"}));
     EXPECT_EQ(model.seen_, std::vector<int>(100, 2));
+  }
+}
+
+// GatherShared over lists whose runs of copies end inside a chunk, exactly at a chunk's end,
+// cross one chunk's edge and span whole chunks (2,048 particles each), on 1, 2 and 4 threads:
+// every copy refers to its parent's handle, a parent with c copies is shared c - 1 times, and
+// exactly the parents no copy names are left behind.
+TEST(GenerationTest, GatherSharedLeavesExactlyTheDeadHandles) {
+  const size_t n = 3 * 2048 + 100;
+  std::vector<std::vector<uint32_t>> lists;
+  std::vector<uint32_t> parents(n);
+  for (size_t k = 0; k < n; ++k) parents[k] = static_cast<uint32_t>(k / 3 * 3);
+  lists.push_back(parents);  // runs of 3, some crossing a chunk's edge
+  for (size_t k = 0; k < n; ++k) parents[k] = static_cast<uint32_t>(k < 2048 ? k / 2 * 2 : 2048);
+  lists.push_back(parents);  // a run ending at a chunk's end, then one over two whole chunks
+  for (size_t k = 0; k < n; ++k) parents[k] = 7;
+  lists.push_back(parents);  // one parent
+  RandomStream rng(5, 0, 0, StreamPurpose::kMotion);
+  uint32_t p = 0;
+  for (size_t k = 0; k < n; ++k) {
+    if (rng.NextUniform() < 0.4) p += 1 + static_cast<uint32_t>(rng.NextUniform() * 3);
+    parents[k] = std::min<uint32_t>(p, static_cast<uint32_t>(n - 1));
+  }
+  lists.push_back(parents);  // random gaps
+  for (const std::vector<uint32_t>& list : lists) {
+    for (int threads : {1, 2, 4}) {
+      WorkerPool workers(threads);
+      std::vector<int> handles(n);
+      std::vector<int*> current(n), next;
+      for (size_t i = 0; i < n; ++i) current[i] = &handles[i];
+      std::atomic<int> shares{0};
+      GatherShared(
+          list, &current, workers,
+          [&](int* h) {
+            shares.fetch_add(1);
+            return h;
+          },
+          &next);
+      std::set<uint32_t> named(list.begin(), list.end());
+      ASSERT_EQ(next.size(), n);
+      for (size_t k = 0; k < n; ++k) ASSERT_EQ(next[k], &handles[list[k]]) << k;
+      EXPECT_EQ(shares.load(), static_cast<int>(n - named.size())) << threads;
+      for (size_t i = 0; i < n; ++i) {
+        ASSERT_EQ(current[i], named.count(static_cast<uint32_t>(i)) ? nullptr : &handles[i])
+            << i << " on " << threads << " threads";
+      }
+    }
+  }
+}
+
+TEST(GenerationTest, GatherValuesTogetherMatchesOneAtATime) {
+  const size_t n = 10000;
+  std::vector<uint32_t> parents(n);
+  for (size_t k = 0; k < n; ++k) parents[k] = static_cast<uint32_t>(k / 4 * 4 + 1);
+  for (int threads : {1, 2}) {
+    WorkerPool workers(threads);
+    std::vector<double> a(n), a_one, spare_a;
+    std::vector<uint64_t> b(n), b_one, spare_b;
+    for (size_t i = 0; i < n; ++i) {
+      a[i] = 0.5 * static_cast<double>(i);
+      b[i] = 3 * i + 1;
+    }
+    a_one = a;
+    b_one = b;
+    GatherValues(parents, workers, &a_one);
+    GatherValues(parents, workers, &b_one);
+    GatherValuesTogether(parents, workers, Gathered<double>{&a, &spare_a},
+                         Gathered<uint64_t>{&b, &spare_b});
+    EXPECT_EQ(a, a_one);
+    EXPECT_EQ(b, b_one);
+    EXPECT_EQ(a[5], 2.5);  // particle 5 copies particle 5 (4 + 1)
   }
 }
 

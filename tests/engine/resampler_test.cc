@@ -60,6 +60,22 @@ TEST(SystematicResamplerTest, ResultDoesNotDependOnThreadCount) {
   }
 }
 
+// Block sums handed in (as the filter's normalisation computes them) give the same parents as
+// block sums computed from the weights; sums that differ move the draw.
+TEST(SystematicResamplerTest, GivenBlockSumsGiveTheSameParents) {
+  auto w = RandomWeights(30000, 4, true);
+  WorkerPool workers(2);
+  std::vector<uint32_t> computed(w.size()), given(w.size()), skewed(w.size());
+  Resample(ResamplingScheme::kSystematic, w, 77, 5, workers, computed);
+  std::vector<double> sums = BlockSums(w, workers);
+  ASSERT_EQ(sums.size(), 8u);
+  Resample(ResamplingScheme::kSystematic, w, 77, 5, workers, given, sums);
+  EXPECT_EQ(given, computed);
+  sums[0] *= 2;  // not the weights' sums: block 0's particles get more copies
+  Resample(ResamplingScheme::kSystematic, w, 77, 5, workers, skewed, sums);
+  EXPECT_NE(skewed, computed);
+}
+
 // Unbiasedness: over many draws the mean copy count of each particle approaches N * w_i.
 TEST(ResamplerTest, AllSchemesAreUnbiased) {
   WorkerPool workers(1);
