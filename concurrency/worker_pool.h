@@ -49,7 +49,8 @@ class WorkerPool {
   // Slots are numbered 0 .. num_slots() - 1; the driving thread outside loops uses slot 0.
   int num_slots() const { return threads_; }
 
-  // Calls body(slot, begin, end) over [0, n) in chunks of at most `grain` items.
+  // Calls body(slot, begin, end) over [0, n) in chunks of `grain` items: chunk c is
+  // [c * grain, min((c + 1) * grain, n)) (GatherShared relies on it).
   // Chunks have a home slot: slot k owns the k-th contiguous share of [0, n) and runs it first,
   // in order, then helps with the others' remaining chunks. So the same particles tend to meet
   // the same worker from one loop to the next, and nodes are mostly freed by the slot whose
