@@ -141,11 +141,6 @@ concept PopulationModel = requires(M& m, const Input& in, uint64_t step, WorkerP
   { m.Population(in, step, workers) } -> std::same_as<Status>;
 };
 
-// Runs body(slot, begin, end) -> Status over [0, n) in batches of at most max_batch particles,
-// fewer when that leaves a thread under 4 batches (100 particles in batches of 64 would keep two
-// threads at 64 and 36); returns the error of the lowest failing batch, which is the error of the
-// lowest failing particle whatever the batches when a batch stops at its first. `status` is
-// scratch space (one entry per batch), kept by the caller to avoid an allocation per loop.
 // RunInBatches' batch size: batch b is particles [b * size, (b + 1) * size).
 inline size_t BatchSize(const WorkerPool& workers, size_t n, size_t max_batch) {
   const size_t threads = static_cast<size_t>(workers.num_threads());
@@ -154,6 +149,11 @@ inline size_t BatchSize(const WorkerPool& workers, size_t n, size_t max_batch) {
   return batch;
 }
 
+// Runs body(slot, begin, end) -> Status over [0, n) in batches of at most max_batch particles,
+// fewer when that leaves a thread under 4 batches (100 particles in batches of 64 would keep two
+// threads at 64 and 36); returns the error of the lowest failing batch, which is the error of the
+// lowest failing particle whatever the batches when a batch stops at its first. `status` is
+// scratch space (one entry per batch), kept by the caller to avoid an allocation per loop.
 template <typename F>
 Status RunInBatches(WorkerPool& workers, size_t n, size_t max_batch, std::vector<Status>* status,
                     F&& body) {
@@ -422,7 +422,7 @@ class ParticleFilter {
     const size_t n = log_w_.size();
     std::vector<MaxPart>& maxes = maxes_;
     if (options_.collective != nullptr) {
-      // One partial per rank, combined in rank order as the blocks are: the same first maximum.
+      // One partial per rank, combined in rank order as the batches are: the same first maximum.
       MaxPart mine;
       for (const MaxPart& p : maxes) {
         mine.nan = mine.nan || p.nan;
