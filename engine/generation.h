@@ -49,35 +49,17 @@ void GatherShared(std::span<const uint32_t> parents, std::vector<Handle>* curren
   }
 }
 
-// The next generation of a per-particle value (a pose, an error state): (*v)[k] becomes the old
-// (*v)[parents[k]], in parallel.
-// `spare` is a buffer the caller keeps between generations (it ends up holding the old values):
-// once it has grown, a gather neither allocates nor fills memory on the driving thread alone.
-template <typename T>
-void GatherValues(std::span<const uint32_t> parents, WorkerPool& workers, std::vector<T>* v,
-                  std::vector<T>* spare) {
-  spare->resize(parents.size());
-  workers.ParallelFor(parents.size(), 4096, [&](int, size_t b, size_t e) {
-    for (size_t k = b; k < e; ++k) (*spare)[k] = (*v)[parents[k]];
-  });
-  v->swap(*spare);
-}
-
-template <typename T>
-void GatherValues(std::span<const uint32_t> parents, WorkerPool& workers, std::vector<T>* v) {
-  std::vector<T> next;
-  GatherValues(parents, workers, v, &next);
-}
-
-// A per-particle value and the buffer its next generation is gathered into (as GatherValues'
-// `spare`).
+// A per-particle value and the buffer its next generation is gathered into, kept by the caller
+// between generations (it ends up holding the old values): once it has grown, a gather neither
+// allocates nor fills memory on the driving thread alone.
 template <typename T>
 struct Gathered {
   std::vector<T>* values;
   std::vector<T>* spare;
 };
 
-// GatherValues of several values in one parallel loop: one join instead of one per value.
+// The next generation of per-particle values (a pose, an error state): each (*values)[k] becomes
+// the old (*values)[parents[k]], all of them in one parallel loop (one join, not one per value).
 template <typename... T>
 void GatherValuesTogether(std::span<const uint32_t> parents, WorkerPool& workers,
                           Gathered<T>... v) {
@@ -89,6 +71,19 @@ void GatherValuesTogether(std::span<const uint32_t> parents, WorkerPool& workers
     (gather(v), ...);
   });
   (v.values->swap(*v.spare), ...);
+}
+
+// One value (`spare` as Gathered's); without `spare`, a new buffer each time.
+template <typename T>
+void GatherValues(std::span<const uint32_t> parents, WorkerPool& workers, std::vector<T>* v,
+                  std::vector<T>* spare) {
+  GatherValuesTogether(parents, workers, Gathered<T>{v, spare});
+}
+
+template <typename T>
+void GatherValues(std::span<const uint32_t> parents, WorkerPool& workers, std::vector<T>* v) {
+  std::vector<T> next;
+  GatherValues(parents, workers, v, &next);
 }
 
 }  // namespace grove

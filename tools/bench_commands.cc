@@ -54,6 +54,12 @@ std::string MachineDescription() {
                      std::thread::hardware_concurrency(), gib, VersionString());
 }
 
+// User plus system CPU time, in seconds.
+double CpuSeconds(const rusage& usage) {
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
 // Runs `body` in a child process so that its memory (peak RSS) is its own; the child writes its
 // result to `result_path`. Returns the child's exit status; *cpu_s (when given) receives the
 // child's CPU time, user and system, summed over its threads.
@@ -66,10 +72,7 @@ int InChild(F&& body, double* cpu_s = nullptr) {
   int status = 0;
   rusage usage{};
   wait4(pid, &status, 0, &usage);
-  if (cpu_s != nullptr) {
-    *cpu_s = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-             1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-  }
+  if (cpu_s != nullptr) *cpu_s = CpuSeconds(usage);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
@@ -315,8 +318,7 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
   auto process_cpu_s = [] {
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
-    return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-           1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+    return CpuSeconds(usage);
   };
   auto run = [&](int64_t particles, int threads) -> StatusOr<FootSlamSummary> {
     FootSlamConfig config;

@@ -401,7 +401,7 @@ TEST(GenerationTest, GatherValuesTogetherMatchesOneAtATime) {
                          Gathered<uint64_t>{&b, &spare_b});
     EXPECT_EQ(a, a_one);
     EXPECT_EQ(b, b_one);
-    EXPECT_EQ(a[5], 2.5);  // particle 5 copies particle 5 (4 + 1)
+    EXPECT_EQ(a[6], 2.5);  // particle 6 copies particle 5 (4 + 1)
   }
 }
 
