@@ -846,14 +846,21 @@ int64_t PathBytesFor(const FootSlamConfig& config, int height) {
 
 int64_t FootSlam::EstimatePeakBytes(const FootSlamConfig& config, int64_t steps) {
   const int64_t n = config.particles;
-  const int64_t fixed = int64_t{64} << 20;
-  // Pose (and its heading's cosine and sine), errors, hexagon, weights, parents and the
-  // gather's temporaries.
-  const int64_t state = 176;
-  // Live poses stay near steps + C N log N (tests/stress/footslam_long_run_test.cc): with the
-  // 32-byte nodes of two generations, about 3 nodes per particle at 30,000 to 1,000,000.
+  // Calibrated on `grove footslam run` over the paper walk (13 minutes; s = 16, T = 5; 2
+  // threads; bench/results/2026-12-05-AMD-EPYC-2c-session27/memory_prediction.md): at 30,000,
+  // 300,000 and 1,000,000 particles the pools reserved 1,398, 909 and 826 bytes of map and
+  // 1,258, 783 and 797 bytes of path history per particle, and the rest of the peak RSS came to
+  // 30 MiB, then about 18 MiB and 410 to 417 bytes per particle.
+  const int64_t fixed = int64_t{48} << 20;
+  // Pose (and its heading's cosine and sine), errors, hexagon and key, each with the gather's
+  // spare buffer; the versions of the maps and paths, the weights and parents; the allocator's
+  // slack on all of them.
+  const int64_t state = 448;
+  // Live poses: the walk's common ancestry (one node a step, below) plus the branches since the
+  // particles' paths last met, which peaked at 18.6 to 33.3 nodes per particle on the bundled
+  // and paper walks at 30,000 to 1,000,000 particles.
   const int64_t pose_node = (sizeof(footslam::PoseHistory::Node) + 15) / 16 * 16;
-  const int64_t history = 3 * pose_node;
+  const int64_t history = 32 * pose_node;
   // What grows with the walk whatever the particles: the time and mean pose of every step
   // (40 bytes), the common ancestry of the paths (one pose node a step) and the map nodes of
   // the area walked, shared by all particles (about 1.2 new hexagons a step, 64 bytes each

@@ -842,7 +842,7 @@ void BindFootSlam(py::module_& m) {
           },
           py::arg("steps"), py::arg("config") = py::none(),
           "A prediction of the peak memory in bytes of a run of `steps` steps under the "
-          "configuration (within about 20 % on the measured runs).");
+          "configuration (7 to 22 % above the peak RSS of the measured runs).");
   BindCommon<FootSlam, FootSlamConfig>(cls, "FootSlam", fields);
 }
 

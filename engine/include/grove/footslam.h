@@ -225,9 +225,10 @@ class GROVE_EXPORT FootSlam {
   static Status CheckAcrossRanks(const FootSlamConfig& config, int ranks);
 
   // A prediction of the peak memory, in bytes, of a run of `steps` steps: particle state, two
-  // generations of maps and path histories, and a fixed overhead. Calibrated on the runs in
-  // bench/results (within about 20 % there); the naive map assumes about 1.2 new hexagons per
-  // step. REQUIRES: config.Validate() is ok.
+  // generations of maps, the path histories and a fixed overhead. Calibrated on 2-thread runs of
+  // the paper walk at 30,000 to 1,000,000 particles and the bundled walk at 30,000, whose peak
+  // RSS it exceeds by 7 to 22 % (bench/results/2026-12-05-AMD-EPYC-2c-session27/); the naive map
+  // assumes about 1.2 new hexagons per step. REQUIRES: config.Validate() is ok.
   static int64_t EstimatePeakBytes(const FootSlamConfig& config, int64_t steps);
   virtual ~FootSlam();
 
