@@ -73,17 +73,11 @@ void GatherValuesTogether(std::span<const uint32_t> parents, WorkerPool& workers
   (v.values->swap(*v.spare), ...);
 }
 
-// One value (`spare` as Gathered's); without `spare`, a new buffer each time.
-template <typename T>
-void GatherValues(std::span<const uint32_t> parents, WorkerPool& workers, std::vector<T>* v,
-                  std::vector<T>* spare) {
-  GatherValuesTogether(parents, workers, Gathered<T>{v, spare});
-}
-
+// One value into a new buffer each time (for models that keep no spare).
 template <typename T>
 void GatherValues(std::span<const uint32_t> parents, WorkerPool& workers, std::vector<T>* v) {
   std::vector<T> next;
-  GatherValues(parents, workers, v, &next);
+  GatherValuesTogether(parents, workers, Gathered<T>{v, &next});
 }
 
 }  // namespace grove
