@@ -10,7 +10,7 @@
 
 #include "grove/c_api.h"
 #include "grove/footslam.h"
-#include "tools/step_reader.h"
+#include "tools/io/step_reader.h"
 
 namespace grove {
 namespace {

@@ -18,7 +18,7 @@
 
 #include "concurrency/worker_pool.h"
 #include "engine/fastslam/fastslam_model.h"
-#include "tools/fastslam_simulator.h"
+#include "tools/sim/fastslam_simulator.h"
 
 namespace grove {
 namespace {

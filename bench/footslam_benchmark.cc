@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "grove/footslam.h"
-#include "tools/walk_simulator.h"
+#include "tools/sim/walk_simulator.h"
 
 namespace grove {
 namespace {

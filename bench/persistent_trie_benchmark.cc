@@ -4,7 +4,7 @@
 #include <random>
 #include <vector>
 
-#include "engine/persistent_trie.h"
+#include "engine/persistent/persistent_trie.h"
 #include "tests/engine/trie_testing.h"
 
 namespace grove {

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "concurrency/worker_pool.h"
-#include "engine/resampler.h"
+#include "engine/filter/resampler.h"
 
 namespace grove {
 namespace {

@@ -8,7 +8,7 @@
 #include <thread>
 #include <vector>
 
-#include "engine/collective.h"
+#include "engine/ranks/collective.h"
 
 namespace grove::testing {
 

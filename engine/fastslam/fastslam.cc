@@ -11,10 +11,10 @@
 #include <thread>
 
 #include "concurrency/worker_pool.h"
-#include "engine/checkpoint_io.h"
-#include "engine/collective.h"
 #include "engine/fastslam/fastslam_model.h"
-#include "engine/filter_driver.h"
+#include "engine/filter/filter_driver.h"
+#include "engine/io/checkpoint_io.h"
+#include "engine/ranks/collective.h"
 
 namespace grove {
 

@@ -17,8 +17,8 @@
 #include "engine/footslam/alphabet.h"
 #include "engine/footslam/htc.h"
 #include "engine/footslam/htree_layout.h"
-#include "engine/persistent_trie.h"
-#include "engine/version_set.h"
+#include "engine/persistent/persistent_trie.h"
+#include "engine/persistent/version_set.h"
 
 namespace grove::footslam {
 

@@ -17,9 +17,7 @@
 #include <unordered_map>
 
 #include "concurrency/worker_pool.h"
-#include "engine/checkpoint_io.h"
-#include "engine/collective.h"
-#include "engine/filter_driver.h"
+#include "engine/filter/filter_driver.h"
 #include "engine/footslam/alphabet.h"
 #include "engine/footslam/alphabet_htree_map.h"
 #include "engine/footslam/footslam_model.h"
@@ -27,7 +25,9 @@
 #include "engine/footslam/htree_layout.h"
 #include "engine/footslam/htree_map.h"
 #include "engine/footslam/naive_map.h"
-#include "engine/persistent_trie.h"
+#include "engine/io/checkpoint_io.h"
+#include "engine/persistent/persistent_trie.h"
+#include "engine/ranks/collective.h"
 
 namespace grove {
 

@@ -3,9 +3,9 @@
 
 #include <cmath>
 
-#include "engine/collective.h"
+#include "engine/filter/resampler.h"
 #include "engine/footslam/htree_layout.h"
-#include "engine/resampler.h"
+#include "engine/ranks/collective.h"
 #include "grove/footslam.h"
 
 namespace grove {

@@ -29,7 +29,7 @@
 
 #include <cstdint>
 
-#include "engine/memory_use.h"
+#include "engine/persistent/memory_use.h"
 
 namespace grove::footslam {
 

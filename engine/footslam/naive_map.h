@@ -12,11 +12,11 @@
 #include <vector>
 
 #include "concurrency/worker_pool.h"
-#include "engine/checkpoint_io.h"
 #include "engine/footslam/alphabet.h"
 #include "engine/footslam/hex_table.h"
 #include "engine/footslam/htc.h"
 #include "engine/footslam/htree_layout.h"
+#include "engine/io/checkpoint_io.h"
 
 namespace grove::footslam {
 

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "concurrency/worker_pool.h"
-#include "engine/checkpoint_io.h"
-#include "engine/collective.h"
+#include "engine/filter/particle_filter.h"
+#include "engine/filter/resampler.h"
 #include "engine/footslam/alphabet.h"
 #include "engine/footslam/alphabet_htree_map.h"
 #include "engine/footslam/footslam_model.h"
@@ -20,8 +20,8 @@
 #include "engine/footslam/htree_layout.h"
 #include "engine/footslam/htree_map.h"
 #include "engine/footslam/naive_map.h"
-#include "engine/particle_filter.h"
-#include "engine/resampler.h"
+#include "engine/io/checkpoint_io.h"
+#include "engine/ranks/collective.h"
 #include "grove/footslam.h"
 
 namespace grove::footslam {

@@ -1,4 +1,4 @@
-#include "engine/particle_filter.h"
+#include "engine/filter/particle_filter.h"
 
 #include <gtest/gtest.h>
 
@@ -13,10 +13,10 @@
 #include <vector>
 
 #include "concurrency/random_stream.h"
-#include "engine/checkpoint_io.h"
-#include "engine/generation.h"
-#include "engine/persistent_trie.h"
-#include "engine/version_set.h"
+#include "engine/filter/generation.h"
+#include "engine/io/checkpoint_io.h"
+#include "engine/persistent/persistent_trie.h"
+#include "engine/persistent/version_set.h"
 
 namespace grove {
 namespace {

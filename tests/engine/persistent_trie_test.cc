@@ -1,4 +1,4 @@
-#include "engine/persistent_trie.h"
+#include "engine/persistent/persistent_trie.h"
 
 #include <gtest/gtest.h>
 

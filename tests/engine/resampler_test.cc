@@ -1,4 +1,4 @@
-#include "engine/resampler.h"
+#include "engine/filter/resampler.h"
 
 #include <gtest/gtest.h>
 

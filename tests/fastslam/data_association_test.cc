@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "engine/fastslam/spatial_key.h"
-#include "engine/persistent_trie.h"
+#include "engine/persistent/persistent_trie.h"
 #include "grove/fastslam.h"
 
 namespace grove::fastslam {

@@ -9,10 +9,10 @@
 #include <tuple>
 #include <vector>
 
-#include "engine/collective.h"
+#include "engine/ranks/collective.h"
 #include "grove/fastslam.h"
 #include "tests/ranks_testing.h"
-#include "tools/fastslam_simulator.h"
+#include "tools/sim/fastslam_simulator.h"
 
 namespace grove {
 namespace {

@@ -14,11 +14,11 @@
 
 #include "alloc/node_pool.h"
 #include "concurrency/worker_pool.h"
-#include "engine/checkpoint_io.h"
 #include "engine/fastslam/fastslam_model.h"
 #include "engine/fastslam/vehicle_model.h"
-#include "engine/version_set.h"
-#include "tools/fastslam_simulator.h"
+#include "engine/io/checkpoint_io.h"
+#include "engine/persistent/version_set.h"
+#include "tools/sim/fastslam_simulator.h"
 
 namespace grove {
 namespace {

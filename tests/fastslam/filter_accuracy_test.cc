@@ -7,7 +7,7 @@
 #include <map>
 
 #include "grove/fastslam.h"
-#include "tools/fastslam_simulator.h"
+#include "tools/sim/fastslam_simulator.h"
 
 namespace grove {
 namespace {

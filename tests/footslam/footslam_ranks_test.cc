@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/collective.h"
+#include "engine/ranks/collective.h"
 #include "grove/footslam.h"
 #include "tests/api/test_walk.h"
 #include "tests/ranks_testing.h"

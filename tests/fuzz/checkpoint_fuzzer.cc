@@ -1,4 +1,4 @@
-// libFuzzer target: FootSlam::Resume on checkpoint files (engine/checkpoint_io.h and every
+// libFuzzer target: FootSlam::Resume on checkpoint files (engine/io/checkpoint_io.h and every
 // Load() below it). The properties are in tests/fuzz/fuzz_checks.h.
 #include <cstddef>
 #include <cstdint>

@@ -1,6 +1,6 @@
-// libFuzzer target: ReadMapCsv, ReadPathCsv (tools/output_readers.h), ReadTimedPoints
-// (tools/trajectory_metrics.h) and FastSLAM's ControlReader and ObservationReader
-// (tools/fastslam_inputs.h) on the input written to a per-process file under /tmp.
+// libFuzzer target: ReadMapCsv, ReadPathCsv (tools/io/output_readers.h), ReadTimedPoints
+// (tools/report/trajectory_metrics.h) and FastSLAM's ControlReader and ObservationReader
+// (tools/io/fastslam_inputs.h) on the input written to a per-process file under /tmp.
 // The properties are in tests/fuzz/fuzz_checks.h.
 #include <cstddef>
 #include <cstdint>

@@ -40,15 +40,15 @@
 #include <utility>
 #include <vector>
 
-#include "engine/checkpoint_io.h"
-#include "engine/config_json.h"
+#include "engine/io/checkpoint_io.h"
+#include "engine/io/config_json.h"
 #include "grove/footslam.h"
 #include "grove/status.h"
-#include "tools/fastslam_inputs.h"
-#include "tools/output_readers.h"
-#include "tools/step_reader.h"
-#include "tools/trajectory_metrics.h"
-#include "tools/victoria_park.h"
+#include "tools/io/fastslam_inputs.h"
+#include "tools/io/output_readers.h"
+#include "tools/io/step_reader.h"
+#include "tools/io/victoria_park.h"
+#include "tools/report/trajectory_metrics.h"
 
 namespace grove::testing {
 
@@ -290,7 +290,7 @@ inline std::string CsvInputPath() {
   return fmt::format("/tmp/grove_fuzz_{}.csv", static_cast<long>(::getpid()));
 }
 
-// The Victoria Park readers (tools/victoria_park.h) on an input with a record separator (0x1e),
+// The Victoria Park readers (tools/io/victoria_park.h) on an input with a record separator (0x1e),
 // cut at its first two into inputs.dat, measurements.dat and gps.dat (missing parts empty), in a
 // directory beside `path`: the data as the readers promise it, or an InvalidArgument naming the
 // file (and its line and column when it names one).

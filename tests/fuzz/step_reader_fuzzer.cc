@@ -1,4 +1,4 @@
-// libFuzzer target: StepReader::OpenText and Next() (tools/step_reader.h); a first byte below 8
+// libFuzzer target: StepReader::OpenText and Next() (tools/io/step_reader.h); a first byte below 8
 // makes the next two choose max_line_bytes and max_step_m.
 // The properties are in tests/fuzz/fuzz_checks.h.
 #include <cstddef>

@@ -1,4 +1,4 @@
-"""Tests of the grove Python module (engine/python/grove_module.cc): the embedder's view.
+"""Tests of the grove Python module (engine/bindings/python/grove_module.cc): the embedder's view.
 
 Run from a build: ctest -R python_test, or by hand with the module's directory on PYTHONPATH:
   PYTHONPATH=<build>/python /usr/bin/python3 -m unittest -v test_grove

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "concurrency/worker_pool.h"
-#include "engine/persistent_trie.h"
+#include "engine/persistent/persistent_trie.h"
 #include "tests/engine/trie_testing.h"
 
 namespace grove {

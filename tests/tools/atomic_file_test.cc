@@ -1,4 +1,4 @@
-#include "tools/atomic_file.h"
+#include "tools/io/atomic_file.h"
 
 #include <fcntl.h>
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-#include "tools/csv_reader.h"
+#include "tools/io/csv_reader.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>

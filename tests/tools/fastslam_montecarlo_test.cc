@@ -1,6 +1,6 @@
 // `grove fastslam montecarlo` through its command function: files, reuse of finished runs,
 // independence of the thread count, scenarios and the exit codes of bad options.
-#include "tools/fastslam_montecarlo.h"
+#include "tools/montecarlo/fastslam_montecarlo.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

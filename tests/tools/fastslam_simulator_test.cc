@@ -1,4 +1,4 @@
-#include "tools/fastslam_simulator.h"
+#include "tools/sim/fastslam_simulator.h"
 
 #include <gtest/gtest.h>
 
@@ -15,7 +15,7 @@
 #include <utility>
 #include <vector>
 
-#include "tools/csv_reader.h"
+#include "tools/io/csv_reader.h"
 
 namespace grove::tools {
 namespace {

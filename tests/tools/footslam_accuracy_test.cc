@@ -6,8 +6,8 @@
 
 #include "grove/footslam.h"
 #include "tests/api/status_testing.h"
-#include "tools/trajectory_metrics.h"
-#include "tools/walk_simulator.h"
+#include "tools/report/trajectory_metrics.h"
+#include "tools/sim/walk_simulator.h"
 
 namespace grove::tools {
 namespace {
@@ -111,8 +111,8 @@ double EarlyError(const SimulatedWalk& walk, const std::vector<HexCounts>* prior
 }
 
 // A prior map equal to the true map of the building (from another walk through it) makes a second
-// walk find its map sooner. Measured (README, tools/footslam_prior_map.sh) on more walks; here
-// three whose first-quarter errors without the prior are 0.9 to 1.1 m and with it about 0.3 m.
+// walk find its map sooner. Measured (README, bench/studies/footslam_prior_map.sh) on more walks;
+// here three whose first-quarter errors without the prior are 0.9 to 1.1 m and with it about 0.3 m.
 TEST(FootSlamPriorMapTest, ATrueMapPriorMakesASecondWalkConvergeFaster) {
   const std::vector<HexCounts> prior = TrueMap(Building(1));
   double without = 0, with = 0;

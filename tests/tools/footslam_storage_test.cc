@@ -11,7 +11,7 @@
 
 #include "grove/footslam.h"
 #include "tests/api/status_testing.h"
-#include "tools/walk_simulator.h"
+#include "tools/sim/walk_simulator.h"
 
 namespace grove::tools {
 namespace {

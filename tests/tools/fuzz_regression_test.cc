@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "engine/config_json.h"
+#include "engine/io/config_json.h"
 #include "grove/footslam.h"
 #include "grove/status.h"
 #include "tests/fuzz/fuzz_checks.h"
-#include "tools/step_reader.h"
+#include "tools/io/step_reader.h"
 
 #ifndef GROVE_FUZZ_CORPUS
 #error "GROVE_FUZZ_CORPUS must name the tests/fuzz/corpus directory"

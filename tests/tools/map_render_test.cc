@@ -1,4 +1,4 @@
-#include "tools/map_render.h"
+#include "tools/report/map_render.h"
 
 // Rooted at /usr/include: cairo is a private dependency of grove_tools, so its include path
 // does not reach this test.
@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "tests/tools/decoded_png.h"
-#include "tools/atomic_file.h"
+#include "tools/io/atomic_file.h"
 
 namespace grove::tools {
 namespace {

@@ -1,4 +1,4 @@
-#include "tools/mc_statistics.h"
+#include "tools/montecarlo/mc_statistics.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "tools/output_readers.h"
+#include "tools/io/output_readers.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

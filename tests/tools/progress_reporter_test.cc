@@ -1,4 +1,4 @@
-#include "tools/progress_reporter.h"
+#include "tools/run/progress_reporter.h"
 
 #include <gtest/gtest.h>
 #include <stdio.h>

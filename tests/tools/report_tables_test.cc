@@ -1,4 +1,4 @@
-#include "tools/report_tables.h"
+#include "tools/report/report_tables.h"
 
 #include <gtest/gtest.h>
 

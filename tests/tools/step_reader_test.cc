@@ -1,4 +1,4 @@
-#include "tools/step_reader.h"
+#include "tools/io/step_reader.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -14,8 +14,8 @@
 #include <utility>
 #include <vector>
 
-#include "tools/footslam_run.h"
-#include "tools/walk_simulator.h"
+#include "tools/run/footslam_run.h"
+#include "tools/sim/walk_simulator.h"
 
 namespace grove::tools {
 namespace {

@@ -1,4 +1,4 @@
-#include "tools/trajectory_metrics.h"
+#include "tools/report/trajectory_metrics.h"
 
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // The Victoria Park readers, their events in the filter's order, and the error against GPS.
-#include "tools/victoria_park.h"
+#include "tools/io/victoria_park.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-#include "tools/walk_simulator.h"
+#include "tools/sim/walk_simulator.h"
 
 #include <gtest/gtest.h>
 
@@ -12,8 +12,8 @@
 #include <utility>
 #include <vector>
 
-#include "tools/step_reader.h"
-#include "tools/trajectory_metrics.h"
+#include "tools/io/step_reader.h"
+#include "tools/report/trajectory_metrics.h"
 
 namespace grove::tools {
 namespace {

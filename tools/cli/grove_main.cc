@@ -13,16 +13,15 @@
 #include "grove/fastslam.h"
 #include "grove/footslam.h"
 #include "grove/version.h"
-#include "tools/bench_commands.h"
-#include "tools/bench_ranks.h"
+#include "tools/bench/bench_commands.h"
 #include "tools/cli/mpi_world.h"
 #include "tools/cli/run_flags.h"
-#include "tools/fastslam_montecarlo.h"
-#include "tools/fastslam_run.h"
-#include "tools/fastslam_simulator.h"
-#include "tools/footslam_batch.h"
-#include "tools/footslam_run.h"
-#include "tools/victoria_park.h"
+#include "tools/io/victoria_park.h"
+#include "tools/montecarlo/fastslam_montecarlo.h"
+#include "tools/run/fastslam_run.h"
+#include "tools/run/footslam_batch.h"
+#include "tools/run/footslam_run.h"
+#include "tools/sim/fastslam_simulator.h"
 
 namespace {
 
@@ -271,36 +270,6 @@ int Main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::IsMember({"fixed", "growing"}));
 
-  CLI::App* ranks_bench = bench->add_subcommand(
-      "ranks", "One filter across MPI ranks on the paper walk: time, communication, digest");
-  gt::RanksBenchOptions ranks_options;
-  ranks_bench->add_option("--out", ranks_options.out_dir, "Output directory")->required();
-  ranks_bench->add_option("--particles", ranks_options.particles, "Particles of the whole filter")
-      ->capture_default_str()
-      ->check(CLI::Range(int64_t{1}, int64_t{1} << 31));
-  ranks_bench->add_option("--minutes", ranks_options.minutes, "Walk length")
-      ->capture_default_str()
-      ->check(CLI::Range(0.1, 1440.0));
-  ranks_bench->add_option("--threads", ranks_options.threads, "Per rank; 0 = the rank's CPU set")
-      ->capture_default_str()
-      ->check(CLI::Range(0, 256));
-  ranks_bench->add_option("--seed", ranks_options.seed)->capture_default_str();
-  ranks_bench
-      ->add_option("--islands", ranks_options.islands,
-                   "Island mode: islands of whole 4,096-particle blocks; 1: the global mode")
-      ->capture_default_str()
-      ->check(CLI::Range(1, 65536));
-  ranks_bench
-      ->add_option("--exchange-steps", ranks_options.exchange_steps,
-                   "Island mode: steps between exchanges")
-      ->capture_default_str()
-      ->check(CLI::Range(int64_t{1}, int64_t{1} << 40));
-  ranks_bench
-      ->add_option("--exchange-fraction", ranks_options.exchange_fraction,
-                   "Island mode: share of an island's particles sent at an exchange")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 0.5));
-
   CLI::App* fs_accuracy = bench->add_subcommand(
       "fastslam-accuracy", "FastSLAM 1.0 and 2.0 RMSE on the webmap against particles and seeds");
   gt::FastSlamAccuracyOptions fs_accuracy_options;
@@ -428,10 +397,6 @@ int Main(int argc, char** argv) {
   if (*fs_accuracy) return gt::FastSlamAccuracyBenchCommand(fs_accuracy_options);
   if (*fs_speed) return gt::FastSlamSpeedBenchCommand(fs_speed_options);
   if (*scaling) return gt::ScalingBenchCommand(scaling_options);
-  if (*ranks_bench) {
-    gt::MpiWorld world;  // one rank unless started by mpirun
-    return gt::RanksBenchCommand(ranks_options, world);
-  }
   if (*simulate) {
     grove::FieldInfo seed_info{
         "--seed", "", grove::FieldType::kUnsigned, grove::kChangesResults, 0, 0, {}, {}};

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/collective.h"
+#include "engine/ranks/collective.h"
 
 namespace grove::tools {
 

@@ -13,10 +13,10 @@
 #include <utility>
 #include <vector>
 
-#include "engine/config_json.h"
+#include "engine/io/config_json.h"
 #include "grove/config_fields.h"
 #include "tools/cli/config_flags.h"
-#include "tools/run_loop.h"
+#include "tools/run/run_loop.h"
 
 namespace grove::tools {
 

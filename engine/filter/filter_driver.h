@@ -1,0 +1,377 @@
+// FilterDriver: what every model's engine does around its ParticleFilter, written once: the
+// failure latch, the time of every step, the weighted-mean pose after every step, the
+// summary's counters and the generic part of a checkpoint body. A model's facade owns one (with
+// its model and worker pool) and adds only what is its own: inputs, maps and read-outs.
+//
+// The model provides, besides the FilterModel concept: x(i), y(i), cos_heading(i) and
+// sin_heading(i) of particle i after a step, for the mean pose.
+//
+// Errors: a step with a bad time returns InvalidArgument and changes nothing; a step the model
+// or the filter fails (its message prefixed with "step K (t = T s): "), and any exception or
+// allocation failure inside one (ResourceExhausted, Internal), latches the driver failed: every
+// later step returns FailedPrecondition and the state may not be checkpointed.
+//
+// Thread safety: one thread drives an engine (see ParticleFilter).
+#ifndef GROVE_ENGINE_FILTER_FILTER_DRIVER_H_
+#define GROVE_ENGINE_FILTER_FILTER_DRIVER_H_
+
+#include <fmt/format.h>
+#include <oneapi/tbb/info.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <exception>
+#include <memory>
+#include <new>
+#include <string>
+#include <vector>
+
+#include "alloc/check.h"
+#include "concurrency/worker_pool.h"
+#include "engine/filter/particle_filter.h"
+#include "engine/filter/resampler.h"
+#include "engine/io/checkpoint_io.h"
+#include "grove/status.h"
+#include "grove/types.h"
+
+namespace grove {
+
+// Runs f() -> StatusOr<T> or Status, turning an escaping exception into a status: what every
+// facade call that builds a container wraps itself in.
+template <typename F>
+auto NoThrow(F&& f) noexcept -> decltype(f()) {
+  try {
+    return f();
+  } catch (const std::bad_alloc&) {
+    return ResourceExhaustedError("out of memory");
+  } catch (const std::exception& e) {
+    return InternalError(std::string("unexpected exception: ") + e.what());
+  } catch (...) {
+    return InternalError("unexpected exception");
+  }
+}
+
+// The loop's options from a model's configuration, whose fields carry the same names.
+template <typename Config>
+FilterOptions FilterOptionsOf(const Config& c) {
+  FilterOptions o;
+  o.resampling = c.resampling;
+  o.resample_threshold = c.resample_threshold;
+  o.batch = static_cast<size_t>(c.batch);
+  o.seed = c.seed;
+  if constexpr (requires { c.islands; }) {
+    o.islands = c.islands;
+    o.exchange_steps = static_cast<uint64_t>(c.island_exchange_steps);
+    o.exchange_fraction = c.island_exchange_fraction;
+  }
+  return o;
+}
+
+// The options of one rank's share of a filter of c.particles across `ranks` (null: one
+// process, as FilterOptionsOf(c)).
+template <typename Config>
+FilterOptions FilterOptionsOf(const Config& c, Collective* ranks) {
+  FilterOptions o = FilterOptionsOf(c);
+  o.collective = ranks;
+  o.total_particles = static_cast<uint64_t>(c.particles);
+  return o;
+}
+
+// A facade's Resume() across ranks (collective): resume_share(ranks) on every rank, whose
+// errors then reach every rank, and the ranks' files must be of one step (CheckCheckpointSteps).
+// Without ranks, or with one, resume_share(nullptr).
+template <typename Engine, typename F>
+StatusOr<std::unique_ptr<Engine>> ResumeOnRanks(Collective* ranks, F&& resume_share) {
+  if (ranks == nullptr || ranks->size() == 1) return resume_share(nullptr);
+  StatusOr<std::unique_ptr<Engine>> engine = resume_share(ranks);
+  GROVE_RETURN_IF_ERROR(AgreeStatus(*ranks, engine.status()));
+  GROVE_RETURN_IF_ERROR(CheckCheckpointSteps(*ranks, (*engine)->steps()));
+  return engine;
+}
+
+enum class TimeOrder {
+  kIncreasing,     // every step after the one before (FootSLAM's steps)
+  kNonDecreasing,  // a step may share the time of the one before (an update after a prediction)
+};
+
+template <typename Model>
+class FilterDriver {
+ public:
+  FilterDriver(Model* model, WorkerPool* workers, const FilterOptions& options,
+               int threads_requested, const Pose2& start, TimeOrder order)
+      : model_(model),
+        workers_(workers),
+        filter_(model, workers, options),
+        threads_requested_(threads_requested),
+        order_(order) {
+    times_.push_back(0.0);
+    mean_.push_back({0.0, start});
+  }
+
+  // A weighting step on `input` at time t_s.
+  template <typename Input>
+  Status Update(double t_s, const Input& input) {
+    return Step(t_s, [&] { return filter_.Update(input); });
+  }
+  // A predict-only step on `input` at time t_s.
+  template <typename Input>
+  Status Predict(double t_s, const Input& input) {
+    return Step(t_s, [&] { return filter_.Predict(input); });
+  }
+
+  // Sets the time of the start pose; the first step must not come before it. Without it the
+  // start takes the first step's time. InvalidArgument for a non-finite time,
+  // FailedPrecondition after the first step.
+  Status SetStartTime(double t_s) {
+    if (!std::isfinite(t_s)) {
+      return InvalidArgumentError(fmt::format("start time = {}: must be finite", t_s));
+    }
+    if (filter_.steps() > 0) {
+      return FailedPreconditionError("the start time must be set before the first step");
+    }
+    start_time_unset_ = false;
+    times_.front() = t_s;
+    mean_.front().t_s = t_s;
+    return Status::Ok();
+  }
+
+  // Runs f() -> Status, turning an exception escaping it into a status and latching the driver
+  // failed: no exception leaves the engine.
+  template <typename F>
+  Status Guarded(F&& f) noexcept {
+    try {
+      return f();
+    } catch (const std::bad_alloc&) {
+      failed_ = true;
+      return ResourceExhaustedError("out of memory");
+    } catch (const std::exception& e) {
+      failed_ = true;
+      return InternalError(std::string("unexpected exception: ") + e.what());
+    } catch (...) {
+      failed_ = true;
+      return InternalError("unexpected exception");
+    }
+  }
+
+  // Runs f() -> Status between steps (a model's housekeeping on the state a step left); an error
+  // or an exception stops the engine as a failed step does.
+  template <typename F>
+  Status AfterStep(F&& f) noexcept {
+    Status status = Guarded(f);
+    if (!status.ok()) failed_ = true;
+    return status;
+  }
+
+  bool failed() const { return failed_; }
+  // FailedPrecondition after an error stopped the engine.
+  Status CheckNotFailed(const char* what) const {
+    if (!failed_) return Status::Ok();
+    return FailedPreconditionError(std::string("the engine stopped at an earlier error and ") +
+                                   what);
+  }
+
+  int64_t steps() const { return static_cast<int64_t>(filter_.steps()); }
+  // times()[k]: the time of the state after step k (k = 0: the start).
+  const std::vector<double>& times() const { return times_; }
+  const std::vector<StampedPose>& mean_trajectory() const { return mean_; }
+  const ParticleFilter<Model>& filter() const { return filter_; }
+
+  FilterSummary Summary() const {
+    FilterSummary s;
+    s.particles = static_cast<int64_t>(filter_.total_particles());
+    s.threads_requested = threads_requested_;
+    // oneTBB never runs more threads than the process may use, whatever the arena asks for.
+    s.threads_used = std::min(workers_->num_threads(), tbb::info::default_concurrency());
+    s.steps = steps();
+    s.resamplings = static_cast<int64_t>(filter_.resamplings());
+    s.mean_ess = filter_.mean_ess();
+    const PhaseTimes& t = filter_.phase_times();
+    s.advance_s = t.advance_s;
+    s.normalize_s = t.normalize_s;
+    s.resample_s = t.resample_s;
+    s.release_s = t.release_s;
+    s.bookkeeping_s = bookkeeping_s_;
+    s.sent_particles = static_cast<int64_t>(filter_.sent_particles());
+    s.sent_bytes = static_cast<int64_t>(filter_.sent_bytes());
+    s.migrate_s = filter_.migrate_seconds();
+    const WorkerPool::Usage usage = workers_->usage();
+    s.loop_s = usage.loop_s;
+    s.loop_busy_s = usage.busy_s;
+    s.loops = static_cast<int64_t>(usage.loops);
+    return s;
+  }
+
+  // The generic state: times, mean poses, bookkeeping time, the start flag and the filter.
+  void Save(ByteWriter* w) const {
+    w->Put<uint64_t>(times_.size());
+    w->PutBytes(times_.data(), times_.size() * sizeof(double));
+    w->Put<uint64_t>(mean_.size());
+    for (const StampedPose& p : mean_) {
+      w->Put(p.t_s);
+      w->Put(p.pose.x_m);
+      w->Put(p.pose.y_m);
+      w->Put(p.pose.heading_rad);
+    }
+    w->Put<double>(bookkeeping_s_);
+    w->Put<uint8_t>(start_time_unset_ ? 1 : 0);
+    filter_.Save(w);
+  }
+
+  // Reads what Save() wrote into a new driver; checks counts, order and finiteness.
+  Status Load(ByteReader* r) {
+    uint64_t count = 0;
+    GROVE_RETURN_IF_ERROR(r->GetCount("time count", sizeof(double), &count));
+    std::vector<double> times(count);
+    GROVE_RETURN_IF_ERROR(r->GetBytes("times", times.data(), count * sizeof(double)));
+    GROVE_RETURN_IF_ERROR(r->GetCount("mean pose count", 4 * sizeof(double), &count));
+    std::vector<StampedPose> mean(count);
+    for (StampedPose& p : mean) {
+      double v[4];
+      GROVE_RETURN_IF_ERROR(r->GetBytes("mean pose", v, sizeof(v)));
+      p = {v[0], Pose2{v[1], v[2], v[3]}};
+    }
+    double bookkeeping_s = 0;
+    uint8_t unset = 0;
+    GROVE_RETURN_IF_ERROR(r->Get("bookkeeping time", &bookkeeping_s));
+    GROVE_RETURN_IF_ERROR(r->Get("start time unset", &unset));
+    if (!(bookkeeping_s >= 0 && bookkeeping_s < 1e12)) {
+      return r->Error("bookkeeping time", "not a duration");
+    }
+    GROVE_RETURN_IF_ERROR(filter_.Load(r));
+    const uint64_t steps = filter_.steps();
+    if (times.size() != steps + 1 || mean.size() != steps + 1) {
+      return r->Error("times", "not one per pose (" + std::to_string(steps + 1) + ")");
+    }
+    for (size_t k = 0; k < times.size(); ++k) {
+      bool ordered =
+          k == 0 || (k == 1 || order_ == TimeOrder::kNonDecreasing ? times[k] >= times[k - 1]
+                                                                   : times[k] > times[k - 1]);
+      if (!std::isfinite(times[k]) || !ordered || mean[k].t_s != times[k]) {
+        return r->Error("times", "not finite and increasing");
+      }
+      const Pose2& p = mean[k].pose;
+      if (!std::isfinite(p.x_m) || !std::isfinite(p.y_m) || !std::isfinite(p.heading_rad)) {
+        return r->Error("mean pose", "not finite");
+      }
+    }
+    if (unset > 1 || (unset == 1 && steps > 0)) return r->Error("start time unset", "invalid");
+    times_.swap(times);
+    mean_.swap(mean);
+    bookkeeping_s_ = bookkeeping_s;
+    start_time_unset_ = unset == 1;
+    return Status::Ok();
+  }
+
+ private:
+  template <typename Run>
+  Status Step(double t_s, Run&& run) {
+    if (!std::isfinite(t_s)) {
+      return InvalidArgumentError(fmt::format("step {}: t = {}: must be finite", steps() + 1, t_s));
+    }
+    GROVE_RETURN_IF_ERROR(CheckNotFailed("cannot be stepped again"));
+    if (!start_time_unset_) {
+      const bool ok = order_ == TimeOrder::kIncreasing ? t_s > times_.back() : t_s >= times_.back();
+      if (!ok) {
+        return InvalidArgumentError(fmt::format(
+            "step {}: t = {} is {} the previous time {}: times must be {}", steps() + 1, t_s,
+            order_ == TimeOrder::kIncreasing ? "not after" : "before", times_.back(),
+            order_ == TimeOrder::kIncreasing ? "strictly increasing" : "non-decreasing"));
+      }
+    }
+    return Guarded([&]() -> Status {
+      if (start_time_unset_) {
+        times_.front() = t_s;
+        mean_.front().t_s = t_s;
+        start_time_unset_ = false;
+      }
+      // Room first (growing geometrically), so that nothing below fails half-way for want of
+      // memory.
+      if (times_.size() == times_.capacity()) times_.reserve(2 * times_.size() + 16);
+      if (mean_.size() == mean_.capacity()) mean_.reserve(2 * mean_.size() + 16);
+      Status status = run();
+      times_.push_back(t_s);
+      if (!status.ok()) {
+        failed_ = true;
+        return Status(status.code(), fmt::format("step {} (t = {} s): {}", filter_.steps(), t_s,
+                                                 status.message()));
+      }
+#ifdef GROVE_EXPENSIVE_CHECKS
+      // Debug builds walk every shared node after every step (mimalloc's expensive level).
+      if constexpr (requires { model_->CheckCounts(); }) {
+        Status counts = model_->CheckCounts();
+        if (!counts.ok()) std::fprintf(stderr, "%s\n", counts.ToString().c_str());
+        GROVE_CHECK(counts.ok());
+      }
+#endif
+      auto t0 = std::chrono::steady_clock::now();
+      StatusOr<Pose2> mean = ComputeMeanPose();
+      if (!mean.ok()) {
+        failed_ = true;
+        return mean.status();
+      }
+      mean_.push_back({t_s, *mean});
+      bookkeeping_s_ +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      return Status::Ok();
+    });
+  }
+
+  // Weighted mean pose over fixed blocks (circular mean for the heading); across ranks, every
+  // rank's blocks in rank order, which is block order.
+  StatusOr<Pose2> ComputeMeanPose() {
+    auto lw = filter_.log_weights();
+    struct Sum {
+      double w = 0, x = 0, y = 0, c = 0, s = 0;
+    };
+    std::vector<Sum> sums = workers_->template MapBlocks<Sum>(model_->size(), kSumBlock,
+                                                              [&](size_t, size_t b, size_t e) {
+                                                                Sum s;
+                                                                double w = 0;
+                                                                for (size_t i = b; i < e; ++i) {
+                                                                  // After resampling every weight
+                                                                  // is the same: one exp, not one
+                                                                  // per particle.
+                                                                  if (i == b || lw[i] != lw[i - 1])
+                                                                    w = std::exp(lw[i]);
+                                                                  s.w += w;
+                                                                  s.x += w * model_->x(i);
+                                                                  s.y += w * model_->y(i);
+                                                                  s.c += w * model_->cos_heading(i);
+                                                                  s.s += w * model_->sin_heading(i);
+                                                                }
+                                                                return s;
+                                                              });
+    if (Collective* ranks = filter_.options().collective; ranks != nullptr) {
+      std::vector<Sum> all;
+      GROVE_RETURN_IF_ERROR(AllGatherValues<Sum>(*ranks, sums, &all));
+      sums.swap(all);
+    }
+    Sum total;
+    for (const Sum& s : sums) {
+      total.w += s.w;
+      total.x += s.x;
+      total.y += s.y;
+      total.c += s.c;
+      total.s += s.s;
+    }
+    return Pose2{total.x / total.w, total.y / total.w, std::atan2(total.s, total.c)};
+  }
+
+  Model* model_;
+  WorkerPool* workers_;
+  ParticleFilter<Model> filter_;
+  int threads_requested_;
+  TimeOrder order_;
+  std::vector<double> times_;  // times_[k]: time of the state after step k (k = 0: the start)
+  std::vector<StampedPose> mean_;
+  double bookkeeping_s_ = 0;
+  bool start_time_unset_ = true;
+  bool failed_ = false;
+};
+
+}  // namespace grove
+
+#endif  // GROVE_ENGINE_FILTER_FILTER_DRIVER_H_

@@ -1,0 +1,195 @@
+#include "tools/io/step_reader.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <memory>
+#include <sstream>
+#include <string_view>
+#include <utility>
+
+namespace grove::tools {
+namespace {
+
+constexpr double kMaxAbsTime = 1e12;
+constexpr std::string_view kExpectedHeader = "expected a header \"t,dx,dy\" or \"t,x,y\"";
+
+}  // namespace
+
+Status StepReader::CheckLineEnd(std::string_view line) const {
+  if (lines_.line_terminated() || options_.allow_unterminated_last_line) return Status::Ok();
+  return LineError(lines_.path(), lines_.line_number(), static_cast<int64_t>(line.size()) + 1,
+                   "the last line has no line end: the file may still be being written; a "
+                   "complete step file ends in a newline");
+}
+
+StatusOr<StepReader> StepReader::Open(const std::string& path, const StepReaderOptions& options) {
+  if (!(options.max_step_m > 0) || !std::isfinite(options.max_step_m)) {
+    return InvalidArgumentError(
+        fmt::format("max_step_m = {}: must be > 0 and finite", options.max_step_m));
+  }
+  StatusOr<LineReader> lines = LineReader::Open(path, options.max_line_bytes);
+  if (!lines.ok()) return lines.status();
+  return Start(std::move(lines).value(), options);
+}
+
+StatusOr<StepReader> StepReader::OpenText(const std::string& name, std::string text,
+                                          const StepReaderOptions& options) {
+  if (!(options.max_step_m > 0) || !std::isfinite(options.max_step_m)) {
+    return InvalidArgumentError(
+        fmt::format("max_step_m = {}: must be > 0 and finite", options.max_step_m));
+  }
+  StatusOr<LineReader> lines = LineReader::FromStream(
+      name, std::make_unique<std::istringstream>(std::move(text)), options.max_line_bytes);
+  if (!lines.ok()) return lines.status();
+  return Start(std::move(lines).value(), options);
+}
+
+StatusOr<StepReader> StepReader::Start(LineReader lines, const StepReaderOptions& options) {
+  const std::string path = lines.path();
+  StepReader reader(std::move(lines), options);
+
+  std::string_view line;
+  for (;;) {
+    StatusOr<bool> more = reader.lines_.Next(&line);
+    if (!more.ok()) return more.status();
+    if (!*more) {
+      return InvalidArgumentError(fmt::format("{}: empty file: {}", path, kExpectedHeader));
+    }
+    GROVE_RETURN_IF_ERROR(reader.CheckLineEnd(line));
+    if (!IsSkippedLine(line)) break;
+  }
+  SplitCsvLine(line, &reader.fields_);
+  const auto header_is = [&](std::string_view a, std::string_view b, std::string_view c) {
+    const auto& f = reader.fields_;
+    return f.size() == 3 && f[0].text == a && f[1].text == b && f[2].text == c;
+  };
+  if (header_is("t", "dx", "dy")) {
+    reader.positions_form_ = false;
+  } else if (header_is("t", "x", "y")) {
+    reader.positions_form_ = true;
+  } else {
+    return LineError(
+        path, reader.lines_.line_number(), 1,
+        fmt::format("unknown header {}: expected \"t,dx,dy\" or \"t,x,y\"", QuotedField(line)));
+  }
+
+  while (reader.lookahead_end_ < 2) {
+    StatusOr<bool> more = reader.ReadRow(&reader.lookahead_[reader.lookahead_end_]);
+    if (!more.ok()) return more.status();
+    if (!*more) break;
+    ++reader.lookahead_end_;
+  }
+  const Row* rows = reader.lookahead_;
+  if (reader.positions_form_) {
+    if (reader.lookahead_end_ >= 1) {
+      reader.start_time_s_ = rows[0].t_s;
+      reader.start_x_m_ = reader.previous_x_m_ = rows[0].a_m;
+      reader.start_y_m_ = reader.previous_y_m_ = rows[0].b_m;
+      reader.lookahead_begin_ = 1;  // the first position is the start, not a step
+    }
+  } else if (reader.lookahead_end_ == 2) {
+    reader.start_time_s_ = rows[0].t_s - (rows[1].t_s - rows[0].t_s);
+  } else if (reader.lookahead_end_ == 1) {
+    reader.start_time_s_ = rows[0].t_s - 1;
+  }
+  return reader;
+}
+
+StatusOr<bool> StepReader::ReadRow(Row* row) {
+  std::string_view line;
+  for (;;) {
+    StatusOr<bool> more = lines_.Next(&line);
+    if (!more.ok()) return more.status();
+    if (!*more) return false;
+    GROVE_RETURN_IF_ERROR(CheckLineEnd(line));
+    if (!IsSkippedLine(line)) break;
+  }
+  const std::string& path = lines_.path();
+  const int64_t number = lines_.line_number();
+  SplitCsvLine(line, &fields_);
+  if (fields_.size() != 3) {
+    return LineError(path, number, 1, fmt::format("expected 3 fields, found {}", fields_.size()));
+  }
+  Row parsed{0, 0, 0, number};
+  GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, number, fields_[0], "t", &parsed.t_s));
+  // Bounded so that time differences and the start time before the first step stay exact enough
+  // to be strictly ordered (a second is still resolved at 1e12 s, about 31,700 years).
+  if (std::fabs(parsed.t_s) > kMaxAbsTime) {
+    return LineError(path, number, fields_[0].column,
+                     fmt::format("t = {}: must be within +-{:g} s", parsed.t_s, kMaxAbsTime));
+  }
+  GROVE_RETURN_IF_ERROR(
+      ParseFiniteNumber(path, number, fields_[1], positions_form_ ? "x" : "dx", &parsed.a_m));
+  GROVE_RETURN_IF_ERROR(
+      ParseFiniteNumber(path, number, fields_[2], positions_form_ ? "y" : "dy", &parsed.b_m));
+  if (has_previous_time_ && !(parsed.t_s > previous_time_s_)) {
+    return LineError(
+        path, number, fields_[0].column,
+        fmt::format("t = {} is not after the previous time {}: times must be strictly increasing",
+                    parsed.t_s, previous_time_s_));
+  }
+  has_previous_time_ = true;
+  previous_time_s_ = parsed.t_s;
+  *row = parsed;
+  return true;
+}
+
+StatusOr<bool> StepReader::Next(StepRecord* step) {
+  if (!error_.ok()) return error_;
+  Row row;
+  if (lookahead_begin_ < lookahead_end_) {
+    row = lookahead_[lookahead_begin_++];
+  } else {
+    StatusOr<bool> more = ReadRow(&row);
+    if (!more.ok()) {
+      error_ = more.status();
+      return error_;
+    }
+    if (!*more) {
+      if (steps_read_ > 0) return false;
+      const bool one_position = positions_form_ && has_previous_time_;
+      error_ = InvalidArgumentError(
+          fmt::format("{}: no steps after the header{}", path(),
+                      one_position ? " (a t,x,y file needs two rows for one step)" : ""));
+      return error_;
+    }
+  }
+  double dx = row.a_m;
+  double dy = row.b_m;
+  if (positions_form_) {
+    dx = row.a_m - previous_x_m_;
+    dy = row.b_m - previous_y_m_;
+  }
+  const double length = std::hypot(dx, dy);
+  if (!(length <= options_.max_step_m)) {
+    error_ = LineError(path(), row.line, 1,
+                       fmt::format("step of {:.6g} m is longer than max_step_m = {}", length,
+                                   options_.max_step_m));
+    return error_;
+  }
+  if (positions_form_) {
+    previous_x_m_ = row.a_m;
+    previous_y_m_ = row.b_m;
+  }
+  *step = StepRecord{row.t_s, dx, dy, row.line};
+  ++steps_read_;
+  return true;
+}
+
+StatusOr<std::vector<StepRecord>> ReadAllSteps(const std::string& path,
+                                               const StepReaderOptions& options) {
+  StatusOr<StepReader> reader = StepReader::Open(path, options);
+  if (!reader.ok()) return reader.status();
+  std::vector<StepRecord> steps;
+  StepRecord step;
+  for (;;) {
+    StatusOr<bool> more = reader->Next(&step);
+    if (!more.ok()) return more.status();
+    if (!*more) break;
+    steps.push_back(step);
+  }
+  return steps;
+}
+
+}  // namespace grove::tools

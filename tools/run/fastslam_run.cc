@@ -1,0 +1,511 @@
+// `grove fastslam run` (FastSLAM on the generic run loop, tools/run/run_loop.h) and
+// `grove fastslam evaluate`.
+#include "tools/run/fastslam_run.h"
+
+#include <fmt/format.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <memory>
+#include <numbers>
+
+#include "engine/filter/resampler.h"
+#include "engine/io/config_json.h"
+#include "tools/io/fastslam_inputs.h"
+#include "tools/io/filter_outputs.h"
+#include "tools/io/victoria_park.h"
+#include "tools/report/map_render.h"
+
+namespace grove::tools {
+namespace {
+
+double Wrap(double a) { return std::remainder(a, 2 * std::numbers::pi); }
+
+// A pose file `t,x,y,heading` (trajectory.csv, truth.csv), times non-decreasing; at a repeated
+// time the last row wins (a scan's update follows the prediction to its time).
+StatusOr<std::map<double, Pose2>> ReadPoses(const std::string& path) {
+  StatusOr<CsvTableReader> table = CsvTableReader::Open(path, {{"t", "x", "y", "heading"}});
+  if (!table.ok()) return table.status();
+  std::map<double, Pose2> poses;
+  double last = -INFINITY;
+  GROVE_RETURN_IF_ERROR(
+      table->ForEachRow([&](const std::vector<CsvField>& f, int64_t line) -> Status {
+        double t = 0;
+        Pose2 p;
+        GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[0], "t", &t));
+        GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[1], "x", &p.x_m));
+        GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[2], "y", &p.y_m));
+        GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[3], "heading", &p.heading_rad));
+        if (t < last) {
+          return LineError(path, line, f[0].column,
+                           fmt::format("t = {} is before the previous time {}", t, last));
+        }
+        last = t;
+        poses[t] = p;
+        return Status::Ok();
+      }));
+  if (poses.empty()) return InvalidArgumentError(fmt::format("{}: no poses", path));
+  return poses;
+}
+
+struct TruthLandmark {
+  double x_m, y_m;
+};
+
+// landmarks_truth.csv: `id,x,y`.
+StatusOr<std::map<int64_t, TruthLandmark>> ReadTruthLandmarks(const std::string& path) {
+  StatusOr<CsvTableReader> table = CsvTableReader::Open(path, {{"id", "x", "y"}});
+  if (!table.ok()) return table.status();
+  std::map<int64_t, TruthLandmark> out;
+  GROVE_RETURN_IF_ERROR(
+      table->ForEachRow([&](const std::vector<CsvField>& f, int64_t line) -> Status {
+        int32_t id = 0;
+        GROVE_RETURN_IF_ERROR(ParseCsvId(path, line, f[0], "id", &id));
+        TruthLandmark l{};
+        GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[1], "x", &l.x_m));
+        GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[2], "y", &l.y_m));
+        if (!out.emplace(id, l).second) {
+          return LineError(path, line, f[0].column, fmt::format("id {} appears twice", id));
+        }
+        return Status::Ok();
+      }));
+  return out;
+}
+
+// An integer field in [lo, 2^63).
+Status ParseInt64(const std::string& path, int64_t line, const CsvField& f, const char* name,
+                  int64_t lo, int64_t* value) {
+  const char* end = f.text.data() + f.text.size();
+  auto [ptr, ec] = std::from_chars(f.text.data(), end, *value);
+  if (ec != std::errc() || ptr != end || *value < lo) {
+    return LineError(
+        path, line, f.column,
+        fmt::format("{}: {} is not an integer in [{}, 2^63)", name, QuotedField(f.text), lo));
+  }
+  return Status::Ok();
+}
+
+// landmarks.csv: `id,x,y,sxx,sxy,syy[,source_id]`.
+StatusOr<std::vector<LandmarkEstimate>> ReadLandmarkEstimates(const std::string& path) {
+  StatusOr<CsvTableReader> table = CsvTableReader::Open(
+      path,
+      {{"id", "x", "y", "sxx", "sxy", "syy"}, {"id", "x", "y", "sxx", "sxy", "syy", "source_id"}});
+  if (!table.ok()) return table.status();
+  const bool sources = table->header() == 1;
+  std::vector<LandmarkEstimate> out;
+  GROVE_RETURN_IF_ERROR(
+      table->ForEachRow([&](const std::vector<CsvField>& f, int64_t line) -> Status {
+        LandmarkEstimate l;
+        GROVE_RETURN_IF_ERROR(ParseInt64(path, line, f[0], "id", 0, &l.id));
+        if (sources)
+          GROVE_RETURN_IF_ERROR(ParseInt64(path, line, f[6], "source_id", -1, &l.source_id));
+        const char* names[] = {"x", "y", "sxx", "sxy", "syy"};
+        double* values[] = {&l.x_m, &l.y_m, &l.sxx, &l.sxy, &l.syy};
+        for (int k = 0; k < 5; ++k) {
+          GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[k + 1], names[k], values[k]));
+        }
+        out.push_back(l);
+        return Status::Ok();
+      }));
+  return out;
+}
+
+nlohmann::json PoseErrorsJson(const PoseErrors& e) {
+  return {{"matched", e.matched},
+          {"truth_without_estimate", e.unmatched},
+          {"position_rmse_m", e.position_rmse_m},
+          {"heading_rmse_rad", e.heading_rmse_rad},
+          {"max_position_error_m", e.max_position_m},
+          {"position_mse_mean_m2", e.position_mse_mean_m2},
+          {"position_mse_variance_m4", e.position_mse_variance_m4}};
+}
+
+// Estimates matched to the truth by id, or under unknown association by the id of the
+// detection that created them (source_id): then several estimates of one true landmark are
+// duplicates (associations the filter missed) and true landmarks without one are missing.
+nlohmann::json LandmarkErrorsJson(const std::vector<LandmarkEstimate>& estimates,
+                                  const std::map<int64_t, TruthLandmark>& truth) {
+  int64_t matched = 0, unknown = 0;
+  double sq = 0, worst = 0;
+  const bool by_source = std::any_of(estimates.begin(), estimates.end(),
+                                     [](const LandmarkEstimate& l) { return l.source_id >= 0; });
+  std::map<int64_t, int64_t> per_truth;
+  for (const LandmarkEstimate& l : estimates) {
+    auto it = truth.find(by_source ? l.source_id : l.id);
+    if (it == truth.end()) {
+      ++unknown;
+      continue;
+    }
+    ++per_truth[it->first];
+    const double d = std::hypot(l.x_m - it->second.x_m, l.y_m - it->second.y_m);
+    sq += d * d;
+    worst = std::max(worst, d);
+    ++matched;
+  }
+  nlohmann::json j = {{"estimated", estimates.size()},
+                      {"true", truth.size()},
+                      {"matched", matched},
+                      {"estimated_without_truth", unknown},
+                      {"rmse_m", matched > 0 ? std::sqrt(sq / matched) : 0.0},
+                      {"max_error_m", worst}};
+  if (by_source) {
+    int64_t duplicates = 0;
+    for (const auto& [id, n] : per_truth) duplicates += n - 1;
+    j["matched_by"] = "source_id";
+    j["duplicates"] = duplicates;
+    j["true_without_estimate"] = static_cast<int64_t>(truth.size() - per_truth.size());
+  }
+  return j;
+}
+
+nlohmann::json FastSlamSummaryJson(const FastSlamSummary& s) {
+  nlohmann::json j = FilterSummaryJson(s);
+  j["controls"] = s.controls;
+  j["scans"] = s.scans;
+  j["observations"] = s.observations;
+  j["predict_steps"] = s.predict_steps;
+  j["landmarks"] = s.landmarks;
+  const AssociationCounts& a = s.association;
+  if (a.associated + a.created + a.ignored > 0) {
+    j["association"] = {
+        {"associated", a.associated},
+        {"created", a.created},
+        {"ignored", a.ignored},
+        {"removed", a.removed},
+        {"dropped", a.dropped},
+        {"tagged", a.tagged},
+        {"wrong", a.wrong},
+        {"error_rate", a.tagged > 0 ? nlohmann::json(static_cast<double>(a.wrong) / a.tagged)
+                                    : nlohmann::json(nullptr)}};
+  }
+  j["map_memory"] = MemoryUseJson(s.map_memory);
+  j["trajectory_memory"] = MemoryUseJson(s.trajectory_memory);
+  return j;
+}
+
+nlohmann::json GpsErrorsJson(const GpsErrors& e) {
+  return {{"fixes", e.fixes.size()},
+          {"mean_m", e.mean_m},
+          {"median_m", e.median_m},
+          {"rmse_m", e.rmse_m},
+          {"max_m", e.max_m},
+          {"alignment_rotation_rad", e.alignment.rotation_rad},
+          {"alignment_translation_m", {e.alignment.translation_x_m, e.alignment.translation_y_m}},
+          {"gps_jumps_over_10_mps", e.jumps},
+          {"gps_gaps_over_5_s", e.gaps},
+          {"mean_without_jumps_m", e.mean_without_jumps_m},
+          {"max_without_jumps_m", e.max_without_jumps_m}};
+}
+
+std::string GpsErrorCsv(const GpsErrors& e) {
+  std::string out = "t,gps_x,gps_y,x,y,error\n";
+  for (const AlignedPointError& f : e.fixes) {
+    fmt::format_to(std::back_inserter(out), "{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f}\n", f.t_s,
+                   f.truth_x_m, f.truth_y_m, f.estimate_x_m, f.estimate_y_m, f.error_m);
+  }
+  return out;
+}
+
+// A filter's name for a chart's title.
+const char* FilterTitle(FastSlamFilter filter) {
+  switch (filter) {
+    case FastSlamFilter::kFastSlam1:
+      return "FastSLAM 1.0";
+    case FastSlamFilter::kFastSlam2:
+      return "FastSLAM 2.0";
+    case FastSlamFilter::kUnscented:
+      return "U-FastSLAM";
+    case FastSlamFilter::kSrcd:
+      return "SRCD-FastSLAM";
+    case FastSlamFilter::kSrcdAided:
+      return "SRCD-aided FastSLAM";
+    case FastSlamFilter::kSrcdParticle:
+      return "SRCD-PF";
+    case FastSlamFilter::kDeSrcd:
+      return "DE-SRCD-FastSLAM";
+  }
+  return FastSlamFilterName(filter);
+}
+
+class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
+ public:
+  FastSlamJob(const FastSlamConfig& config, const FastSlamRunOptions& options)
+      : FacadeRunJob(config, options.run.ranks), options_(options) {}
+
+  const FastSlamConfig& config() const { return config_; }
+
+  // Opens the inputs (their errors are input errors) and reads the optional truth. Observations
+  // without ids select unknown association (config() says which ran).
+  Status Open() {
+    if (!options_.victoria_park_dir.empty()) {
+      StatusOr<VictoriaParkData> data =
+          ReadVictoriaPark(options_.victoria_park_dir, options_.until_s);
+      if (!data.ok()) return data.status();
+      park_ = std::make_unique<VictoriaParkData>(std::move(data).value());
+      park_events_ = new VictoriaParkEvents(park_.get());
+      source_.reset(park_events_);
+      records_ = static_cast<int64_t>(park_->controls.size() + park_->observations.size());
+      return Status::Ok();
+    }
+    StatusOr<FastSlamInputReader> reader =
+        FastSlamInputReader::Open(options_.controls_path, options_.observations_path);
+    if (!reader.ok()) return reader.status();
+    if (!reader->has_ids() && config_.association == FastSlamAssociation::kKnown) {
+      if (ranks_ == nullptr || ranks_->rank() == 0) {  // one line, not one per rank
+        std::fprintf(stderr, "%s has no id column: unknown association (association = ml)\n",
+                     options_.observations_path.c_str());
+      }
+      config_.association = FastSlamAssociation::kMaximumLikelihood;
+    }
+    source_ = std::make_unique<FastSlamInputReader>(std::move(reader).value());
+    records_ = CountRegularFileLines(options_.controls_path) +
+               CountRegularFileLines(options_.observations_path);
+    if (!options_.truth_path.empty()) {
+      StatusOr<std::map<double, Pose2>> truth = ReadPoses(options_.truth_path);
+      if (!truth.ok()) return truth.status();
+      truth_ = std::move(truth).value();
+    }
+    if (!options_.landmarks_truth_path.empty()) {
+      StatusOr<std::map<int64_t, TruthLandmark>> l =
+          ReadTruthLandmarks(options_.landmarks_truth_path);
+      if (!l.ok()) return l.status();
+      landmarks_truth_ = std::move(l).value();
+    }
+    return Status::Ok();
+  }
+
+  std::vector<std::string> InputPaths() const override {
+    if (park_ != nullptr) return {park_->controls_path, park_->observations_path, park_->gps_path};
+    std::vector<std::string> paths = {options_.controls_path, options_.observations_path};
+    for (const std::string* p : {&options_.truth_path, &options_.landmarks_truth_path}) {
+      if (!p->empty()) paths.push_back(*p);
+    }
+    return paths;
+  }
+  std::vector<std::string> OutputNames() const override {
+    std::vector<std::string> names = {"trajectory.csv", "heaviest_trajectory.csv", "landmarks.csv",
+                                      "map.png", "map.svg"};
+    if (park_ != nullptr) names.push_back("gps_error.csv");
+    return names;
+  }
+  std::string InputName() const override {
+    if (park_ != nullptr) return "Victoria Park (" + options_.victoria_park_dir + ")";
+    return options_.controls_path + " + " + options_.observations_path;
+  }
+  const char* RecordsName() const override { return "input rows"; }
+  int64_t ExpectedRecords() const override { return records_; }
+  // A rough bound, not a calibrated model: 64 MiB fixed, 4 KiB per particle (state, its own map
+  // paths in two generations, path segments) and 256 bytes per input row (the step log, times
+  // and poses of the driver, the outputs built in memory).
+  // Across ranks, of this rank's particles.
+  int64_t PredictPeakBytes(int64_t records) const override {
+    const uint64_t share =
+        ShareOf(static_cast<uint64_t>(config_.particles), ranks_, kSumBlock).count;
+    return (int64_t{64} << 20) + static_cast<int64_t>(share) * 4096 + records * 256;
+  }
+  std::string DescribePrediction(int64_t records) const override {
+    return fmt::format("{} particles, {} input rows{}", config_.particles, records,
+                       records_ == 0 ? " (a stream: its length is not known before the run)" : "");
+  }
+
+  StatusOr<bool> Read(std::string* digest_bytes) override {
+    StatusOr<bool> more = source_->Next(&event_);
+    if (!more.ok() || !*more) return more;
+    if (event_.is_scan) {
+      const double t = event_.scan_t_s;
+      digest_bytes->append(reinterpret_cast<const char*>(&t), sizeof(t));
+      for (const LandmarkObservation& z : event_.scan) {
+        const double v[3] = {z.range_m, z.bearing_rad, static_cast<double>(z.id)};
+        digest_bytes->append(reinterpret_cast<const char*>(v), sizeof(v));
+      }
+    } else {
+      const double v[3] = {event_.control.t_s, event_.control.v_mps, event_.control.steer_rad};
+      digest_bytes->append(reinterpret_cast<const char*>(v), sizeof(v));
+    }
+    return true;
+  }
+  void Replay() override {}
+  Status Step() override {
+    if (event_.is_scan) {
+      Status s = engine_->Scan(event_.scan_t_s, event_.scan);
+      if (!s.ok()) {
+        return Status(s.code(), fmt::format("{}:{}: {}", source_->ScanSource(), event_.scan_line,
+                                            s.message()));
+      }
+      return Status::Ok();
+    }
+    Status s = engine_->Control(event_.control.t_s, event_.control.v_mps, event_.control.steer_rad);
+    if (!s.ok()) {
+      return Status(s.code(), fmt::format("{}:{}: {}", source_->ControlSource(),
+                                          event_.control.line, s.message()));
+    }
+    return Status::Ok();
+  }
+
+  Status WriteOutputs(OutputSet* out, nlohmann::json* summary) override {
+    // Every read-out first: across ranks they are collective, and every rank takes them.
+    const std::vector<StampedPose>& mean = engine_->MeanTrajectory();
+    StatusOr<std::vector<StampedPose>> heaviest = engine_->HeaviestTrajectory();
+    if (!heaviest.ok()) return heaviest.status();
+    StatusOr<std::vector<LandmarkEstimate>> landmarks = engine_->HeaviestLandmarks();
+    if (!landmarks.ok()) return landmarks.status();
+    const FastSlamSummary engine_summary = engine_->Summary();
+    if (out == nullptr) return Status::Ok();  // not rank 0
+    GROVE_RETURN_IF_ERROR(out->Add("trajectory.csv", TrajectoryCsv(mean)));
+    GROVE_RETURN_IF_ERROR(out->Add("heaviest_trajectory.csv", TrajectoryCsv(*heaviest)));
+    GROVE_RETURN_IF_ERROR(out->Add("landmarks.csv", LandmarksCsv(*landmarks)));
+    if (StopRequested()) return Status::Ok();
+    MapImage image;
+    for (const StampedPose& p : *heaviest) image.path.push_back({p.pose.x_m, p.pose.y_m});
+    for (const auto& [t, p] : truth_) image.truth.push_back({p.x_m, p.y_m});
+    for (const LandmarkEstimate& l : *landmarks) {
+      image.landmarks.push_back({l.x_m, l.y_m, l.sxx, l.sxy, l.syy});
+    }
+    for (const auto& [id, l] : landmarks_truth_) image.landmarks_truth.push_back({l.x_m, l.y_m});
+    const char* filter = FilterTitle(config_.filter);
+    image.title = fmt::format("{}, {} particles: heaviest particle's path and landmarks", filter,
+                              config_.particles);
+    StatusOr<GpsErrors> gps_mean = InvalidArgumentError("no GPS"), gps_heaviest = gps_mean;
+    if (park_ != nullptr) {
+      gps_mean = CompareWithGps(mean, park_->gps);
+      gps_heaviest = CompareWithGps(*heaviest, park_->gps);
+      if (gps_mean.ok() && gps_heaviest.ok()) {
+        GROVE_RETURN_IF_ERROR(out->Add("gps_error.csv", GpsErrorCsv(*gps_mean)));
+        // The GPS drawn in the filter's frame: the inverse of the heaviest path's alignment.
+        const TrajectoryError& a = gps_heaviest->alignment;
+        const double c = std::cos(a.rotation_rad), s = std::sin(a.rotation_rad);
+        for (const TimedPoint& g : park_->gps) {
+          const double dx = g.x_m - a.translation_x_m, dy = g.y_m - a.translation_y_m;
+          image.truth.push_back({c * dx + s * dy, -s * dx + c * dy});
+        }
+        image.truth_label = "GPS (rigidly aligned)";
+      } else {
+        GROVE_RETURN_IF_ERROR(out->Add("gps_error.csv", "t,gps_x,gps_y,x,y,error\n"));
+      }
+      image.title = fmt::format("Victoria Park, {}, {} particles: heaviest path, landmarks, GPS",
+                                filter, config_.particles);
+    }
+    GROVE_RETURN_IF_ERROR(AddMapImages(out, image));
+    if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
+    summary->update(FastSlamSummaryJson(engine_summary));
+    if (park_ != nullptr) {
+      (*summary)["inputs"] = {
+          {"victoria_park", options_.victoria_park_dir},
+          {"until_s", std::isfinite(options_.until_s) ? nlohmann::json(options_.until_s)
+                                                      : nlohmann::json(nullptr)},
+          {"scans_before_the_first_control", park_events_->skipped_scans()}};
+      (*summary)["gps"] =
+          gps_mean.ok() ? GpsErrorsJson(*gps_mean) : nlohmann::json(gps_mean.status().message());
+      (*summary)["gps_heaviest"] = gps_heaviest.ok()
+                                       ? GpsErrorsJson(*gps_heaviest)
+                                       : nlohmann::json(gps_heaviest.status().message());
+    } else {
+      (*summary)["inputs"] = {{"controls", options_.controls_path},
+                              {"observations", options_.observations_path}};
+    }
+    if (!truth_.empty()) {
+      std::map<double, Pose2> estimate;
+      for (const StampedPose& p : mean) estimate[p.t_s] = p.pose;
+      (*summary)["accuracy"] = PoseErrorsJson(ComparePoses(truth_, estimate));
+    }
+    if (!landmarks_truth_.empty()) {
+      (*summary)["landmark_accuracy"] = LandmarkErrorsJson(*landmarks, landmarks_truth_);
+    }
+    return Status::Ok();
+  }
+
+ private:
+  FastSlamRunOptions options_;
+  std::unique_ptr<FastSlamEventSource> source_;
+  std::unique_ptr<VictoriaParkData> park_;
+  VictoriaParkEvents* park_events_ = nullptr;  // source_, for Victoria Park
+  int64_t records_ = 0;
+  FastSlamEvent event_;
+  std::map<double, Pose2> truth_;
+  std::map<int64_t, TruthLandmark> landmarks_truth_;
+};
+
+}  // namespace
+
+PoseErrors ComparePoses(const std::map<double, Pose2>& truth,
+                        const std::map<double, Pose2>& estimate) {
+  PoseErrors e;
+  std::vector<double> sq;
+  double heading_sq = 0;
+  for (const auto& [t, p] : truth) {
+    auto it = estimate.find(t);
+    if (it == estimate.end()) {
+      ++e.unmatched;
+      continue;
+    }
+    const double d2 = (it->second.x_m - p.x_m) * (it->second.x_m - p.x_m) +
+                      (it->second.y_m - p.y_m) * (it->second.y_m - p.y_m);
+    sq.push_back(d2);
+    const double dh = Wrap(it->second.heading_rad - p.heading_rad);
+    heading_sq += dh * dh;
+    e.max_position_m = std::max(e.max_position_m, std::sqrt(d2));
+  }
+  e.matched = static_cast<int64_t>(sq.size());
+  if (sq.empty()) return e;
+  double sum = 0;
+  for (double v : sq) sum += v;
+  const double mean = sum / sq.size();
+  double var = 0;
+  for (double v : sq) var += (v - mean) * (v - mean);
+  e.position_mse_mean_m2 = mean;
+  e.position_mse_variance_m4 = var / sq.size();
+  e.position_rmse_m = std::sqrt(mean);
+  e.heading_rmse_rad = std::sqrt(heading_sq / sq.size());
+  return e;
+}
+
+std::string LandmarksCsv(const std::vector<LandmarkEstimate>& landmarks) {
+  std::string out = "id,x,y,sxx,sxy,syy,source_id\n";
+  for (const LandmarkEstimate& l : landmarks) {
+    fmt::format_to(std::back_inserter(out), "{},{:.6f},{:.6f},{:.9g},{:.9g},{:.9g},{}\n", l.id,
+                   l.x_m, l.y_m, l.sxx, l.sxy, l.syy, l.source_id);
+  }
+  return out;
+}
+
+int RunFastSlamCommand(const FastSlamConfig& config, const FastSlamRunOptions& options) {
+  if (Status s = config.Validate(); !s.ok()) return Fail(kExitUsage, s.message());
+  FastSlamJob job(config, options);
+  if (Status s = job.Open(); !s.ok()) return Fail(kExitInput, s.message());
+  return RunCommand(&job, options.run, ConfigToJson(FastSlamConfigFields(), job.config()));
+}
+
+int FastSlamEvaluateCommand(const std::string& truth_path, const std::string& trajectory_path,
+                            const std::string& landmarks_path,
+                            const std::string& landmarks_truth_path) {
+  StatusOr<std::map<double, Pose2>> truth = ReadPoses(truth_path);
+  if (!truth.ok()) return Fail(kExitInput, truth.status().message());
+  StatusOr<std::map<double, Pose2>> estimate = ReadPoses(trajectory_path);
+  if (!estimate.ok()) return Fail(kExitInput, estimate.status().message());
+  const PoseErrors e = ComparePoses(*truth, *estimate);
+  if (e.matched == 0) {
+    return Fail(kExitInput, fmt::format("{} and {} share no time", truth_path, trajectory_path));
+  }
+  nlohmann::json report = {{"pose", PoseErrorsJson(e)},
+                           {"nees", "not computed: the run writes no particle covariance"}};
+  if (!landmarks_path.empty()) {
+    if (landmarks_truth_path.empty()) {
+      return Fail(kExitUsage, "--landmarks needs --landmarks-truth");
+    }
+    StatusOr<std::vector<LandmarkEstimate>> l = ReadLandmarkEstimates(landmarks_path);
+    if (!l.ok()) return Fail(kExitInput, l.status().message());
+    StatusOr<std::map<int64_t, TruthLandmark>> t = ReadTruthLandmarks(landmarks_truth_path);
+    if (!t.ok()) return Fail(kExitInput, t.status().message());
+    report["landmarks"] = LandmarkErrorsJson(*l, *t);
+  }
+  std::printf("%s\n", report.dump(2).c_str());
+  return kExitOk;
+}
+
+}  // namespace grove::tools

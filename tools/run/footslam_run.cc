@@ -1,0 +1,189 @@
+// `grove footslam run`: FootSLAM on the generic run loop (tools/run/run_loop.h).
+#include "tools/run/footslam_run.h"
+
+#include <fmt/format.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <fstream>
+#include <memory>
+#include <string_view>
+#include <vector>
+
+#include "engine/filter/resampler.h"
+#include "engine/io/config_json.h"
+#include "tools/io/footslam_outputs.h"
+#include "tools/io/output_readers.h"
+#include "tools/io/step_reader.h"
+#include "tools/report/map_render.h"
+
+namespace grove::tools {
+namespace {
+
+class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
+ public:
+  FootSlamJob(const FootSlamConfig& config, const FootSlamRunOptions& options)
+      : FacadeRunJob(config, options.run.ranks),
+        options_(options),
+        steps_name_(options.steps_path.empty() ? EmbeddedWalkName() : options.steps_path),
+        odometry_(Pose2{config.start_x_m, config.start_y_m, config.start_heading_rad}) {}
+
+  // Opens the step file; its errors are input errors.
+  Status Open() {
+    StepReaderOptions reader_options;
+    reader_options.max_step_m = options_.max_step_m;
+    StatusOr<StepReader> reader =
+        options_.steps_path.empty()
+            ? StepReader::OpenText(EmbeddedWalkName(), EmbeddedWalkSteps(), reader_options)
+            : StepReader::Open(options_.steps_path, reader_options);
+    if (!reader.ok()) return reader.status();
+    reader_ = std::make_unique<StepReader>(std::move(reader).value());
+    if (!options_.prior_map_path.empty()) {
+      StatusOr<std::vector<HexCounts>> prior =
+          ReadPriorMapCsv(options_.prior_map_path, config_.hex_radius_m);
+      if (!prior.ok()) return prior.status();
+      prior_ = std::move(prior).value();
+    }
+    const int64_t lines = options_.steps_path.empty() ? CountLines(EmbeddedWalkSteps())
+                                                      : CountRegularFileLines(options_.steps_path);
+    // Lines after the header (comments and blank lines make it an estimate).
+    records_ = std::max<int64_t>(lines - 1 - (reader_->positions_form() ? 1 : 0), 0);
+    return Status::Ok();
+  }
+
+  std::vector<std::string> InputPaths() const override {
+    std::vector<std::string> paths;
+    if (!options_.steps_path.empty()) paths.push_back(options_.steps_path);
+    if (!options_.prior_map_path.empty()) paths.push_back(options_.prior_map_path);
+    return paths;
+  }
+
+  Status Create() override {
+    GROVE_RETURN_IF_ERROR(FacadeRunJob::Create());
+    if (options_.prior_map_path.empty()) return Status::Ok();
+    Status s = engine_->SetPriorMap(prior_);
+    if (!s.ok()) return Status(s.code(), options_.prior_map_path + ": " + s.message());
+    return Status::Ok();
+  }
+  std::vector<std::string> OutputNames() const override {
+    std::vector<std::string> names = {"map.csv",
+                                      "map_best.csv",
+                                      "trajectory.csv",
+                                      "mean_trajectory.csv",
+                                      "smoothed_trajectory.csv",
+                                      "map.png",
+                                      "map.svg"};
+    // Storage of diversity: the stored map alone (map.csv and map_best.csv include it).
+    if (config_.store_distance_m > 0) names.push_back("stored_map.csv");
+    return names;
+  }
+  std::string InputName() const override { return steps_name_; }
+  const char* RecordsName() const override { return "steps"; }
+  int64_t ExpectedRecords() const override { return records_; }
+  int64_t PredictPeakBytes(int64_t records) const override {
+    FootSlamConfig share = config_;  // across ranks, this rank's particles
+    share.particles = static_cast<int64_t>(
+        ShareOf(static_cast<uint64_t>(config_.particles), ranks_, kSumBlock).count);
+    return FootSlam::EstimatePeakBytes(share, records) + records * kCommandBytesPerStep;
+  }
+  std::string DescribePrediction(int64_t records) const override {
+    return fmt::format("{} particles, {} map, {} steps{}", config_.particles,
+                       FootSlamMapKindName(config_.map), records,
+                       records_ == 0 ? " (a stream: its length is not known before the run)" : "");
+  }
+
+  StatusOr<bool> Read(std::string* digest_bytes) override {
+    StatusOr<bool> more = reader_->Next(&step_);
+    if (!more.ok() || !*more) return more;
+    const double v[3] = {step_.t_s, step_.dx_m, step_.dy_m};
+    digest_bytes->append(reinterpret_cast<const char*>(v), sizeof(v));
+    return true;
+  }
+  void Replay() override { odometry_.Add(step_.dx_m, step_.dy_m); }
+  Status Step() override {
+    if (engine_->steps() == 0) {
+      Status st = engine_->SetStartTime(reader_->start_time_s());
+      if (!st.ok()) return Status(st.code(), fmt::format("{}: {}", steps_name_, st.message()));
+    }
+    Status s = engine_->Step(step_.t_s, step_.dx_m, step_.dy_m);
+    if (!s.ok()) {
+      return Status(s.code(), fmt::format("{}:{}: {}", steps_name_, step_.line, s.message()));
+    }
+    odometry_.Add(step_.dx_m, step_.dy_m);
+    return Status::Ok();
+  }
+
+  Status WriteOutputs(OutputSet* out, nlohmann::json* summary) override {
+    // Every read-out first: across ranks they are collective, and every rank takes them.
+    StatusOr<std::vector<HexCounts>> cumulative = engine_->CumulativeMap();
+    if (!cumulative.ok()) return cumulative.status();
+    StatusOr<std::vector<HexCounts>> best = engine_->HeaviestMap();
+    if (!best.ok()) return best.status();
+    StatusOr<std::vector<HexCounts>> stored = engine_->StoredMap();
+    if (!stored.ok()) return stored.status();
+    StatusOr<std::vector<StampedPose>> trajectory = engine_->HeaviestTrajectory();
+    if (!trajectory.ok()) return trajectory.status();
+    StatusOr<std::vector<StampedPose>> smoothed = engine_->SmoothedTrajectory();
+    if (!smoothed.ok()) return smoothed.status();
+    const FootSlamSummary s = engine_->Summary();
+    if (out == nullptr) return Status::Ok();  // another rank writes them
+    GROVE_RETURN_IF_ERROR(out->Add("map.csv", MapCsv(*cumulative, false)));
+    GROVE_RETURN_IF_ERROR(out->Add("map_best.csv", MapCsv(*best, true)));
+    if (config_.store_distance_m > 0) {
+      GROVE_RETURN_IF_ERROR(out->Add("stored_map.csv", MapCsv(*stored, false)));
+    }
+    GROVE_RETURN_IF_ERROR(out->Add("trajectory.csv", TrajectoryCsv(*trajectory)));
+    GROVE_RETURN_IF_ERROR(
+        out->Add("mean_trajectory.csv", TrajectoryCsv(engine_->MeanTrajectory())));
+    GROVE_RETURN_IF_ERROR(out->Add("smoothed_trajectory.csv", TrajectoryCsv(*smoothed)));
+    if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
+    // The smoothed path: the best of the three paths on the simulator's walks (README).
+    MapImage image = FootSlamImage(
+        config_.hex_radius_m, *cumulative, *smoothed, odometry_.points(),
+        fmt::format("FootSLAM, {} particles, {} steps: cumulative map, smoothed path, "
+                    "raw odometry",
+                    config_.particles, engine_->steps()));
+    image.path_label = "smoothed path";
+    GROVE_RETURN_IF_ERROR(AddMapImages(out, image));
+    if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
+    summary->update(FootSlamSummaryJson(s));
+    (*summary)["inputs"] = {{"steps", steps_name_}, {"steps_read", engine_->steps()}};
+    (*summary)["hexagons"] = {{"cumulative", cumulative->size()}, {"heaviest", best->size()}};
+    if (s.prior_hexagons + s.prior_hexagons_outside > 0 || !options_.prior_map_path.empty()) {
+      (*summary)["prior_map"] = {{"path", options_.prior_map_path},
+                                 {"hexagons", s.prior_hexagons},
+                                 {"hexagons_outside_grid", s.prior_hexagons_outside},
+                                 {"confidence", config_.prior_map_confidence}};
+    }
+    return Status::Ok();
+  }
+
+ private:
+  FootSlamRunOptions options_;
+  std::string steps_name_;
+  std::unique_ptr<StepReader> reader_;
+  int64_t records_ = 0;
+  std::vector<HexCounts> prior_;
+  StepRecord step_;
+  OdometryPath odometry_;
+};
+
+}  // namespace
+
+int RunFootSlamCommand(const FootSlamConfig& config, const FootSlamRunOptions& options) {
+  if (Status s = config.Validate(); !s.ok()) return Fail(kExitUsage, s.message());
+  if (!(options.max_step_m > 0) || !std::isfinite(options.max_step_m)) {
+    return Fail(kExitUsage,
+                fmt::format("--max-step = {}: must be > 0 and finite", options.max_step_m));
+  }
+  if (!options.prior_map_path.empty() && !options.run.resume_path.empty()) {
+    return Fail(kExitUsage,
+                "--prior-map with --resume: the checkpoint holds the prior map its run started "
+                "with; resume without --prior-map");
+  }
+  FootSlamJob job(config, options);
+  if (Status s = job.Open(); !s.ok()) return Fail(kExitInput, s.message());
+  return RunCommand(&job, options.run, ConfigToJson(FootSlamConfigFields(), config));
+}
+
+}  // namespace grove::tools

@@ -1,0 +1,607 @@
+#include "tools/run/run_loop.h"
+
+#include <fmt/format.h>
+#include <sched.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "grove/checksum.h"
+#include "tools/io/atomic_file.h"
+#include "tools/io/csv_reader.h"
+#include "tools/run/progress_reporter.h"
+
+namespace grove::tools {
+namespace {
+
+// The signal that asked the run to stop (0: none), and whether the terminal went away. A
+// signal handler may only store to lock-free atomics; the loop reads them between steps.
+std::atomic<int> g_stop_signal{0};
+std::atomic<bool> g_hangup{false};
+static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free);
+
+extern "C" void OnStopSignal(int signal) { g_stop_signal.store(signal, std::memory_order_relaxed); }
+extern "C" void OnHangup(int) { g_hangup.store(true, std::memory_order_relaxed); }
+
+// Where the run stands in its input: kept in each checkpoint so that a resumed run can check
+// that it reads the same records.
+struct InputPosition {
+  std::string input_name;
+  int64_t records = 0;
+  uint32_t digest = 0;  // CRC-32 of the digest bytes of every record so far
+
+  void Add(std::string_view bytes) {
+    digest = Crc32(bytes, digest);
+    ++records;
+  }
+  std::string ToJson() const {
+    // The FootSLAM checkpoints of earlier versions named these steps_file and steps.
+    return nlohmann::json{{"steps_file", input_name}, {"steps", records}, {"digest", digest}}.dump(
+        -1, ' ', false, nlohmann::json::error_handler_t::replace);
+  }
+  static StatusOr<InputPosition> FromJson(const std::string& text, const std::string& name) {
+    InputPosition p;
+    try {
+      nlohmann::json j = nlohmann::json::parse(text);
+      p.input_name = j.at("steps_file").get<std::string>();
+      p.records = j.at("steps").get<int64_t>();
+      p.digest = j.at("digest").get<uint32_t>();
+    } catch (const nlohmann::json::exception& e) {
+      return DataLossError(fmt::format("{}: the input position is unreadable: {}", name,
+                                       QuoteForMessage(e.what(), 200)));
+    }
+    if (p.records < 0) return DataLossError(name + ": the input position is negative");
+    return p;
+  }
+};
+
+// The file `path` names, if it exists.
+bool StatOf(const std::string& path, struct stat* st) {
+  return !path.empty() && ::stat(path.c_str(), st) == 0;
+}
+
+bool SameFile(const struct stat& a, const struct stat& b) {
+  return a.st_dev == b.st_dev && a.st_ino == b.st_ino;
+}
+
+std::string DirectoryOf(const std::string& path) {
+  size_t slash = path.find_last_of('/');
+  if (slash == std::string::npos) return ".";
+  return slash == 0 ? "/" : path.substr(0, slash);
+}
+
+// Every path the run will write is checked before the first step: none is an input, none is
+// a directory, the checkpoint's directory exists (or is made) and takes a file.
+Status CheckOutputPaths(const RunJob& job, const std::string& out_dir,
+                        const std::string& checkpoint_path) {
+  struct Input {
+    std::string path;
+    struct stat st;
+  };
+  std::vector<Input> inputs;
+  for (const std::string& p : job.InputPaths()) {
+    Input in{p, {}};
+    if (StatOf(p, &in.st)) inputs.push_back(in);
+  }
+  std::vector<std::string> outputs;
+  for (const std::string& name : job.OutputNames()) outputs.push_back(out_dir + "/" + name);
+  outputs.push_back(out_dir + "/summary.json");
+  for (const std::string& target : outputs) {
+    if (target == checkpoint_path) {
+      return InvalidArgumentError(
+          fmt::format("--checkpoint {} is one of the run's outputs: choose another path", target));
+    }
+  }
+  outputs.push_back(checkpoint_path);
+  for (const std::string& target : outputs) {
+    struct stat st;
+    if (!StatOf(target, &st)) continue;
+    for (const Input& in : inputs) {
+      if (SameFile(st, in.st)) {
+        return InvalidArgumentError(fmt::format(
+            "{} would be written over, but it is the input {}: write the outputs elsewhere", target,
+            in.path));
+      }
+    }
+    if (S_ISDIR(st.st_mode)) {
+      return IoError(fmt::format("cannot write {}: it is a directory", target));
+    }
+  }
+  // The checkpoint's directory must take a file now, not after hours of running.
+  GROVE_RETURN_IF_ERROR(EnsureDirectory(DirectoryOf(checkpoint_path)));
+  StatusOr<AtomicFileWriter> probe = AtomicFileWriter::Create(checkpoint_path);
+  if (!probe.ok()) return probe.status();
+  return Status::Ok();  // the probe's temporary is removed here
+}
+
+// Reads a checkpoint: a regular file, whole.
+StatusOr<std::string> ReadCheckpointFile(const std::string& path) {
+  if (path.empty()) return InvalidArgumentError("--resume: the path is empty");
+  struct stat st;
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    return IoError(fmt::format("{}: {}, not a checkpoint file", path,
+                               S_ISDIR(st.st_mode) ? "is a directory" : "is not a regular file"));
+  }
+  return ReadWholeFile(path);
+}
+
+int64_t ReadCgroupValue(const std::string& path) {
+  std::ifstream in(path);
+  std::string text;
+  if (!(in >> text) || text == "max") return -1;
+  int64_t v = -1;
+  auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  return ec == std::errc() ? v : -1;
+}
+
+}  // namespace
+
+int Fail(int code, std::string_view message) {
+  std::fprintf(stderr, "grove: error: %.*s\n", static_cast<int>(message.size()), message.data());
+  return code;
+}
+
+int ExitCodeOf(const Status& s) {
+  switch (s.code()) {
+    case StatusCode::kInvalidArgument:
+    case StatusCode::kNotFound:
+    case StatusCode::kDataLoss:
+      return kExitInput;
+    case StatusCode::kIoError:
+    case StatusCode::kResourceExhausted:
+      return kExitOutput;
+    case StatusCode::kOutOfRange:
+    case StatusCode::kFailedPrecondition:
+      return kExitRun;
+    default:
+      return kExitInternal;
+  }
+}
+
+int UsableCpus() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof(set), &set) == 0) return std::max(1, CPU_COUNT(&set));
+  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+}
+
+int64_t PeakRssBytes() {
+  struct rusage usage;
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<int64_t>(usage.ru_maxrss) * 1024;  // Linux reports KiB
+}
+
+StatusOr<int64_t> ParseMemorySize(const std::string& text) {
+  double value = 0;
+  const char* begin = text.data();
+  const char* end = begin + text.size();
+  auto [ptr, ec] = std::from_chars(begin, end, value);
+  double scale = 1;
+  if (ec == std::errc() && ptr + 1 == end) {
+    switch (*ptr) {
+      case 'K':
+      case 'k':
+        scale = 1024.0;
+        break;
+      case 'M':
+      case 'm':
+        scale = 1024.0 * 1024;
+        break;
+      case 'G':
+      case 'g':
+        scale = 1024.0 * 1024 * 1024;
+        break;
+      case 'T':
+      case 't':
+        scale = 1024.0 * 1024 * 1024 * 1024;
+        break;
+      default:
+        ec = std::errc::invalid_argument;
+    }
+  } else if (ptr != end) {
+    ec = std::errc::invalid_argument;
+  }
+  double bytes = value * scale;
+  if (ec != std::errc() || !std::isfinite(bytes) || bytes < 1 || bytes > 9.0e18) {
+    return InvalidArgumentError(
+        fmt::format("--memory-budget = {}: must be a size such as 512M, 8G or 1073741824",
+                    QuoteForMessage(text)));
+  }
+  return static_cast<int64_t>(bytes);
+}
+
+int64_t AvailableMemoryBytes(std::string* source) {
+  int64_t best = 0;
+  auto consider = [&](int64_t bytes, const char* what) {
+    if (bytes < 0) return;
+    if (best == 0 || bytes < best) {
+      best = std::max<int64_t>(bytes, 1);
+      if (source != nullptr) *source = what;
+    }
+  };
+  {
+    std::ifstream meminfo("/proc/meminfo");
+    std::string key, unit;
+    int64_t kib = 0;
+    while (meminfo >> key >> kib >> unit) {
+      if (key == "MemAvailable:") consider(kib * 1024, "memory available");
+    }
+  }
+  struct rlimit limit;
+  if (getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY) {
+    std::ifstream statm("/proc/self/statm");
+    int64_t pages = 0;
+    statm >> pages;
+    consider(static_cast<int64_t>(limit.rlim_cur) - pages * sysconf(_SC_PAGESIZE),
+             "address-space limit (ulimit -v)");
+  }
+  {
+    // cgroup v2: the process's own group, "0::/path".
+    std::ifstream cgroup("/proc/self/cgroup");
+    std::string line;
+    while (std::getline(cgroup, line)) {
+      if (line.rfind("0::", 0) != 0) continue;
+      const std::string dir = "/sys/fs/cgroup" + line.substr(3);
+      const int64_t max = ReadCgroupValue(dir + "/memory.max");
+      const int64_t current = ReadCgroupValue(dir + "/memory.current");
+      if (max >= 0 && current >= 0) consider(max - current, "cgroup memory limit");
+    }
+  }
+  return best;
+}
+
+SignalHandlers::SignalHandlers() {
+  g_stop_signal.store(0);
+  g_hangup.store(false);
+  struct sigaction stop = {};
+  stop.sa_handler = OnStopSignal;
+  sigemptyset(&stop.sa_mask);
+  stop.sa_flags = SA_RESETHAND | SA_RESTART;  // interrupted reads and writes resume
+  sigaction(SIGINT, &stop, &old_int_);
+  sigaction(SIGTERM, &stop, &old_term_);
+  struct sigaction hup = {};
+  hup.sa_handler = OnHangup;
+  sigemptyset(&hup.sa_mask);
+  hup.sa_flags = SA_RESTART;
+  sigaction(SIGHUP, &hup, &old_hup_);
+  struct sigaction pipe = {};
+  pipe.sa_handler = SIG_IGN;
+  sigemptyset(&pipe.sa_mask);
+  sigaction(SIGPIPE, &pipe, &old_pipe_);
+}
+
+SignalHandlers::~SignalHandlers() {
+  sigaction(SIGINT, &old_int_, nullptr);
+  sigaction(SIGTERM, &old_term_, nullptr);
+  sigaction(SIGHUP, &old_hup_, nullptr);
+  sigaction(SIGPIPE, &old_pipe_, nullptr);
+}
+
+bool StopRequested() { return g_stop_signal.load(std::memory_order_relaxed) != 0; }
+int StopSignal() { return g_stop_signal.load(std::memory_order_relaxed); }
+bool HangupSeen() { return g_hangup.load(std::memory_order_relaxed); }
+
+// Across ranks, before a record is stepped: the lowest rank's stop signal (0: none), or an error
+// when a rank failed to read, or the ranks read different records or not the same number.
+StatusOr<int> AgreeOnRecord(Collective& ranks, const StatusOr<bool>& more,
+                            const std::string& record, int64_t number,
+                            const std::string& input_name, const char* records_name) {
+  struct Mark {
+    int32_t signal;
+    int32_t state;  // 0: the input ended, 1: a record, 2: a read error
+    uint32_t crc;
+    uint32_t zero;
+  };
+  const Mark mine{StopSignal(), more.ok() ? (*more ? 1 : 0) : 2, Crc32(record), 0};
+  std::vector<Mark> all;
+  GROVE_RETURN_IF_ERROR(AllGatherValues<Mark>(ranks, std::span(&mine, 1), &all));
+  for (const Mark& m : all) {
+    if (m.signal != 0) return m.signal;
+  }
+  bool failed = false;
+  for (const Mark& m : all) failed = failed || m.state == 2;
+  if (failed) {
+    GROVE_RETURN_IF_ERROR(AgreeStatus(ranks, more.ok() ? Status::Ok() : more.status()));
+  }
+  for (size_t q = 1; q < all.size(); ++q) {
+    if (all[q].state != all[0].state) {
+      return InvalidArgumentError(fmt::format(
+          "{}: rank {} and rank 0 disagree on whether {} {} exists: every rank must read the "
+          "same input",
+          input_name, q, records_name, number));
+    }
+    if (all[q].crc != all[0].crc) {
+      return InvalidArgumentError(
+          fmt::format("{}: rank {} read other values than rank 0 in {} {}: every rank must read "
+                      "the same input",
+                      input_name, q, records_name, number));
+    }
+  }
+  return 0;
+}
+
+// Across ranks: the lowest rank's stop signal (0: none).
+StatusOr<int> AgreeOnSignal(Collective& ranks) {
+  const int32_t mine = StopSignal();
+  std::vector<int32_t> all;
+  GROVE_RETURN_IF_ERROR(AllGatherValues<int32_t>(ranks, std::span(&mine, 1), &all));
+  for (int32_t s : all) {
+    if (s != 0) return s;
+  }
+  return 0;
+}
+
+std::string RankCheckpointPath(const std::string& path, int rank) {
+  return rank == 0 ? path : fmt::format("{}.rank{}", path, rank);
+}
+
+int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& config) {
+  auto wall_start = std::chrono::steady_clock::now();
+  // Across ranks rank 0 (the lead) checks and writes the outputs and reports; every rank takes
+  // the same steps, agrees on every error, and exits with the same code.
+  Collective* ranks = options.ranks;
+  const bool lead = ranks == nullptr || ranks->rank() == 0;
+  auto agree = [&](const Status& s) { return ranks == nullptr ? s : AgreeStatus(*ranks, s); };
+  auto fail = [&](int code, std::string_view message) { return lead ? Fail(code, message) : code; };
+  std::optional<SignalHandlers> signals;
+  if (options.handle_signals) signals.emplace();
+  const std::string checkpoint_path = options.checkpoint_path.empty()
+                                          ? options.out_dir + "/checkpoint.grove"
+                                          : options.checkpoint_path;
+  // Across ranks each rank writes and reads its own share's file.
+  const int rank = ranks == nullptr ? 0 : ranks->rank();
+  const std::string my_checkpoint_path = RankCheckpointPath(checkpoint_path, rank);
+  const std::string my_resume_path =
+      options.resume_path.empty() ? "" : RankCheckpointPath(options.resume_path, rank);
+
+  // Every output path is checked, and the output directory locked, before any work.
+  std::optional<OutputDirectory> out_dir;
+  Status paths_ok;
+  if (lead) {
+    StatusOr<OutputDirectory> opened = OutputDirectory::Open(options.out_dir);
+    if (opened.ok()) {
+      out_dir.emplace(std::move(opened).value());
+      paths_ok = CheckOutputPaths(*job, options.out_dir, checkpoint_path);
+    } else {
+      paths_ok = opened.status();
+    }
+  }
+  if (Status s = agree(paths_ok); !s.ok()) {
+    return fail(s.code() == StatusCode::kInvalidArgument ? kExitUsage : kExitOutput, s.message());
+  }
+
+  // Refuse a run that would not fit before building anything.
+  const int64_t records = job->ExpectedRecords();
+  std::string budget_source = "--memory-budget";
+  const int64_t budget = options.memory_budget_bytes > 0 ? options.memory_budget_bytes
+                                                         : AvailableMemoryBytes(&budget_source);
+  const int64_t predicted = job->PredictPeakBytes(records);
+  Status fits;
+  if (budget > 0 && predicted > budget) {
+    fits = ResourceExhaustedError(
+        fmt::format("the run is predicted to need {:.1f} MiB ({}), more than the {} of "
+                    "{:.1f} MiB; use fewer particles or raise --memory-budget",
+                    predicted / 1048576.0, job->DescribePrediction(records), budget_source,
+                    budget / 1048576.0));
+  }
+  if (Status s = agree(fits); !s.ok()) return fail(kExitMemory, s.message());
+
+  // A new engine, or one continuing from a checkpoint.
+  InputPosition resumed_at;
+  if (options.resume_path.empty()) {
+    if (Status s = agree(job->Create()); !s.ok()) {
+      return fail(s.code() == StatusCode::kResourceExhausted ? kExitMemory : ExitCodeOf(s),
+                  s.message());
+    }
+  } else {
+    StatusOr<std::string> bytes = ReadCheckpointFile(my_resume_path);
+    if (!bytes.ok() && rank > 0) {
+      bytes = Status(bytes.status().code(),
+                     bytes.status().message() +
+                         " (across ranks, rank q resumes from the file --resume names plus "
+                         "\".rank<q>\": resume on as many ranks as wrote the checkpoint)");
+    }
+    if (Status s = agree(bytes.status()); !s.ok()) return fail(kExitInput, s.message());
+    std::string user;
+    // Collective across ranks: every rank's error reaches every rank.
+    Status s = job->Resume(*bytes, my_resume_path, &user);
+    if (!s.ok()) {
+      // Another configuration or format is a usage error; a corrupt file a bad input.
+      return fail(s.code() == StatusCode::kFailedPrecondition  ? kExitUsage
+                  : s.code() == StatusCode::kResourceExhausted ? kExitMemory
+                                                               : kExitInput,
+                  s.message());
+    }
+    StatusOr<InputPosition> at = InputPosition::FromJson(user, my_resume_path);
+    if (Status s = agree(at.status()); !s.ok()) return fail(kExitInput, s.message());
+    resumed_at = *at;
+  }
+
+  InputPosition position;
+  position.input_name = job->InputName();
+  int64_t checkpoints_written = 0, checkpoint_bytes = 0;
+  double checkpoint_s = 0;
+  // Across ranks every rank writes its own file and the ranks agree on the outcome; a crash
+  // between two ranks' renames leaves files of two steps, which a resume refuses.
+  auto write_checkpoint = [&]() -> Status {
+    auto t0 = std::chrono::steady_clock::now();
+    StatusOr<std::string> bytes = job->Checkpoint(position.ToJson());
+    Status s = bytes.status();
+    if (s.ok()) s = WriteFileAtomically(my_checkpoint_path, *bytes);
+    GROVE_RETURN_IF_ERROR(agree(s));
+    if (out_dir) out_dir->Keep();  // it holds a checkpoint now (the default path)
+    ++checkpoints_written;
+    checkpoint_bytes = static_cast<int64_t>(bytes->size());
+    checkpoint_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return Status::Ok();
+  };
+  // Across ranks every rank comes here together (the signal is agreed).
+  auto stop_with_checkpoint = [&](int signal) {
+    if (position.records < resumed_at.records) {  // still re-reading: nothing new to save
+      if (lead) {
+        std::fprintf(stderr, "\ngrove: stopped by %s before any new step; %s is unchanged\n",
+                     strsignal(signal), options.resume_path.c_str());
+      }
+      return kExitSignalBase + signal;
+    }
+    Status s = write_checkpoint();
+    if (!s.ok()) return fail(kExitOutput, s.message());
+    if (lead) {
+      std::fprintf(stderr,
+                   "\ngrove: stopped by %s after step %lld: wrote %s%s; continue with the same "
+                   "command and --resume %s\n",
+                   strsignal(signal), static_cast<long long>(job->steps()), checkpoint_path.c_str(),
+                   ranks == nullptr ? "" : " (and one file per further rank beside it)",
+                   checkpoint_path.c_str());
+    }
+    return kExitSignalBase + signal;
+  };
+
+  const bool terminal = isatty(fileno(stderr)) != 0;
+  ProgressReporter progress(records, job->particles(), stderr, terminal);
+  const bool show_progress = options.progress && lead;
+  std::string digest_bytes;
+  while (true) {
+    if (ranks == nullptr) {
+      if (int signal = StopSignal(); signal != 0) return stop_with_checkpoint(signal);
+    }
+    digest_bytes.clear();
+    StatusOr<bool> more = job->Read(&digest_bytes);
+    if (ranks != nullptr) {
+      // Every rank reads the input itself: the ranks agree on a stop signal, on the read's
+      // outcome and on the record's bytes before any of them steps.
+      StatusOr<int> signal = AgreeOnRecord(*ranks, more, digest_bytes, position.records + 1,
+                                           job->InputName(), job->RecordsName());
+      if (!signal.ok()) return fail(kExitInput, signal.status().message());
+      if (*signal != 0) return stop_with_checkpoint(*signal);
+    }
+    if (!more.ok()) return fail(kExitInput, more.status().message());
+    if (!*more) break;
+    // The records a resumed run has taken already: re-read to check them, not stepped again.
+    const bool replay = position.records < resumed_at.records;
+    position.Add(digest_bytes);
+    if (replay) {
+      Status same;
+      if (position.records == resumed_at.records && position.digest != resumed_at.digest) {
+        same = InvalidArgumentError(
+            fmt::format("{}: the first {} {} differ from those of {} (made from {}): resume with "
+                        "the same input",
+                        job->InputName(), resumed_at.records, job->RecordsName(), my_resume_path,
+                        QuoteForMessage(resumed_at.input_name, 200)));
+      }
+      if (ranks != nullptr && position.records == resumed_at.records) same = agree(same);
+      if (!same.ok()) return fail(kExitInput, same.message());
+      job->Replay();
+      continue;
+    }
+    if (Status s = job->Step(); !s.ok()) {
+      // Out of memory in a step is the memory's fault, not the disk's.
+      return fail(s.code() == StatusCode::kResourceExhausted ? kExitMemory : ExitCodeOf(s),
+                  s.message());
+    }
+    if (show_progress && !HangupSeen()) progress.Update(position.records);
+    if (options.checkpoint_every > 0 && job->steps() % options.checkpoint_every == 0) {
+      if (Status s = write_checkpoint(); !s.ok()) return fail(ExitCodeOf(s), s.message());
+    }
+  }
+  Status long_enough;
+  if (position.records < resumed_at.records) {
+    long_enough = InvalidArgumentError(fmt::format(
+        "{}: has {} {}, but {} was made after {}: resume with the same input", job->InputName(),
+        position.records, job->RecordsName(), my_resume_path, resumed_at.records));
+  }
+  if (Status s = agree(long_enough); !s.ok()) return fail(kExitInput, s.message());
+  if (job->steps() == 0) return fail(kExitInput, fmt::format("{}: no steps", job->InputName()));
+  if (show_progress && !HangupSeen()) progress.Finish();
+
+  // The outputs as a set: staged, then renamed into place, summary.json last. Across ranks
+  // every rank computes them (the read-outs are collective); the lead writes them.
+  std::optional<OutputSet> out;
+  Status staged;
+  if (lead) {
+    StatusOr<OutputSet> begun = OutputSet::Begin(options.out_dir);
+    if (begun.ok()) {
+      out.emplace(std::move(begun).value());
+    } else {
+      staged = begun.status();
+    }
+  }
+  if (Status s = agree(staged); !s.ok()) return fail(kExitOutput, s.message());
+  nlohmann::json summary = {{"config", config}};
+  if (Status s = agree(job->WriteOutputs(out ? &*out : nullptr, &summary)); !s.ok()) {
+    return fail(ExitCodeOf(s), s.message());
+  }
+  if (ranks != nullptr) {
+    StatusOr<int> signal = AgreeOnSignal(*ranks);
+    if (!signal.ok()) return fail(kExitInternal, signal.status().message());
+    if (*signal != 0) return stop_with_checkpoint(*signal);
+  } else if (int signal = StopSignal(); signal != 0) {
+    return stop_with_checkpoint(signal);
+  }
+  summary["wall_time_s"] =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  summary["peak_rss_bytes"] = PeakRssBytes();
+  summary["predicted_peak_bytes"] = predicted;
+  summary["memory_budget"] = {{"bytes", budget}, {"source", budget_source}};
+  summary["checkpoints"] = {{"written", checkpoints_written},
+                            {"seconds", checkpoint_s},
+                            {"last_bytes", checkpoint_bytes},
+                            {"resumed_from", options.resume_path},
+                            {"resumed_at_record", resumed_at.records}};
+  if (ranks != nullptr) summary["ranks"] = ranks->size();
+  if (Status s = agree(lead ? out->Commit(summary) : Status::Ok()); !s.ok()) {
+    return fail(kExitOutput, s.message());
+  }
+  const std::string brief = job->BriefReport();  // collective across ranks: every rank
+  if (!lead) return kExitOk;
+  out_dir->Keep();
+  std::string names;
+  for (const std::string& n : out->names()) names += n + ", ";
+  std::fprintf(stderr, "%s\nwrote %s/{%ssummary.json}\n", brief.c_str(), options.out_dir.c_str(),
+               names.c_str());
+  return kExitOk;
+}
+
+int64_t CountLines(std::string_view text) {
+  return static_cast<int64_t>(std::count(text.begin(), text.end(), '\n'));
+}
+
+int64_t CountRegularFileLines(const std::string& path) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return 0;
+  std::ifstream in(path, std::ios::binary);
+  std::vector<char> buffer(1 << 20);
+  int64_t lines = 0;
+  while (in) {
+    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    lines += CountLines(std::string_view(buffer.data(), static_cast<size_t>(in.gcount())));
+  }
+  return lines;
+}
+
+Status AddMapImages(OutputSet* out, const MapImage& image) {
+  if (StopRequested()) return Status::Ok();
+  StatusOr<std::string> png = RenderPng(image);
+  if (!png.ok()) return png.status();
+  GROVE_RETURN_IF_ERROR(out->Add("map.png", *png));
+  if (StopRequested()) return Status::Ok();
+  StatusOr<std::string> svg = RenderSvg(image);
+  if (!svg.ok()) return svg.status();
+  return out->Add("map.svg", *svg);
+}
+
+}  // namespace grove::tools
