@@ -1,28 +1,37 @@
 #!/usr/bin/env bash
-# Runs every benchmark and writes the results, with the machine they came from, to
-# bench/results/<date>-<cpu>-<cores>c/. Run on a quiet machine; takes about 20 minutes on 2 cores.
+# Runs the micro-benchmarks, the FootSLAM step benchmark, `grove bench scaling` and `grove bench
+# paper`, and writes their results into bench/results/<machine>/, replacing that machine's
+# previous baseline of these four (git keeps the old one). <machine> is the CPU's model name and
+# core count, e.g. amd-epyc-2c; MACHINE=name overrides it. machine.md, the machine's description,
+# is written only when missing. Run on a quiet machine; about 20 minutes on 2 cores.
 #   bench/run_all.sh [build-dir]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build="${1:-build}"
-cpu=$(sed -n 's/^model name\s*:\s*//p' /proc/cpuinfo | head -1 | tr -cs 'A-Za-z0-9' '-' | sed 's/-$//')
-out="bench/results/$(date +%Y-%m-%d)-${cpu}-$(nproc)c"
-mkdir -p "$out"
-{
-  echo "# Machine"
-  echo
-  echo "- CPU: $(sed -n 's/^model name\s*:\s*//p' /proc/cpuinfo | head -1), $(nproc) cores"
-  echo "- memory: $(free -g | awk '/Mem:/ {print $2}') GiB"
-  echo "- OS: $(. /etc/os-release; echo "$PRETTY_NAME"), kernel $(uname -r)"
-  echo "- compiler: $(c++ --version | head -1)"
-  echo "- build type: $(sed -n 's/^CMAKE_BUILD_TYPE:STRING=//p' "$build/CMakeCache.txt")"
-  echo "- commit: $(git rev-parse --short HEAD)$(git diff --quiet || echo ' (with uncommitted changes)')"
-  echo "- transparent huge pages: $(cat /sys/kernel/mm/transparent_hugepage/enabled)"
-} >"$out/machine.md"
-"$build/bench/grove_micro_benchmark" --benchmark_out="$out/micro.json" --benchmark_out_format=json \
-  | tee "$out/micro.txt"
+model=$(sed -n 's/^model name\s*:\s*//p' /proc/cpuinfo | head -1)
+slug=$(echo "$model" | sed -e 's/([RrTtMm]*)//g' -e 's/ CPU//' -e 's/@.*//' | tr 'A-Z' 'a-z' |
+  tr -cs 'a-z0-9' '-' | sed 's/^-//; s/-$//')
+out="bench/results/${MACHINE:-$slug-$(nproc)c}"
+mkdir -p "$out"/{micro,footslam_benchmark}
+if [ ! -f "$out/machine.md" ]; then
+  {
+    echo "# Machine: $(basename "$out")"
+    echo
+    echo "- CPU: $model, $(nproc) cores"
+    echo "- memory: $(free -g | awk '/Mem:/ {print $2}') GiB"
+    echo "- OS: $(. /etc/os-release; echo "$PRETTY_NAME"), kernel $(uname -r)"
+    echo "- compiler: $(c++ --version | head -1)"
+    echo "- transparent huge pages: $(cat /sys/kernel/mm/transparent_hugepage/enabled)"
+  } >"$out/machine.md"
+fi
+# Each result records the commit, compiler and build type it was made with.
+"$build/bench/grove_micro_benchmark" --benchmark_out="$out/micro/micro.json" \
+  --benchmark_out_format=json | tee "$out/micro/micro.txt"
 "$build/bench/grove_footslam_benchmark" --benchmark_min_time=2 \
-  --benchmark_out="$out/footslam.json" --benchmark_out_format=json | tee "$out/footslam.txt"
+  --benchmark_out="$out/footslam_benchmark/footslam.json" --benchmark_out_format=json \
+  | tee "$out/footslam_benchmark/footslam.txt"
 "$build/tools/grove" bench scaling --out "$out/scaling"
 "$build/tools/grove" bench paper --out "$out/paper"
-echo "results in $out"
+# The charts are drawn as PNG and SVG; the results keep the PNG.
+rm -f "$out"/scaling/*.svg "$out"/paper/*.svg
+echo "results in $out; add a row for them to bench/results/README.md"

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""FootSLAM's defaults, swept on simulated walks with a held-out half (issue 15).
+"""FootSLAM's defaults, swept on simulated walks with a held-out half.
 
 Twelve 8-minute walks: building walks of seeds 1-8 (heading drift 0.012 rad per sqrt step) and
 open-area walks of seeds 1-4 (the simulator's defaults). The tuning half is building 1-4 and open

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """How one FootSLAM filter across MPI ranks (global resampling) would scale on a cluster.
 
-A model, not a measurement: it takes from `grove bench ranks` runs (ranks.json) the measured
+A model, not a measurement: it takes from `grove_ranks_benchmark` runs (ranks.json) the measured
 compute cost of a particle-step on one thread, the resampling rate, and the bytes of particles
 each rank sends per resampling, and adds assumed network costs:
   - every step: 4 small collectives (status, maximum, block sums, squared-weight sums);
