@@ -953,10 +953,16 @@ TEST_F(CliTest, VictoriaParkBadDataStopsWithTheFileAndLine) {
   };
   ASSERT_EQ(run().exit_code, 0);
   fs::remove_all(out);
-  // A plain file beside the compressed one is read first.
+  // A plain file beside the compressed one: which one is meant is not guessed.
   std::ofstream(data / "measurements.dat") << "     0.852   20.46202    0.88575    0.35404\n"
                                            << "     0.900   abc    0.88575    0.35404\n";
   Outcome o = run();
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find("both measurements.dat and measurements.dat.gz exist"), std::string::npos)
+      << o.err;
+  EXPECT_FALSE(fs::exists(out));
+  fs::rename(data / "measurements.dat.gz", dir_ / "measurements.dat.gz");
+  o = run();
   EXPECT_EQ(o.exit_code, 3);
   EXPECT_NE(o.err.find((data / "measurements.dat").string() + ":2:14:"), std::string::npos)
       << o.err;
@@ -971,6 +977,7 @@ TEST_F(CliTest, VictoriaParkBadDataStopsWithTheFileAndLine) {
   EXPECT_EQ(o.exit_code, 3);
   EXPECT_NE(o.err.find("2 numbers where 4 are expected"), std::string::npos) << o.err;
   fs::remove(data / "measurements.dat");
+  fs::rename(dir_ / "measurements.dat.gz", data / "measurements.dat.gz");
   // A truncated gzip file.
   const std::string gz = Slurp(data / "inputs.dat.gz");
   std::ofstream(data / "inputs.dat.gz", std::ios::binary) << gz.substr(0, gz.size() / 2);
