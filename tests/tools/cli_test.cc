@@ -429,6 +429,15 @@ TEST_F(CliTest, ABatchRefusesABadManifestAndReportsAFailedWalk) {
            Case{"{\"name\": \"a\", \"stpes\": \"w/steps.csv\"}\n",
                 "walks.jsonl:1:15: unknown key \"stpes\""},
            Case{"\n\n", "walks.jsonl: no walks"},
+           // Regression: the batch's own summary name was accepted and failed only at the end.
+           Case{"{\"name\": \"batch_summary.jsonl\", \"steps\": \"w/steps.csv\"}\n",
+                "walks.jsonl:1:2: name = \"batch_summary.jsonl\": reserved"},
+           // Regression: duplicate keys were accepted, the last one winning.
+           Case{"{\"name\": \"a\", \"name\": \"b\", \"steps\": \"w/steps.csv\"}\n",
+                "walks.jsonl:1:15: duplicate key \"name\""},
+           Case{"{\"name\": \"a\", \"steps\": \"w/steps.csv\", \"config\": {\"seed\": 1, "
+                "\"seed\": 2}}\n",
+                "walks.jsonl:1:61: duplicate key \"seed\""},
        }) {
     SCOPED_TRACE(c.text);
     const std::string manifest = Write("walks.jsonl", c.text);
