@@ -845,6 +845,9 @@ TEST_F(CliTest, FastSlamBadInputsStopWithFileLineColumn) {
       {good_controls, "t,range,bearing,id\n0.025,inf,0.5,1\n", "observations",
        "2:", "must be finite"},
       {"t,v\n0,3\n", good_observations, "controls", "1:1:", "unknown header"},
+      // Regression: a controls file with only its header blamed the first observation.
+      {"t,v,steer\n", good_observations, "controls", " no controls", "needs at least one"},
+      {"t,v,steer\n", "t,range,bearing,id\n", "controls", " no controls", "needs at least one"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.controls + " | " + c.observations);
