@@ -260,14 +260,48 @@ class FootSlamRunTest(unittest.TestCase):
         with self.assertRaises(grove.DataLossError):
             grove.FootSlam.resume(data[: len(data) // 3], SMALL)
 
-    def test_pickle_round_trip(self):
+    def test_pickle_round_trip_at_every_protocol(self):
+        # Regression: protocols 0 and 1 aborted the interpreter.
+        for protocol in range(pickle.HIGHEST_PROTOCOL + 1):
+            with self.subTest(protocol=protocol):
+                f = grove.FootSlam(SMALL)
+                f.run(self.walk[:50])
+                g = pickle.loads(pickle.dumps(f, protocol=protocol))
+                self.assertEqual(g.config, f.config)
+                f.run(self.walk[50:])
+                g.run(self.walk[50:])
+                self.assertSameFilter(f, g)
+
+    def test_init_or_setstate_on_a_live_filter_raises(self):
+        # Regression: both silently did nothing.
         f = grove.FootSlam(SMALL)
-        f.run(self.walk[:50])
-        g = pickle.loads(pickle.dumps(f))
-        self.assertEqual(g.config, f.config)
-        f.run(self.walk[50:])
-        g.run(self.walk[50:])
-        self.assertSameFilter(f, g)
+        f.run(self.walk[:10])
+        with self.assertRaisesRegex(TypeError, "already initialised"):
+            f.__init__(SMALL, seed=9)
+        with self.assertRaisesRegex(TypeError, "already initialised"):
+            f.__setstate__(f.__getstate__())
+        self.assertEqual(f.config["seed"], SMALL["seed"])
+        self.assertEqual(f.steps, 10)
+        # A state from __getstate__ still rebuilds a new object (older pickles).
+        g = grove.FootSlam.__new__(grove.FootSlam)
+        g.__setstate__(f.__getstate__())
+        self.assertEqual(g.steps, 10)
+
+    def test_config_as_json_text_raises_type_error(self):
+        with self.assertRaisesRegex(TypeError, "json.loads"):
+            grove.FootSlam('{"particles": 10}')
+
+    def test_prior_map_of_plain_numbers_raises_type_error(self):
+        with self.assertRaisesRegex(TypeError, "HEX_DTYPE.*float64"):
+            grove.FootSlam(SMALL).set_prior_map(np.zeros(3))
+
+    def test_complex_or_text_steps_raise_type_error(self):
+        f = grove.FootSlam(SMALL)
+        with self.assertRaisesRegex(TypeError, "complex128"):
+            f.run(np.array([[0.5 + 1j, 0.7, 0.0]]))
+        with self.assertRaisesRegex(TypeError, "real numbers"):
+            f.run([["0.5", "0.7", "0.0"]])
+        self.assertEqual(f.steps, 0)
 
     def test_summary(self):
         f = self.run_walk()
@@ -287,8 +321,10 @@ class FootSlamRunTest(unittest.TestCase):
         bad["counts"][2, 1] = -1.0
         with self.assertRaisesRegex(grove.InvalidArgumentError, "prior map row 2 "):
             f.set_prior_map(bad)
-        with self.assertRaises(ValueError):
+        with self.assertRaises(TypeError):
             f.set_prior_map(np.zeros((2, 2)))
+        with self.assertRaisesRegex(ValueError, "one-dimensional"):
+            f.set_prior_map(np.stack([prior, prior]))
         f.set_prior_map(prior)
         self.assertEqual(f.summary()["prior_hexagons"], len(prior))
         f.run(self.walk)

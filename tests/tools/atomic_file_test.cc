@@ -451,6 +451,38 @@ TEST(EnsureDirectoryTest, FileInTheWayIsAnIoErrorNamingIt) {
   EXPECT_EQ(status.code(), StatusCode::kIoError);
 }
 
+// Regression: a path whose last component was too long (ENAMETOOLONG) left the 20 directories
+// made before it.
+TEST(EnsureDirectoryTest, AFailedCallLeavesNoNewDirectory) {
+  ScratchDir scratch;
+  const std::string& dir = scratch.path();
+  std::string path = dir + "/keep";
+  ASSERT_TRUE(EnsureDirectory(path).ok());
+  for (int k = 0; k < 5; ++k) path += "/" + std::string(200, 'd');
+  path += "/" + std::string(300, 'x');  // over NAME_MAX
+  Status status = EnsureDirectory(path);
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.code(), StatusCode::kIoError);
+  EXPECT_EQ(ListDir(dir + "/keep"), std::vector<std::string>{}) << "made directories stayed";
+  EXPECT_TRUE(fs::is_directory(dir + "/keep")) << "an existing directory was removed";
+}
+
+TEST(EnsureDirectoryTest, CreatedDirectoriesAreListedAndRemovedWhenEmpty) {
+  ScratchDir scratch;
+  const std::string& dir = scratch.path();
+  ASSERT_TRUE(EnsureDirectory(dir + "/a").ok());
+  std::vector<std::string> created;
+  ASSERT_TRUE(EnsureDirectory(dir + "/a/b/c", &created).ok());
+  EXPECT_EQ(created, (std::vector<std::string>{dir + "/a/b", dir + "/a/b/c"}));
+  ASSERT_TRUE(WriteFileAtomically(dir + "/a/b/c/file", "x").ok());
+  RemoveCreatedDirectories(created);  // c is not empty: both stay
+  EXPECT_TRUE(fs::exists(dir + "/a/b/c/file"));
+  fs::remove(dir + "/a/b/c/file");
+  RemoveCreatedDirectories(created);
+  EXPECT_FALSE(fs::exists(dir + "/a/b"));
+  EXPECT_TRUE(fs::is_directory(dir + "/a"));
+}
+
 TEST(EnsureDirectoryTest, EmptyPathIsInvalidArgument) {
   EXPECT_EQ(EnsureDirectory("").code(), StatusCode::kInvalidArgument);
 }

@@ -429,6 +429,15 @@ TEST_F(CliTest, ABatchRefusesABadManifestAndReportsAFailedWalk) {
            Case{"{\"name\": \"a\", \"stpes\": \"w/steps.csv\"}\n",
                 "walks.jsonl:1:15: unknown key \"stpes\""},
            Case{"\n\n", "walks.jsonl: no walks"},
+           // Regression: the batch's own summary name was accepted and failed only at the end.
+           Case{"{\"name\": \"batch_summary.jsonl\", \"steps\": \"w/steps.csv\"}\n",
+                "walks.jsonl:1:2: name = \"batch_summary.jsonl\": reserved"},
+           // Regression: duplicate keys were accepted, the last one winning.
+           Case{"{\"name\": \"a\", \"name\": \"b\", \"steps\": \"w/steps.csv\"}\n",
+                "walks.jsonl:1:15: duplicate key \"name\""},
+           Case{"{\"name\": \"a\", \"steps\": \"w/steps.csv\", \"config\": {\"seed\": 1, "
+                "\"seed\": 2}}\n",
+                "walks.jsonl:1:61: duplicate key \"seed\""},
        }) {
     SCOPED_TRACE(c.text);
     const std::string manifest = Write("walks.jsonl", c.text);
@@ -836,6 +845,9 @@ TEST_F(CliTest, FastSlamBadInputsStopWithFileLineColumn) {
       {good_controls, "t,range,bearing,id\n0.025,inf,0.5,1\n", "observations",
        "2:", "must be finite"},
       {"t,v\n0,3\n", good_observations, "controls", "1:1:", "unknown header"},
+      // Regression: a controls file with only its header blamed the first observation.
+      {"t,v,steer\n", good_observations, "controls", " no controls", "needs at least one"},
+      {"t,v,steer\n", "t,range,bearing,id\n", "controls", " no controls", "needs at least one"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.controls + " | " + c.observations);
@@ -953,10 +965,16 @@ TEST_F(CliTest, VictoriaParkBadDataStopsWithTheFileAndLine) {
   };
   ASSERT_EQ(run().exit_code, 0);
   fs::remove_all(out);
-  // A plain file beside the compressed one is read first.
+  // A plain file beside the compressed one: which one is meant is not guessed.
   std::ofstream(data / "measurements.dat") << "     0.852   20.46202    0.88575    0.35404\n"
                                            << "     0.900   abc    0.88575    0.35404\n";
   Outcome o = run();
+  EXPECT_EQ(o.exit_code, 3);
+  EXPECT_NE(o.err.find("both measurements.dat and measurements.dat.gz exist"), std::string::npos)
+      << o.err;
+  EXPECT_FALSE(fs::exists(out));
+  fs::rename(data / "measurements.dat.gz", dir_ / "measurements.dat.gz");
+  o = run();
   EXPECT_EQ(o.exit_code, 3);
   EXPECT_NE(o.err.find((data / "measurements.dat").string() + ":2:14:"), std::string::npos)
       << o.err;
@@ -971,6 +989,7 @@ TEST_F(CliTest, VictoriaParkBadDataStopsWithTheFileAndLine) {
   EXPECT_EQ(o.exit_code, 3);
   EXPECT_NE(o.err.find("2 numbers where 4 are expected"), std::string::npos) << o.err;
   fs::remove(data / "measurements.dat");
+  fs::rename(dir_ / "measurements.dat.gz", data / "measurements.dat.gz");
   // A truncated gzip file.
   const std::string gz = Slurp(data / "inputs.dat.gz");
   std::ofstream(data / "inputs.dat.gz", std::ios::binary) << gz.substr(0, gz.size() / 2);

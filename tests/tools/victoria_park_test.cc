@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 #include <unistd.h>
+#include <zlib.h>
 
 #include <cmath>
 #include <filesystem>
@@ -10,6 +11,8 @@
 #include <numbers>
 #include <string>
 #include <vector>
+
+#include "grove/checksum.h"
 
 namespace grove::tools {
 namespace {
@@ -92,6 +95,68 @@ TEST_F(VictoriaParkTest, ErrorsNameFileLineAndColumn) {
   d = ReadVictoriaPark(dir_.string(), 1e9);
   EXPECT_EQ(d.status().code(), StatusCode::kNotFound);
   EXPECT_NE(d.status().message().find("inputs.dat.gz: no such file"), std::string::npos);
+}
+
+TEST_F(VictoriaParkTest, RecordsEveryFileReadWithItsSizeAndCrc) {
+  Write("inputs.dat", "1.0 2.0 0.1\n");
+  Write("measurements.dat", "1.0 12 0.0 0.3\n");
+  Write("gps.dat", "0.0 1 2\n");
+  StatusOr<VictoriaParkData> d = ReadVictoriaPark(dir_.string(), 1e9);
+  ASSERT_TRUE(d.ok()) << d.status().message();
+  ASSERT_EQ(d->files.size(), 3u);
+  EXPECT_EQ(d->files[0].path, (dir_ / "inputs.dat").string());
+  EXPECT_EQ(d->files[0].bytes, 12u);
+  EXPECT_EQ(d->files[0].crc32, Crc32("1.0 2.0 0.1\n"));
+  EXPECT_EQ(d->files[2].path, (dir_ / "gps.dat").string());
+  EXPECT_EQ(InputFilesJson(d->files)[1]["bytes"], 15);
+}
+
+// Regression: a stale plain inputs.dat beside inputs.dat.gz was read silently.
+TEST_F(VictoriaParkTest, APlainAndACompressedCopyOfOneFileIsAnError) {
+  Write("inputs.dat", "1.0 2.0 0.1\n");
+  Write("inputs.dat.gz", "not read\n");
+  Write("measurements.dat", "1.0 12 0.0 0.3\n");
+  Write("gps.dat", "0.0 1 2\n");
+  StatusOr<VictoriaParkData> d = ReadVictoriaPark(dir_.string(), 1e9);
+  ASSERT_FALSE(d.ok());
+  EXPECT_EQ(d.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(d.status().message().find("both inputs.dat and inputs.dat.gz exist"), std::string::npos)
+      << d.status().message();
+}
+
+// Regression: a line of a billion zeros was held whole (1 GB of memory) before it was refused.
+TEST_F(VictoriaParkTest, ALineLongerThanTheLimitIsRefusedWithoutBeingHeld) {
+  Write("inputs.dat", "1.0 2.0 0.1\n");
+  Write("measurements.dat", "1.0 12 0.0 0.3\n" + std::string(200000, '0') + "\n");
+  Write("gps.dat", "0.0 1 2\n");
+  StatusOr<VictoriaParkData> d = ReadVictoriaPark(dir_.string(), 1e9);
+  ASSERT_FALSE(d.ok());
+  EXPECT_NE(d.status().message().find("measurements.dat:2:1: line longer than 65536 bytes"),
+            std::string::npos)
+      << d.status().message();
+}
+
+TEST_F(VictoriaParkTest, CompressedFilesAreReadAndTruncatedOnesRefused) {
+  const std::string text = "1.0 2.0 0.1\n2.0 2.5 -0.1\n";
+  gzFile f = gzopen((dir_ / "inputs.dat.gz").c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  ASSERT_EQ(gzwrite(f, text.data(), static_cast<unsigned>(text.size())),
+            static_cast<int>(text.size()));
+  ASSERT_EQ(gzclose(f), Z_OK);
+  Write("measurements.dat", "1.0 12 0.0 0.3\n");
+  Write("gps.dat", "0.0 1 2\n");
+  StatusOr<VictoriaParkData> d = ReadVictoriaPark(dir_.string(), 1e9);
+  ASSERT_TRUE(d.ok()) << d.status().message();
+  EXPECT_EQ(d->controls.size(), 2u);
+  EXPECT_EQ(d->files[0].path, (dir_ / "inputs.dat.gz").string());
+  // Cut the compressed file short: its end is missing.
+  fs::resize_file(dir_ / "inputs.dat.gz", fs::file_size(dir_ / "inputs.dat.gz") - 6);
+  d = ReadVictoriaPark(dir_.string(), 1e9);
+  ASSERT_FALSE(d.ok());
+  EXPECT_EQ(d.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(d.status().message().find("inputs.dat.gz: the compressed data is truncated"),
+            std::string::npos)
+      << d.status().message();
 }
 
 TEST(CompareWithGpsTest, AlignsRigidlyAndCountsTheGpsJumps) {

@@ -262,8 +262,13 @@ Status WriteFileAtomically(const std::string& path, std::string_view contents) {
   return writer->Commit();
 }
 
-Status EnsureDirectory(const std::string& dir) {
+Status EnsureDirectory(const std::string& dir, std::vector<std::string>* created) {
   if (dir.empty()) return InvalidArgumentError("cannot create a directory with an empty path");
+  std::vector<std::string> made;
+  auto fail = [&](Status s) {
+    RemoveCreatedDirectories(made);
+    return s;
+  };
   size_t pos = 0;
   while (pos != std::string::npos) {
     pos = dir.find('/', pos + 1);
@@ -271,23 +276,29 @@ Status EnsureDirectory(const std::string& dir) {
     // Skip "" (root), repeated slashes and the trailing slash.
     if (prefix.empty() || prefix.back() == '/') continue;
     if (::mkdir(prefix.c_str(), 0777) == 0) {
+      made.push_back(prefix);
       // The new directory's own entries, then its entry in the parent.
-      GROVE_RETURN_IF_ERROR(SyncDirectory(prefix));
-      GROVE_RETURN_IF_ERROR(SyncDirectory(DirectoryOf(prefix)));
+      if (Status s = SyncDirectory(prefix); !s.ok()) return fail(s);
+      if (Status s = SyncDirectory(DirectoryOf(prefix)); !s.ok()) return fail(s);
       continue;
     }
     int err = errno;
     struct stat st;
     if (err == EEXIST || err == EISDIR) {
       if (::stat(prefix.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) continue;
-      return IoError(
-          fmt::format("cannot create directory {}: {} exists and is not a directory", dir, prefix));
+      return fail(IoError(fmt::format(
+          "cannot create directory {}: {} exists and is not a directory", dir, prefix)));
     }
     // EACCES on an existing directory (e.g. a read-only parent) is not an error.
     if (::stat(prefix.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) continue;
-    return IoError(fmt::format("cannot create directory {}: {}", prefix, ErrnoText(err)));
+    return fail(IoError(fmt::format("cannot create directory {}: {}", prefix, ErrnoText(err))));
   }
+  if (created != nullptr) created->insert(created->end(), made.begin(), made.end());
   return Status::Ok();
+}
+
+void RemoveCreatedDirectories(const std::vector<std::string>& created) {
+  for (auto it = created.rbegin(); it != created.rend(); ++it) ::rmdir(it->c_str());
 }
 
 }  // namespace grove::tools

@@ -14,6 +14,7 @@
 
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "grove/status.h"
 
@@ -68,8 +69,14 @@ class AtomicFileWriter {
 
 // mkdir -p: creates `dir` and its missing parents (mode 0777 minus umask), fsyncing each new
 // directory and then its parent, so that a crash cannot lose a directory a later file went into.
-// Fails if some component exists and is not a directory.
-Status EnsureDirectory(const std::string& dir);
+// Fails if some component exists and is not a directory; a failed call removes what it made
+// (deepest first), so it leaves nothing new. `created`, when given, gets the directories made,
+// outermost first, for a caller that must remove them if it fails later.
+Status EnsureDirectory(const std::string& dir, std::vector<std::string>* created = nullptr);
+
+// Removes the directories of `created` (as EnsureDirectory lists them) that are empty, deepest
+// first; one that is not empty stays.
+void RemoveCreatedDirectories(const std::vector<std::string>& created);
 
 }  // namespace grove::tools
 

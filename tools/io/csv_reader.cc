@@ -124,6 +124,17 @@ StatusOr<LineReader> LineReader::FromStream(const std::string& path,
   return reader;
 }
 
+StatusOr<LineReader> LineReader::FromFunction(const std::string& path, ReadFunction read,
+                                              size_t max_line_bytes) {
+  GROVE_RETURN_IF_ERROR(CheckMaxLineBytes(max_line_bytes));
+  LineReader reader;
+  reader.path_ = path;
+  reader.max_line_bytes_ = max_line_bytes;
+  reader.read_ = std::move(read);
+  reader.buffer_.resize(std::max(kMinBufferBytes, max_line_bytes + 2));
+  return reader;
+}
+
 StatusOr<bool> LineReader::Next(std::string_view* line) {
   if (!error_.ok()) return error_;
   for (;;) {
@@ -165,6 +176,13 @@ Status LineReader::Fill() {
   // The buffer holds at least max + 2 bytes, so there is room for one more byte at least.
   char* data = buffer_.data() + end_;
   const size_t room = buffer_.size() - end_;
+  if (read_) {
+    StatusOr<size_t> n = read_(data, room);
+    if (!n.ok()) return n.status();
+    if (*n == 0) eof_ = true;
+    end_ += *n;
+    return Status::Ok();
+  }
   if (in_ == nullptr) {
     for (;;) {
       const ssize_t n = ::read(fd_.get(), data, room);

@@ -17,6 +17,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <istream>
 #include <memory>
 #include <string>
@@ -43,6 +44,11 @@ class LineReader {
   // Reads lines from `in`; `path` names it in messages.
   static StatusOr<LineReader> FromStream(const std::string& path, std::unique_ptr<std::istream> in,
                                          size_t max_line_bytes);
+  // Reads lines from `read`, which fills up to `room` bytes at `data` and returns how many (0 at
+  // the end) or an error, which the reader returns as it is; `path` names the input in messages.
+  using ReadFunction = std::function<StatusOr<size_t>(char* data, size_t room)>;
+  static StatusOr<LineReader> FromFunction(const std::string& path, ReadFunction read,
+                                           size_t max_line_bytes);
 
   // Sets *line to the next line without its terminator; the view is valid until the next call.
   // Returns false at the end of the file.
@@ -77,6 +83,7 @@ class LineReader {
   size_t max_line_bytes_ = 0;
   FileDescriptor fd_;                 // the input, for Open
   std::unique_ptr<std::istream> in_;  // the input, for FromStream
+  ReadFunction read_;                 // the input, for FromFunction
   std::vector<char> buffer_;
   size_t begin_ = 0;  // unread bytes are buffer_[begin_, end_)
   size_t end_ = 0;

@@ -121,6 +121,12 @@ Status FastSlamInputReader::Fill() {
 
 StatusOr<bool> FastSlamInputReader::Next(FastSlamEvent* out) {
   GROVE_RETURN_IF_ERROR(Fill());
+  // A controls file with no rows: say so, not that the first scan is early.
+  if (controls_done_ && !any_control_ && !control_ready_) {
+    return InvalidArgumentError(fmt::format(
+        "{}: no controls (the file has no rows after its header): a run needs at least one",
+        controls_.path()));
+  }
   if (!control_ready_ && !observation_ready_) return false;
   // A control first when it comes no later than the next scan.
   if (control_ready_ && (!observation_ready_ || control_.t_s <= observation_.t_s)) {

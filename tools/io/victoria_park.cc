@@ -2,18 +2,21 @@
 
 #include <fmt/format.h>
 #include <sys/stat.h>
-#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 
+#include "grove/checksum.h"
 #include "tools/io/csv_reader.h"
+#include "tools/io/gzip_line_reader.h"
 
 namespace grove::tools {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
+// The longest line a data file may have: as the CSV readers.
+constexpr size_t kMaxLineBytes = size_t{64} << 10;
 
 // Splits `line` at runs of blanks into fields with 1-based columns.
 void SplitBlanks(std::string_view line, std::vector<CsvField>* fields) {
@@ -28,22 +31,21 @@ void SplitBlanks(std::string_view line, std::vector<CsvField>* fields) {
   }
 }
 
-// Calls row(fields, line) for every non-blank line of `path`, which must have `names.size()`
-// numbers, parsed into `values`.
+// Calls row(values, fields, line) for every non-blank line of `path` (plain or gzip), which must
+// have `names.size()` numbers. Lines are read through a bounded buffer: a line longer than
+// kMaxLineBytes is an error, never held whole.
 template <typename F>
 Status ForEachRecord(const std::string& path, const std::vector<const char*>& names, F&& row) {
-  StatusOr<std::string> text = ReadMaybeCompressed(path);
-  if (!text.ok()) return text.status();
+  StatusOr<LineReader> lines = OpenMaybeCompressed(path, kMaxLineBytes);
+  if (!lines.ok()) return lines.status();
   std::vector<CsvField> fields;
   std::vector<double> values(names.size());
-  int64_t line_number = 0;
-  size_t pos = 0;
-  while (pos < text->size()) {
-    size_t end = text->find('\n', pos);
-    if (end == std::string::npos) end = text->size();
-    const std::string_view line(text->data() + pos, end - pos);
-    pos = end + 1;
-    ++line_number;
+  std::string_view line;
+  for (;;) {
+    StatusOr<bool> more = lines->Next(&line);
+    if (!more.ok()) return more.status();
+    if (!*more) break;
+    const int64_t line_number = lines->line_number();
     SplitBlanks(line, &fields);
     if (fields.empty()) continue;
     if (fields.size() != names.size()) {
@@ -60,57 +62,52 @@ Status ForEachRecord(const std::string& path, const std::vector<const char*>& na
   return Status::Ok();
 }
 
-// `dir`/name, or `dir`/name.gz when only that exists.
-std::string DataFile(const std::string& dir, const std::string& name) {
-  const std::string plain = dir + "/" + name;
+bool Exists(const std::string& path) {
   struct stat st;
-  if (::stat(plain.c_str(), &st) == 0) return plain;
-  return plain + ".gz";
+  return ::stat(path.c_str(), &st) == 0;
+}
+
+// `dir`/name, or `dir`/name.gz when only that exists; both is an error (which one is meant?).
+StatusOr<std::string> DataFile(const std::string& dir, const std::string& name) {
+  const std::string plain = dir + "/" + name;
+  const std::string gz = plain + ".gz";
+  if (Exists(plain) && Exists(gz)) {
+    return InvalidArgumentError(
+        fmt::format("{}: both {} and {}.gz exist: keep one, so that which one is read is not a "
+                    "guess",
+                    dir, name, name));
+  }
+  return Exists(plain) ? plain : gz;
+}
+
+// The size and CRC-32 of the file's bytes as stored (compressed or not).
+StatusOr<InputFile> DescribeFile(const std::string& path) {
+  StatusOr<std::string> bytes = ReadWholeFile(path);
+  if (!bytes.ok()) return bytes.status();
+  return InputFile{path, static_cast<uint64_t>(bytes->size()), Crc32(*bytes)};
 }
 
 }  // namespace
 
 const char* BundledVictoriaParkDir() { return GROVE_VICTORIA_PARK_DIR; }
 
-StatusOr<std::string> ReadMaybeCompressed(const std::string& path) {
-  struct stat st;
-  if (::stat(path.c_str(), &st) != 0) {
-    return NotFoundError(fmt::format("{}: no such file", path));
-  }
-  if (!S_ISREG(st.st_mode))
-    return InvalidArgumentError(fmt::format("{}: not a regular file", path));
-  gzFile f = gzopen(path.c_str(), "rb");
-  if (f == nullptr) return IoError(fmt::format("{}: cannot open", path));
-  std::string out;
-  char buffer[1 << 16];
-  for (;;) {
-    const int n = gzread(f, buffer, sizeof(buffer));
-    if (n < 0) {
-      int code = 0;
-      const std::string what = gzerror(f, &code);
-      gzclose(f);
-      if (code == Z_ERRNO) return IoError(fmt::format("{}: cannot read: {}", path, what));
-      return InvalidArgumentError(
-          fmt::format("{}: the compressed data is corrupt: {}", path, QuotedField(what)));
-    }
-    if (n == 0) break;
-    out.append(buffer, static_cast<size_t>(n));
-  }
-  // A truncated gzip stream reads as a short file: gzclose_r reports it.
-  const int closed = gzclose(f);
-  if (closed == Z_ERRNO) return IoError(fmt::format("{}: cannot read", path));
-  if (closed != Z_OK) {
-    return InvalidArgumentError(
-        fmt::format("{}: the compressed data is truncated or corrupt (zlib {})", path, closed));
+nlohmann::json InputFilesJson(const std::vector<InputFile>& files) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const InputFile& f : files) {
+    out.push_back({{"path", f.path}, {"bytes", f.bytes}, {"crc32", f.crc32}});
   }
   return out;
 }
 
 StatusOr<VictoriaParkData> ReadVictoriaPark(const std::string& dir, double until_s) {
   VictoriaParkData d;
-  d.controls_path = DataFile(dir, "inputs.dat");
-  d.observations_path = DataFile(dir, "measurements.dat");
-  d.gps_path = DataFile(dir, "gps.dat");
+  for (auto [name, path] :
+       {std::pair{"inputs.dat", &d.controls_path},
+        std::pair{"measurements.dat", &d.observations_path}, std::pair{"gps.dat", &d.gps_path}}) {
+    StatusOr<std::string> file = DataFile(dir, name);
+    if (!file.ok()) return file.status();
+    *path = *file;
+  }
   auto increasing = [](const std::string& path, int64_t line, const CsvField& f, double t,
                        double previous, bool strict) -> Status {
     if (strict ? !(t > previous) : t < previous) {
@@ -169,6 +166,11 @@ StatusOr<VictoriaParkData> ReadVictoriaPark(const std::string& dir, double until
   if (d.controls.empty()) {
     return InvalidArgumentError(
         fmt::format("{}: no control at or before {} s", d.controls_path, until_s));
+  }
+  for (const std::string* path : {&d.controls_path, &d.observations_path, &d.gps_path}) {
+    StatusOr<InputFile> file = DescribeFile(*path);
+    if (!file.ok()) return file.status();
+    d.files.push_back(*file);
   }
   return d;
 }

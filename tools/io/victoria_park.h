@@ -18,6 +18,7 @@
 #define GROVE_TOOLS_IO_VICTORIA_PARK_H_
 
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -31,19 +32,27 @@ namespace grove::tools {
 // The bundled copy (the source tree's tools/data/victoria_park).
 const char* BundledVictoriaParkDir();
 
+// A file a run read, as stored: its path, size and CRC-32 (summary.json names them).
+struct InputFile {
+  std::string path;
+  uint64_t bytes = 0;
+  uint32_t crc32 = 0;
+};
+
 struct VictoriaParkData {
   std::vector<ControlRecord> controls;
   std::vector<ObservationRecord> observations;  // bearing in the vehicle frame, id -1
   std::vector<TimedPoint> gps;
   std::string controls_path, observations_path, gps_path;
+  std::vector<InputFile> files;  // the three files read, in that order
 };
 
-// Reads `dir`/inputs.dat, measurements.dat and gps.dat (each also as NAME.gz), keeping the
-// records with time <= until_s.
-StatusOr<VictoriaParkData> ReadVictoriaPark(const std::string& dir, double until_s);
+// The files as summary.json lists them: [{"path", "bytes", "crc32"}], as the outputs are.
+nlohmann::json InputFilesJson(const std::vector<InputFile>& files);
 
-// The whole of one file, decompressed when it is gzip (zlib reads plain files as they are).
-StatusOr<std::string> ReadMaybeCompressed(const std::string& path);
+// Reads `dir`/inputs.dat, measurements.dat and gps.dat (each as NAME or NAME.gz; both present is
+// an error), keeping the records with time <= until_s. Lines longer than 64 KiB are errors.
+StatusOr<VictoriaParkData> ReadVictoriaPark(const std::string& dir, double until_s);
 
 // The events of the data in the filter's order (a control before a scan at its time).
 class VictoriaParkEvents final : public FastSlamEventSource {

@@ -397,6 +397,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
     if (park_ != nullptr) {
       (*summary)["inputs"] = {
           {"victoria_park", options_.victoria_park_dir},
+          {"files", InputFilesJson(park_->files)},
           {"until_s", std::isfinite(options_.until_s) ? nlohmann::json(options_.until_s)
                                                       : nlohmann::json(nullptr)},
           {"scans_before_the_first_control", park_events_->skipped_scans()}};

@@ -9,9 +9,12 @@
 #include <chrono>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -49,12 +52,33 @@ bool FileExists(const std::string& path) {
   return ::stat(path.c_str(), &st) == 0;
 }
 
+// The summary the batch writes into --out, and the prefix of its temporaries: no walk may take
+// it as its name.
+constexpr std::string_view kSummaryName = "batch_summary.jsonl";
+
 bool ValidName(const std::string& name) {
   if (name.empty() || name.size() > 200 || name[0] == '.') return false;
   return std::all_of(name.begin(), name.end(), [](char c) {
     return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' ||
            c == '_' || c == '-';
   });
+}
+
+// A parser callback that sets *duplicate to the first key given twice in one object (nlohmann
+// keeps the last silently) and lets parsing go on.
+nlohmann::json::parser_callback_t DuplicateKeyFinder(std::string* duplicate) {
+  auto seen = std::make_shared<std::vector<std::set<std::string>>>();
+  return [seen, duplicate](int /*depth*/, nlohmann::json::parse_event_t event,
+                           nlohmann::json& parsed) {
+    using Event = nlohmann::json::parse_event_t;
+    if (event == Event::object_start) seen->emplace_back();
+    if (event == Event::object_end && !seen->empty()) seen->pop_back();
+    if (event == Event::key && !seen->empty() && duplicate->empty() &&
+        !seen->back().insert(parsed.get<std::string>()).second) {
+      *duplicate = parsed.get<std::string>();
+    }
+    return true;
+  };
 }
 
 // The configuration fields that change results, as JSON: what a walk's digest covers (threads
@@ -86,10 +110,16 @@ StatusOr<std::vector<Walk>> ReadManifest(const std::string& path, const FootSlam
       return InvalidArgumentError(fmt::format("{}:{}:{}: {}", path, number, column, message));
     };
     nlohmann::json j;
+    std::string duplicate;
     try {
-      j = nlohmann::json::parse(line);
+      j = nlohmann::json::parse(line, DuplicateKeyFinder(&duplicate));
     } catch (const nlohmann::json::parse_error& e) {
       return error(std::max<size_t>(e.byte, 1), "not a JSON object: " + std::string(e.what()));
+    }
+    if (!duplicate.empty()) {
+      const std::string quoted = "\"" + duplicate + "\"";
+      return error(line.find(quoted, line.find(quoted) + 1) + 1,
+                   fmt::format("duplicate key {}", QuoteForMessage(duplicate)));
     }
     if (!j.is_object()) return error(1, "not a JSON object");
     for (const auto& [key, value] : j.items()) {
@@ -110,6 +140,10 @@ StatusOr<std::vector<Walk>> ReadManifest(const std::string& path, const FootSlam
                    fmt::format("name = {}: use letters, digits, '.', '_' and '-' (at most 200, "
                                "not starting with '.')",
                                QuoteForMessage(w.name)));
+    }
+    if (std::string_view(w.name).starts_with(kSummaryName)) {
+      return error(column_of("name"), fmt::format("name = {}: reserved for the batch's own {}",
+                                                  QuoteForMessage(w.name), kSummaryName));
     }
     if (auto [it, added] = names.emplace(w.name, number); !added) {
       return error(column_of("name"),

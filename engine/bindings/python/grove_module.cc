@@ -7,6 +7,7 @@
 // rule that keeps this free of deadlocks: no thread waits for an object's mutex while it holds
 // the GIL (Locked() releases the GIL first), so a thread holding the mutex may take the GIL.
 // The configuration is copied at construction and never changes, so reading it needs no lock.
+#include <pybind11/eval.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -226,8 +227,16 @@ Config MakeConfig(const std::vector<ConfigField<Config>>& fields, const py::obje
                   const py::kwargs& kwargs) {
   Config result;
   if (!config.is_none()) {
-    if (!PyDict_Check(config.ptr()) && !PyMapping_Check(config.ptr())) {
-      throw py::type_error("config must be a dict of configuration keys, not " + TypeName(config));
+    const bool mapping =
+        PyDict_Check(config.ptr()) ||
+        py::isinstance(config, py::module_::import("collections.abc").attr("Mapping"));
+    if (!mapping) {
+      std::string hint;
+      if (PyUnicode_Check(config.ptr()) || PyBytes_Check(config.ptr())) {
+        hint = " (for JSON text, pass json.loads(text))";
+      }
+      throw py::type_error("config must be a dict of configuration keys, not " + TypeName(config) +
+                           hint);
     }
     ThrowIfError(ApplyPythonConfig(fields, py::dict(config), &result));
   }
@@ -394,17 +403,58 @@ py::array StructArray(py::handle dtype, const std::vector<T>& items) {
   return out;
 }
 
+// `map` as a contiguous array of grove.HEX_DTYPE: a one-dimensional structured array with at
+// least the fields q, r and counts (x and y, when there, are copied too), fields taken by name.
+py::array HexArray(const py::object& map) {
+  py::object np = py::module_::import("numpy");
+  py::array given = np.attr("asarray")(map);
+  const py::object names = given.dtype().attr("names");
+  const char* missing = nullptr;
+  for (const char* field : {"q", "r", "counts"}) {
+    if (names.is_none() || !names.contains(field)) {
+      missing = field;
+      break;
+    }
+  }
+  if (missing != nullptr) {
+    throw py::type_error(
+        "map: expected a structured array of grove.HEX_DTYPE (as cumulative_map() "
+        "returns), found " +
+        py::cast<std::string>(py::str(given.dtype())) + " values without field " + missing);
+  }
+  if (given.ndim() != 1) {
+    throw py::value_error(
+        "map: must be one-dimensional, a structured array of grove.HEX_DTYPE (as "
+        "cumulative_map() returns)");
+  }
+  py::array out = np.attr("zeros")(given.shape(0), py::reinterpret_borrow<py::dtype>(g_hex_dtype));
+  for (const char* field : {"q", "r", "x", "y", "counts"}) {
+    if (names.contains(field)) out[field] = given[field];
+  }
+  return out;
+}
+
 using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
-// `value` as a C-contiguous float64 array (a copy only when it is not one already).
+// `value` as a C-contiguous float64 array (a copy only when it is not one already). Only real
+// numbers are taken (integers and floats, not booleans, complex numbers, text or objects): a
+// TypeError names the dtype found. Running out of memory converting is a MemoryError.
 DoubleArray AsDoubles(const py::object& value, const char* what) {
-  DoubleArray a = DoubleArray::ensure(value);
-  if (!a) {
-    PyErr_Clear();
+  py::array any = py::array::ensure(value);
+  if (!any) {
     throw py::type_error(std::string(what) + ": expected an array of numbers, not " +
                          TypeName(value));
   }
-  return a;
+  const char kind = any.dtype().kind();
+  if (kind != 'i' && kind != 'u' && kind != 'f') {
+    throw py::type_error(std::string(what) +
+                         ": expected real numbers (integers or floats), found " +
+                         py::cast<std::string>(py::str(any.dtype())) + " values");
+  }
+  // numpy's own conversion, whose MemoryError reaches the caller (ensure() would clear it).
+  py::object doubles =
+      py::module_::import("numpy").attr("ascontiguousarray")(any, py::dtype::of<double>());
+  return DoubleArray::ensure(doubles);
 }
 
 // The rows of an (n, cols) array, copied (the filter reads them with the GIL released).
@@ -562,6 +612,17 @@ std::unique_ptr<Filter<Engine, Config>> ResumeFilter(const Config& config, py::b
                                                   std::move(user_data));
 }
 
+// What pickle and copy need, at every protocol: a module-level function and its arguments
+// (protocols 0 and 1 cannot rebuild a pybind11 object from its class and a state).
+template <typename Engine, typename Config>
+py::tuple Reduce(const Filter<Engine, Config>& f, const char* name,
+                 const std::vector<ConfigField<Config>>& fields) {
+  std::string data = ValueOrRaise(f.Locked([](Engine& e) { return e.Checkpoint(); }));
+  return py::make_tuple(
+      py::module_::import("grove").attr("_restore"),
+      py::make_tuple(py::str(name), ConfigToDict(fields, f.config()), py::bytes(data)));
+}
+
 // The methods both filters share, bound on `cls`.
 template <typename Engine, typename Config, typename Class>
 void BindCommon(Class& cls, const char* name, const std::vector<ConfigField<Config>>* fields) {
@@ -622,6 +683,12 @@ void BindCommon(Class& cls, const char* name, const std::vector<ConfigField<Conf
           "Walks the whole shared state and checks every reference count; raises InternalError "
           "naming a broken rule. Slow; for tests.")
       .def("__repr__", [name, fields](const F& f) { return ConfigRepr(name, *fields, f.config()); })
+      .def(
+          "__reduce_ex__",
+          [name, fields](const F& f, int /*protocol*/) { return Reduce(f, name, *fields); },
+          py::arg("protocol"),
+          "Pickling at every protocol: grove._restore(class name, config, checkpoint bytes).")
+      .def("__reduce__", [name, fields](const F& f) { return Reduce(f, name, *fields); })
       .def(py::pickle(
           [fields](const F& f) {
             std::string data = ValueOrRaise(f.Locked([](Engine& e) { return e.Checkpoint(); }));
@@ -763,13 +830,7 @@ void BindFootSlam(py::module_& m) {
       .def(
           "set_prior_map",
           [](const PyFootSlam& f, const py::object& map) {
-            py::array a = py::module_::import("numpy").attr("ascontiguousarray")(
-                map, py::reinterpret_borrow<py::dtype>(g_hex_dtype));
-            if (a.ndim() != 1) {
-              throw py::value_error(
-                  "map: must be one-dimensional, a structured array of grove.HEX_DTYPE (as "
-                  "cumulative_map() returns)");
-            }
+            py::array a = HexArray(map);
             std::vector<HexCounts> hexes(static_cast<size_t>(a.shape(0)));
             if (!hexes.empty())
               std::memcpy(hexes.data(), a.data(), hexes.size() * sizeof(HexCounts));
@@ -1077,4 +1138,42 @@ PYBIND11_MODULE(grove, m) {
         "string (the one-line form).");
   BindFootSlam(m);
   BindFastSlam(m);
+  // A Python function, so that pickle finds it by name at every protocol (a bound C++ function
+  // is pickled through its capsule, which protocols 0 and 1 cannot do).
+  m.def(
+      "_initialised",
+      [](py::handle self) {
+        if (py::detail::get_type_info(Py_TYPE(self.ptr())) == nullptr) {
+          throw py::type_error("expected a grove object, found " + TypeName(self));
+        }
+        auto* instance = reinterpret_cast<py::detail::instance*>(self.ptr());
+        return instance->get_value_and_holder().holder_constructed();
+      },
+      "Whether a grove object's C++ part exists (for the guards of __init__ and __setstate__).");
+  py::exec(R"(
+def _refuse_when_initialised(cls, name):
+    """pybind11 ignores __init__ and __setstate__ on a live object; refuse them instead."""
+    original = getattr(cls, name)
+    def guarded(self, *args, **kwargs):
+        if _initialised(self):
+            raise TypeError("%s.%s(): the object is already initialised; make a new one"
+                            % (type(self).__name__, name))
+        return original(self, *args, **kwargs)
+    guarded.__name__ = name
+    guarded.__qualname__ = cls.__name__ + "." + name
+    guarded.__doc__ = original.__doc__
+    setattr(cls, name, guarded)
+
+for _cls in (FootSlam, FastSlam):
+    _refuse_when_initialised(_cls, "__init__")
+    _refuse_when_initialised(_cls, "__setstate__")
+del _cls
+
+def _restore(name, config, data):
+    """Rebuilds a pickled filter from its class name, configuration and checkpoint bytes."""
+    if name not in ("FootSlam", "FastSlam"):
+        raise InvalidArgumentError("_restore: name = %r: must be FootSlam or FastSlam" % (name,))
+    return globals()[name].resume(data, config)
+)",
+           m.attr("__dict__"));
 }
