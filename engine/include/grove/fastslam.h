@@ -268,7 +268,7 @@ class GROVE_EXPORT FastSlam {
   // Validates `config` and builds the engine; nothing is built when the config is invalid.
   static StatusOr<std::unique_ptr<FastSlam>> Create(const FastSlamConfig& config);
   // One rank's engine of a filter whose config.particles are split over the ranks of `ranks`
-  // (engine/ranks/collective.h; null: one process, as Create(config)), as FootSlam's: every rank
+  // (grove/collective.h; null: one process, as Create(config)), as FootSlam's: every rank
   // creates its engine with the same configuration and makes the same calls in the same order;
   // Control, Scan and every read-out are collective and give every rank the whole filter's
   // result, the same bits as one process. Checkpoint() saves this rank's share. Every rank needs

@@ -211,7 +211,7 @@ class GROVE_EXPORT FootSlam {
   // Validates `config` and builds the engine; nothing is built when the config is invalid.
   static StatusOr<std::unique_ptr<FootSlam>> Create(const FootSlamConfig& config);
   // One rank's engine of a filter whose config.particles are split over the ranks of `ranks`
-  // (engine/ranks/collective.h; null: one process, as Create(config)). Every rank creates its
+  // (grove/collective.h; null: one process, as Create(config)). Every rank creates its
   // engine with the same configuration and makes the same calls in the same order: Step, and every
   // read-out, is collective, and gives every rank the whole filter's result, the same bits as
   // one process. Checkpoint() saves this rank's share (Resume with ranks reads it back).
