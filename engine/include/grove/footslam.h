@@ -5,12 +5,14 @@
 //
 //   grove::FootSlamConfig config;
 //   config.particles = 30000;
-//   auto slam = grove::FootSlam::Create(config);          // validates; nothing built on error
-//   if (!slam.ok()) { ... slam.status().message() ... }
+//   auto slam = grove::FootSlam::Create(config);  // validates; nothing built on error
+//   if (!slam.ok()) return slam.status();
+//   const double steps[][3] = {{0.5, 0.70, 0.00}, {1.0, 0.68, 0.05}};  // t_s, dx_m, dy_m
 //   for (const auto& s : steps) {
-//     grove::Status st = (*slam)->Step(s.t, s.dx, s.dy);  // on error the engine is unchanged
+//     grove::Status st = (*slam)->Step(s[0], s[1], s[2]);  // on error the engine is unchanged
+//     if (!st.ok()) return st;
 //   }
-//   std::vector<grove::HexCounts> map = (*slam)->CumulativeMap();
+//   grove::StatusOr<std::vector<grove::HexCounts>> map = (*slam)->CumulativeMap();
 //
 // Thread safety: a FootSlam is driven by one thread at a time (no two calls overlap, const
 // read-outs included); it runs its own worker threads inside Step(). Two engines in one
