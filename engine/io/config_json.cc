@@ -201,6 +201,44 @@ Status UnknownKeyError(const std::string& name, const ConfigEntry& e,
                   nearest.empty() ? "" : fmt::format(" (did you mean \"{}\"?)", nearest)));
 }
 
+Status ParseConfigJson(const std::string& name, const std::string& text,
+                       std::span<const FieldInfo* const> fields,
+                       std::vector<FieldSetting>* settings,
+                       const std::vector<std::string>& other_keys,
+                       const std::function<Status(const ConfigJsonKey&)>& on_other_key) {
+  StatusOr<std::vector<ConfigEntry>> entries = ParseConfigObject(name, text);
+  if (!entries.ok()) return entries.status();
+  for (const ConfigEntry& e : *entries) {
+    auto field = std::find_if(fields.begin(), fields.end(),
+                              [&](const FieldInfo* f) { return e.key == f->name; });
+    if (field != fields.end()) {
+      StatusOr<FieldValue> v = FieldValueFromJson(name, **field, e);
+      if (!v.ok()) return v.status();
+      settings->push_back({static_cast<size_t>(field - fields.begin()), *v});
+    } else if (std::find(other_keys.begin(), other_keys.end(), e.key) != other_keys.end()) {
+      if (on_other_key) {
+        GROVE_RETURN_IF_ERROR(on_other_key(
+            ConfigJsonKey{e.key, e.value.dump(-1, ' ', false, json::error_handler_t::replace),
+                          e.line, e.column}));
+      }
+    } else {
+      std::vector<std::string> known = other_keys;
+      for (const FieldInfo* f : fields) known.push_back(f->name);
+      return UnknownKeyError(name, e, known);
+    }
+  }
+  return Status::Ok();
+}
+
+std::string FieldsToJson(std::span<const FieldInfo* const> fields,
+                         std::span<const FieldValue> values, int indent) {
+  json out = json::object();
+  for (size_t i = 0; i < fields.size() && i < values.size(); ++i) {
+    out[fields[i]->name] = FieldValueToJson(*fields[i], values[i]);
+  }
+  return out.dump(indent);
+}
+
 StatusOr<std::string> ReadConfigFile(const std::string& path) {
   if (path.empty()) return InvalidArgumentError("--config: the path is empty");
   int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);

@@ -4,9 +4,14 @@
 
 #include <barrier>
 
+#include "engine/filter/resampler.h"
 #include "engine/io/checkpoint_io.h"
 
 namespace grove {
+
+ParticleShare ShareOf(uint64_t total, const Collective* ranks) {
+  return ShareOf(total, ranks, kSumBlock);
+}
 
 Status CheckRankShares(uint64_t total, int ranks, uint64_t block) {
   const uint64_t k = static_cast<uint64_t>(ranks);

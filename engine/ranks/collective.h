@@ -1,44 +1,23 @@
-// Collective: the few operations a filter needs to run across ranks (processes, or engines in one
-// process), whatever carries the bytes: MPI in the CLI (tools/cli/mpi_world.h), threads in one
-// process here (InProcessCollective, for tests and embedders).
+// The engine's side of a filter across ranks (grove/collective.h): how the particles are split
+// into shares, the rank records of a checkpoint, and gathers of values.
 //
-// One filter across K ranks: every rank holds a contiguous share of the particles, whole blocks of
-// kSumBlock in rank order (RankShare), so the per-block sums a single process takes in block order
-// are the same sums, gathered in rank order: the same seed gives the same bits at any rank count.
-//
-// Every rank must make the same calls in the same order (as with MPI's collectives); a call on
-// one rank waits for the others.
+// Every rank holds a contiguous share of the particles, whole blocks of kSumBlock in rank order
+// (RankShare), so the per-block sums a single process takes in block order are the same sums,
+// gathered in rank order: the same seed gives the same bits at any rank count.
 #ifndef GROVE_ENGINE_RANKS_COLLECTIVE_H_
 #define GROVE_ENGINE_RANKS_COLLECTIVE_H_
 
 #include <cstdint>
 #include <cstring>
-#include <memory>
 #include <span>
 #include <string>
 #include <type_traits>
 #include <vector>
 
+#include "grove/collective.h"
 #include "grove/status.h"
 
 namespace grove {
-
-class Collective {
- public:
-  virtual ~Collective() = default;
-  virtual int rank() const = 0;
-  virtual int size() const = 0;
-  // Every rank's `mine`, in rank order, to every rank.
-  virtual Status AllGather(const std::string& mine, std::vector<std::string>* all) = 0;
-  // to[q] goes to rank q (to.size() == size()); (*from)[q] is what rank q sent to this rank.
-  virtual Status AllToAll(const std::vector<std::string>& to, std::vector<std::string>* from) = 0;
-};
-
-// The particles a rank holds: [first, first + count) of the filter's total.
-struct ParticleShare {
-  uint64_t first = 0;
-  uint64_t count = 0;
-};
 
 // Rank `rank` of `ranks` holds blocks [rank * B / ranks, (rank + 1) * B / ranks) of the
 // B = ceil(total / block) blocks of `block` particles.
@@ -102,30 +81,6 @@ StatusOr<std::vector<T>> GatherOverRanks(Collective* c, std::vector<T> mine) {
   GROVE_RETURN_IF_ERROR(AllGatherValues<T>(*c, mine, &all));
   return all;
 }
-
-// The same status on every rank: the lowest failing rank's (OK when none failed). A rank whose
-// own step failed calls this too, so no rank is left waiting in a later collective.
-Status AgreeStatus(Collective& c, const Status& mine);
-
-// K ranks as threads of one process: Create(K) gives the K endpoints, each to be driven by its own
-// thread. The operations meet at a barrier; a thread that stops calling blocks the others.
-class InProcessCollective : public Collective {
- public:
-  static std::vector<std::unique_ptr<Collective>> Create(int ranks);
-
-  int rank() const override { return rank_; }
-  int size() const override;
-  Status AllGather(const std::string& mine, std::vector<std::string>* all) override;
-  Status AllToAll(const std::vector<std::string>& to, std::vector<std::string>* from) override;
-
-  struct Shared;
-
- private:
-  InProcessCollective(std::shared_ptr<Shared> shared, int rank)
-      : shared_(std::move(shared)), rank_(rank) {}
-  std::shared_ptr<Shared> shared_;
-  int rank_;
-};
 
 }  // namespace grove
 

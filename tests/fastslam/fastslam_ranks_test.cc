@@ -11,7 +11,7 @@
 
 #include "engine/ranks/collective.h"
 #include "grove/fastslam.h"
-#include "tests/ranks_testing.h"
+#include "tests/api/ranks_testing.h"
 #include "tools/sim/fastslam_simulator.h"
 
 namespace grove {

@@ -11,8 +11,8 @@
 
 #include "engine/ranks/collective.h"
 #include "grove/footslam.h"
+#include "tests/api/ranks_testing.h"
 #include "tests/api/test_walk.h"
-#include "tests/ranks_testing.h"
 
 namespace grove {
 namespace {

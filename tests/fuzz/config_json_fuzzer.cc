@@ -1,5 +1,5 @@
 // libFuzzer target: ApplyConfigJson and FootSlamConfig::Validate
-// (tools/config_json.h).
+// (grove/config_json.h).
 // The properties are in tests/fuzz/fuzz_checks.h.
 #include <cstddef>
 #include <cstdint>

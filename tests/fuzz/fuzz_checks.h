@@ -41,7 +41,7 @@
 #include <vector>
 
 #include "engine/io/checkpoint_io.h"
-#include "engine/io/config_json.h"
+#include "grove/config_json.h"
 #include "grove/footslam.h"
 #include "grove/status.h"
 #include "tools/io/fastslam_inputs.h"
@@ -246,9 +246,9 @@ inline std::string CheckConfigJsonUnguarded(const uint8_t* data, size_t size) {
   constexpr char kName[] = "fuzz_config.json";
   const std::string text(reinterpret_cast<const char*>(data), size);
   FootSlamConfig config;
-  const nlohmann::json before = ConfigToJson(FootSlamConfigFields(), config);
+  const nlohmann::json before = nlohmann::json::parse(ConfigToJson(FootSlamConfigFields(), config));
   const Status applied = ApplyConfigJson(FootSlamConfigFields(), kName, text, &config);
-  const nlohmann::json after = ConfigToJson(FootSlamConfigFields(), config);
+  const nlohmann::json after = nlohmann::json::parse(ConfigToJson(FootSlamConfigFields(), config));
   if (!applied.ok()) {
     std::string failure = CheckError(applied, kName, text);
     if (!failure.empty()) return failure;

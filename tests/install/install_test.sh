@@ -42,7 +42,7 @@ if grep -q libgrove <<<"$libs"; then
   exit 1
 fi
 "$work/cpp/walk" "$walk"
-"$work/cpp/walk_static" "$walk"
+"$work/cpp/walk_static" "$walk" '{"particles": 1000, "seed": 3}'
 
 # C99 through pkg-config.
 export PKG_CONFIG_PATH=$(dirname "$(find "$prefix" -name grove.pc)")

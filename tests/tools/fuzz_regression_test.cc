@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/io/config_json.h"
+#include "grove/config_json.h"
 #include "grove/footslam.h"
 #include "grove/status.h"
 #include "tests/fuzz/fuzz_checks.h"

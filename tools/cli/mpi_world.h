@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/ranks/collective.h"
+#include "grove/collective.h"
 
 namespace grove::tools {
 

@@ -13,8 +13,8 @@
 #include <utility>
 #include <vector>
 
-#include "engine/io/config_json.h"
 #include "grove/config_fields.h"
+#include "grove/config_json.h"
 #include "tools/cli/config_flags.h"
 #include "tools/run/run_loop.h"
 
@@ -69,7 +69,7 @@ class RunFlags {
     }
     if (Status s = config_flags_.Apply(config); !s.ok()) return Fail(kExitUsage, s.message());
     if (print_config_) {
-      std::printf("%s\n", ConfigToJson(fields_, *config).dump(2).c_str());
+      std::printf("%s\n", ConfigToJson(fields_, *config, 2).c_str());
       return kExitOk;
     }
     if (options_.out_dir.empty()) return Fail(kExitUsage, "--out: an output directory is required");

@@ -15,8 +15,8 @@
 #include <memory>
 #include <numbers>
 
-#include "engine/filter/resampler.h"
-#include "engine/io/config_json.h"
+#include "grove/collective.h"
+#include "grove/config_json.h"
 #include "tools/io/fastslam_inputs.h"
 #include "tools/io/filter_outputs.h"
 #include "tools/io/victoria_park.h"
@@ -305,8 +305,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
   // and poses of the driver, the outputs built in memory).
   // Across ranks, of this rank's particles.
   int64_t PredictPeakBytes(int64_t records) const override {
-    const uint64_t share =
-        ShareOf(static_cast<uint64_t>(config_.particles), ranks_, kSumBlock).count;
+    const uint64_t share = ShareOf(static_cast<uint64_t>(config_.particles), ranks_).count;
     return (int64_t{64} << 20) + static_cast<int64_t>(share) * 4096 + records * 256;
   }
   std::string DescribePrediction(int64_t records) const override {

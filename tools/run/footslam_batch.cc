@@ -18,8 +18,8 @@
 #include <thread>
 #include <vector>
 
-#include "engine/io/config_json.h"
 #include "grove/checksum.h"
+#include "grove/config_json.h"
 #include "tools/io/atomic_file.h"
 #include "tools/io/csv_reader.h"
 #include "tools/run/footslam_run.h"
@@ -84,11 +84,7 @@ nlohmann::json::parser_callback_t DuplicateKeyFinder(std::string* duplicate) {
 // The configuration fields that change results, as JSON: what a walk's digest covers (threads
 // and batch size do not change its outputs, so a batch with other --jobs skips it still).
 std::string ResultConfigJson(const FootSlamConfig& config) {
-  nlohmann::json j = ConfigToJson(FootSlamConfigFields(), config);
-  for (const auto& f : FootSlamConfigFields()) {
-    if (f.info.effect != kChangesResults) j.erase(f.info.name);
-  }
-  return j.dump();
+  return ResultConfigToJson(FootSlamConfigFields(), config);
 }
 
 // Reads and checks every manifest line; InvalidArgument "manifest:line:column: ..." for the

@@ -10,8 +10,8 @@
 #include <string_view>
 #include <vector>
 
-#include "engine/filter/resampler.h"
-#include "engine/io/config_json.h"
+#include "grove/collective.h"
+#include "grove/config_json.h"
 #include "tools/io/footslam_outputs.h"
 #include "tools/io/output_readers.h"
 #include "tools/io/step_reader.h"
@@ -82,8 +82,8 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   int64_t ExpectedRecords() const override { return records_; }
   int64_t PredictPeakBytes(int64_t records) const override {
     FootSlamConfig share = config_;  // across ranks, this rank's particles
-    share.particles = static_cast<int64_t>(
-        ShareOf(static_cast<uint64_t>(config_.particles), ranks_, kSumBlock).count);
+    share.particles =
+        static_cast<int64_t>(ShareOf(static_cast<uint64_t>(config_.particles), ranks_).count);
     return FootSlam::EstimatePeakBytes(share, records) + records * kCommandBytesPerStep;
   }
   std::string DescribePrediction(int64_t records) const override {

@@ -18,6 +18,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "grove/checksum.h"
@@ -295,6 +296,24 @@ bool StopRequested() { return g_stop_signal.load(std::memory_order_relaxed) != 0
 int StopSignal() { return g_stop_signal.load(std::memory_order_relaxed); }
 bool HangupSeen() { return g_hangup.load(std::memory_order_relaxed); }
 
+// Every rank's `mine`, in rank order (collective).
+template <typename T>
+StatusOr<std::vector<T>> EveryRanks(Collective& ranks, const T& mine) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  std::vector<std::string> parts;
+  GROVE_RETURN_IF_ERROR(
+      ranks.AllGather(std::string(reinterpret_cast<const char*>(&mine), sizeof(T)), &parts));
+  std::vector<T> values(parts.size());
+  for (size_t q = 0; q < parts.size(); ++q) {
+    if (parts[q].size() != sizeof(T)) {
+      return InternalError(
+          fmt::format("collective: rank {} sent {} bytes, not {}", q, parts[q].size(), sizeof(T)));
+    }
+    std::memcpy(&values[q], parts[q].data(), sizeof(T));
+  }
+  return values;
+}
+
 // Across ranks, before a record is stepped: the lowest rank's stop signal (0: none), or an error
 // when a rank failed to read, or the ranks read different records or not the same number.
 StatusOr<int> AgreeOnRecord(Collective& ranks, const StatusOr<bool>& more,
@@ -307,8 +326,9 @@ StatusOr<int> AgreeOnRecord(Collective& ranks, const StatusOr<bool>& more,
     uint32_t zero;
   };
   const Mark mine{StopSignal(), more.ok() ? (*more ? 1 : 0) : 2, Crc32(record), 0};
-  std::vector<Mark> all;
-  GROVE_RETURN_IF_ERROR(AllGatherValues<Mark>(ranks, std::span(&mine, 1), &all));
+  StatusOr<std::vector<Mark>> gathered = EveryRanks(ranks, mine);
+  if (!gathered.ok()) return gathered.status();
+  const std::vector<Mark>& all = *gathered;
   for (const Mark& m : all) {
     if (m.signal != 0) return m.signal;
   }
@@ -336,10 +356,9 @@ StatusOr<int> AgreeOnRecord(Collective& ranks, const StatusOr<bool>& more,
 
 // Across ranks: the lowest rank's stop signal (0: none).
 StatusOr<int> AgreeOnSignal(Collective& ranks) {
-  const int32_t mine = StopSignal();
-  std::vector<int32_t> all;
-  GROVE_RETURN_IF_ERROR(AllGatherValues<int32_t>(ranks, std::span(&mine, 1), &all));
-  for (int32_t s : all) {
+  StatusOr<std::vector<int32_t>> all = EveryRanks<int32_t>(ranks, StopSignal());
+  if (!all.ok()) return all.status();
+  for (int32_t s : *all) {
     if (s != 0) return s;
   }
   return 0;
@@ -349,7 +368,7 @@ std::string RankCheckpointPath(const std::string& path, int rank) {
   return rank == 0 ? path : fmt::format("{}.rank{}", path, rank);
 }
 
-int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& config) {
+int RunCommand(RunJob* job, const RunOptions& options, const std::string& config_json) {
   auto wall_start = std::chrono::steady_clock::now();
   // Across ranks rank 0 (the lead) checks and writes the outputs and reports; every rank takes
   // the same steps, agrees on every error, and exits with the same code.
@@ -541,7 +560,7 @@ int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& con
     }
   }
   if (Status s = agree(staged); !s.ok()) return fail(kExitOutput, s.message());
-  nlohmann::json summary = {{"config", config}};
+  nlohmann::json summary = {{"config", nlohmann::json::parse(config_json)}};
   if (Status s = agree(job->WriteOutputs(out ? &*out : nullptr, &summary)); !s.ok()) {
     return fail(ExitCodeOf(s), s.message());
   }

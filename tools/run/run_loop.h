@@ -18,7 +18,7 @@
 #include <string_view>
 #include <vector>
 
-#include "engine/ranks/collective.h"
+#include "grove/collective.h"
 #include "grove/status.h"
 #include "tools/io/output_set.h"
 #include "tools/report/map_render.h"
@@ -179,9 +179,9 @@ int64_t CountRegularFileLines(const std::string& path);
 // rank 0 (and for one process), `path.rank<q>` beside it for rank q.
 std::string RankCheckpointPath(const std::string& path, int rank);
 
-// Runs `job` as `options` say; `config` is the effective configuration for summary.json.
-// Returns the exit code after printing any error on stderr as one line.
-int RunCommand(RunJob* job, const RunOptions& options, const nlohmann::json& config);
+// Runs `job` as `options` say; `config_json` is the effective configuration (ConfigToJson) for
+// summary.json. Returns the exit code after printing any error on stderr as one line.
+int RunCommand(RunJob* job, const RunOptions& options, const std::string& config_json);
 
 // True when SIGINT or SIGTERM asked the current run to stop; the signal (0: none); whether a
 // SIGHUP came.

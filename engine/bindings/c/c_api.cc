@@ -13,7 +13,7 @@
 #include <utility>
 #include <vector>
 
-#include "engine/io/config_json.h"
+#include "grove/config_json.h"
 #include "grove/fastslam.h"
 #include "grove/footslam.h"
 #include "grove/resampling.h"

@@ -1,6 +1,5 @@
-// The `grove` Python module: FootSLAM and landmark FastSLAM for Python, over the public facades
-// (grove/footslam.h, grove/fastslam.h) and nothing else of the engine but the configuration
-// tables' helpers.
+// The `grove` Python module: FootSLAM and landmark FastSLAM for Python, over the public headers
+// alone (grove/footslam.h, grove/fastslam.h and the configuration tables' helpers).
 //
 // Thread safety: each Python object wraps one engine and a mutex; every call locks it with the
 // GIL released, so calls on one object serialise and calls on two objects run in parallel. The
@@ -25,8 +24,8 @@
 #include <utility>
 #include <vector>
 
-#include "engine/io/config_json.h"
 #include "grove/config_fields.h"
+#include "grove/config_json.h"
 #include "grove/fastslam.h"
 #include "grove/footslam.h"
 #include "grove/status.h"

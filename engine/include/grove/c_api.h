@@ -8,16 +8,19 @@
  *   char error[256];
  *   if (grove_footslam_create(&config, &slam, error, sizeof error) != GROVE_OK) {
  *     fprintf(stderr, "%s\n", error);
+ *     return 1;
  *   }
- *   for (i = 0; i < n; ++i) {
+ *   const double t[] = {0.5, 1.0}, dx[] = {0.70, 0.68}, dy[] = {0.00, 0.05};
+ *   for (int i = 0; i < 2; ++i) {
  *     if (grove_footslam_step(slam, t[i], dx[i], dy[i]) != GROVE_OK) {
  *       fprintf(stderr, "%s\n", grove_footslam_last_error(slam));
  *     }
  *   }
  *   size_t count = 0;
- *   grove_footslam_cumulative_map(slam, NULL, 0, &count);       (size query)
+ *   grove_footslam_cumulative_map(slam, NULL, 0, &count);     // size query
  *   grove_hex_counts* map = malloc(count * sizeof *map);
- *   grove_footslam_cumulative_map(slam, map, count, &count);    (fill)
+ *   if (map != NULL) grove_footslam_cumulative_map(slam, map, count, &count);  // fill
+ *   free(map);
  *   grove_footslam_destroy(slam);
  *
  * Errors. Every call that can fail returns a grove_status; nothing is written to an output on

@@ -6,15 +6,17 @@
 // result-changing fields that a checkpoint stores, so a new field is added in two places: the
 // struct and the table.
 //
-//   const std::vector<ConfigField<MyConfig>>& MyConfigFields() {
-//     static const auto* fields = new std::vector<ConfigField<MyConfig>>{
-//         IntegerField("particles", &MyConfig::particles, 1, 1000000, kChangesResults,
-//                      "Number of particles"),
-//         RealField("sigma_m", &MyConfig::sigma_m, Interval::AtLeast(0), kChangesResults,
-//                   "Noise, metres"),
-//     };
-//     return *fields;
-//   }
+//   struct MyConfig {
+//     int64_t particles = 1000;
+//     double sigma_m = 0.1;
+//   };
+//   static const auto* fields = new std::vector<grove::ConfigField<MyConfig>>{
+//       grove::IntegerField("particles", &MyConfig::particles, 1, 1000000,
+//                           grove::kChangesResults, "Number of particles"),
+//       grove::RealField("sigma_m", &MyConfig::sigma_m, grove::Interval::AtLeast(0),
+//                        grove::kChangesResults, "Noise, metres"),
+//   };
+//   return grove::CheckFieldRanges(*fields, MyConfig{});  // OK, or the first field out of range
 #ifndef GROVE_CONFIG_FIELDS_H_
 #define GROVE_CONFIG_FIELDS_H_
 

@@ -4,12 +4,13 @@
 // Gaussians, kept in a persistent tree that it shares with its relatives (log-N updates, O(1)
 // copies, freed by reference counts).
 //
-//   grove::FastSlamConfig config;                       // FastSLAM 2.0, 100 particles, Bailey
-//   auto slam = grove::FastSlam::Create(config);         // validates; nothing built on error
-//   (*slam)->Control(0.0, 3.0, 0.0);                    // speed and steering from t = 0 on
-//   grove::LandmarkObservation z[] = {{12.5, 0.3, 7}};   // range, bearing, landmark id
-//   (*slam)->Scan(0.2, z);                               // predicts to t = 0.2, then updates
-//   auto landmarks = (*slam)->HeaviestLandmarks();
+//   grove::FastSlamConfig config;                     // FastSLAM 2.0, 100 particles, Bailey
+//   auto slam = grove::FastSlam::Create(config);       // validates; nothing built on error
+//   if (!slam.ok()) return slam.status();
+//   GROVE_RETURN_IF_ERROR((*slam)->Control(0.0, 3.0, 0.0));  // speed, steering from t = 0 on
+//   grove::LandmarkObservation z[] = {{12.5, 0.3, 7}};  // range, bearing, landmark id
+//   GROVE_RETURN_IF_ERROR((*slam)->Scan(0.2, z));      // predicts to t = 0.2, then updates
+//   auto landmarks = (*slam)->HeaviestLandmarks();     // a StatusOr: fails without memory
 //
 // Time: the first Control() sets the start time (the start pose is at it). A control holds
 // from its time until the next control's (zero-order hold); every call predicts from the last
@@ -268,7 +269,7 @@ class GROVE_EXPORT FastSlam {
   // Validates `config` and builds the engine; nothing is built when the config is invalid.
   static StatusOr<std::unique_ptr<FastSlam>> Create(const FastSlamConfig& config);
   // One rank's engine of a filter whose config.particles are split over the ranks of `ranks`
-  // (engine/ranks/collective.h; null: one process, as Create(config)), as FootSlam's: every rank
+  // (grove/collective.h; null: one process, as Create(config)), as FootSlam's: every rank
   // creates its engine with the same configuration and makes the same calls in the same order;
   // Control, Scan and every read-out are collective and give every rank the whole filter's
   // result, the same bits as one process. Checkpoint() saves this rank's share. Every rank needs

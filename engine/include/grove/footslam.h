@@ -5,12 +5,14 @@
 //
 //   grove::FootSlamConfig config;
 //   config.particles = 30000;
-//   auto slam = grove::FootSlam::Create(config);          // validates; nothing built on error
-//   if (!slam.ok()) { ... slam.status().message() ... }
+//   auto slam = grove::FootSlam::Create(config);  // validates; nothing built on error
+//   if (!slam.ok()) return slam.status();
+//   const double steps[][3] = {{0.5, 0.70, 0.00}, {1.0, 0.68, 0.05}};  // t_s, dx_m, dy_m
 //   for (const auto& s : steps) {
-//     grove::Status st = (*slam)->Step(s.t, s.dx, s.dy);  // on error the engine is unchanged
+//     grove::Status st = (*slam)->Step(s[0], s[1], s[2]);  // on error the engine is unchanged
+//     if (!st.ok()) return st;
 //   }
-//   std::vector<grove::HexCounts> map = (*slam)->CumulativeMap();
+//   grove::StatusOr<std::vector<grove::HexCounts>> map = (*slam)->CumulativeMap();
 //
 // Thread safety: a FootSlam is driven by one thread at a time (no two calls overlap, const
 // read-outs included); it runs its own worker threads inside Step(). Two engines in one
@@ -211,7 +213,7 @@ class GROVE_EXPORT FootSlam {
   // Validates `config` and builds the engine; nothing is built when the config is invalid.
   static StatusOr<std::unique_ptr<FootSlam>> Create(const FootSlamConfig& config);
   // One rank's engine of a filter whose config.particles are split over the ranks of `ranks`
-  // (engine/ranks/collective.h; null: one process, as Create(config)). Every rank creates its
+  // (grove/collective.h; null: one process, as Create(config)). Every rank creates its
   // engine with the same configuration and makes the same calls in the same order: Step, and every
   // read-out, is collective, and gives every rank the whole filter's result, the same bits as
   // one process. Checkpoint() saves this rank's share (Resume with ranks reads it back).

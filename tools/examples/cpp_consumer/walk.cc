@@ -1,5 +1,8 @@
-// Runs FootSLAM on a step file (t,dx,dy per line, one header line) and prints the last mean
-// pose, the size of the cumulative map and the library's version.
+// Runs FootSLAM on a step file (t,dx,dy per line, one header line) under a configuration given
+// as JSON (default {"particles": 2000}) and prints the last mean pose, the size of the
+// cumulative map and the library's version.
+#include <grove/collective.h>
+#include <grove/config_json.h>
 #include <grove/footslam.h>
 #include <grove/version.h>
 
@@ -8,16 +11,28 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <vector>
 
 int main(int argc, char** argv) {
-  if (argc != 2) {
-    std::fprintf(stderr, "usage: %s STEPS.csv\n", argv[0]);
+  if (argc != 2 && argc != 3) {
+    std::fprintf(stderr, "usage: %s STEPS.csv [CONFIG_JSON]\n", argv[0]);
     return 2;
   }
   std::printf("%s\n", grove::VersionString().c_str());
   grove::FootSlamConfig config;
-  config.particles = 2000;
-  grove::StatusOr<std::unique_ptr<grove::FootSlam>> slam = grove::FootSlam::Create(config);
+  const std::string json = argc == 3 ? argv[2] : R"({"particles": 2000})";
+  if (grove::Status s =
+          grove::ApplyConfigJson(grove::FootSlamConfigFields(), "CONFIG_JSON", json, &config);
+      !s.ok()) {
+    std::fprintf(stderr, "%s\n", s.ToString().c_str());
+    return 2;
+  }
+  // One rank of a collective in this process: the same results as FootSlam::Create(config). With
+  // InProcessCollective::Create(K), each endpoint driven by its own thread, the particles would be
+  // split over K ranks.
+  std::vector<std::unique_ptr<grove::Collective>> ranks = grove::InProcessCollective::Create(1);
+  grove::StatusOr<std::unique_ptr<grove::FootSlam>> slam =
+      grove::FootSlam::Create(config, ranks[0].get());
   if (!slam.ok()) {
     std::fprintf(stderr, "%s\n", slam.status().ToString().c_str());
     return 1;

@@ -1,14 +1,14 @@
 // Ranks as threads of one process for tests of filters across ranks: OnRanks runs one body per
 // rank, joined by InProcessCollective.
-#ifndef GROVE_TESTS_RANKS_TESTING_H_
-#define GROVE_TESTS_RANKS_TESTING_H_
+#ifndef GROVE_TESTS_API_RANKS_TESTING_H_
+#define GROVE_TESTS_API_RANKS_TESTING_H_
 
 #include <cstring>
 #include <memory>
 #include <thread>
 #include <vector>
 
-#include "engine/ranks/collective.h"
+#include "grove/collective.h"
 
 namespace grove::testing {
 
@@ -27,4 +27,4 @@ inline bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof(a))
 
 }  // namespace grove::testing
 
-#endif  // GROVE_TESTS_RANKS_TESTING_H_
+#endif  // GROVE_TESTS_API_RANKS_TESTING_H_
