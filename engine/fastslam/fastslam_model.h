@@ -406,10 +406,10 @@ class FastSlamModel {
     if (!traits_.evolution || scan.observations.empty()) return Status::Ok();
     std::atomic<bool> evidence{false};
     GROVE_RETURN_IF_ERROR(RunInBatches(workers, n_, static_cast<size_t>(config_.batch),
-                                       &batch_status_, [&](int, size_t b, size_t e) {
+                                       &batch_status_, [&](int slot, size_t b, size_t e) {
                                          for (size_t i = b; i < e; ++i) {
                                            int terms = 0;
-                                           fitness_[i] = Fitness(scan, i, pose_[i], &terms);
+                                           fitness_[i] = Fitness(scan, i, pose_[i], slot, &terms);
                                            // Relaxed: read after the loop's join.
                                            if (terms > 0) {
                                              evidence.store(true, std::memory_order_relaxed);
@@ -443,11 +443,11 @@ class FastSlamModel {
             StreamPurpose::kDifferentialEvolution + 256 * static_cast<uint32_t>(g);
         GROVE_RETURN_IF_ERROR(RunInBatches(
             workers, n_, static_cast<size_t>(config_.batch), &batch_status_,
-            [&](int, size_t b, size_t e) {
+            [&](int slot, size_t b, size_t e) {
               for (size_t i = b; i < e; ++i) {
                 RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(first_ + i), purpose);
                 trial[i] = TrialPose(first_ + i, population, x_best, &rs);
-                trial_fitness[i] = Fitness(scan, i, trial[i]);
+                trial_fitness[i] = Fitness(scan, i, trial[i], slot);
               }
               return Status::Ok();
             }));
@@ -472,12 +472,12 @@ class FastSlamModel {
         });
   }
 
-  // Differential evolution's fitness of `pose` for particle i at this scan (public for tests):
-  // the seed's Eq. 32 as a logarithm, -1/2 sum_j v_j^T R^-1 v_j over the scan's observations of
-  // landmarks in particle i's map (under unknown association its associations, from the query
-  // Advance() kept).
+  // Differential evolution's fitness of `pose` for particle i at this scan, from worker slot
+  // `slot` (public for tests): the seed's Eq. 32 as a logarithm, -1/2 sum_j v_j^T R^-1 v_j over
+  // the scan's observations of landmarks in particle i's map (under unknown association its
+  // associations, from the query Advance() kept).
   // *terms (may be null) gets the number of observations summed.
-  double Fitness(const ScanStep& scan, size_t i, const VehiclePose& pose,
+  double Fitness(const ScanStep& scan, size_t i, const VehiclePose& pose, int slot,
                  int* terms = nullptr) const {
     const Eigen::Matrix2d r = SensorCovariance(noise_);
     double f = 0;
@@ -489,10 +489,10 @@ class FastSlamModel {
       f -= 0.5 * (v(0) * v(0) / r(0, 0) + v(1) * v(1) / r(1, 1));
     };
     if (ml_) {
-      thread_local std::vector<Match> matches;
-      thread_local std::vector<Decision> decisions;
-      matches = pending_[i].matches;  // Decide() reorders them
-      Decide(matches, scan.observations.size(), params_, &decisions);
+      Scratch& sc = scratch_[slot];
+      std::vector<Decision>& decisions = sc.decisions;
+      sc.query.matches = pending_[i].matches;  // Decide() reorders them
+      Decide(sc.query.matches, scan.observations.size(), params_, &decisions);
       for (size_t j = 0; j < decisions.size(); ++j) {
         if (decisions[j].kind != Decision::kAssociated) continue;
         add(scan.observations[j], *trie_.Find(maps_[i], decisions[j].key));
@@ -1079,10 +1079,12 @@ class FastSlamModel {
     std::vector<Match> matches;
     std::vector<uint64_t> in_view;  // increasing
   };
+  // A worker slot's buffers, reused from particle to particle.
   struct alignas(kFalseSharingBytes) Scratch {
     ScanQuery query;
     std::vector<Decision> decisions;
     std::vector<uint64_t> keys;
+    std::vector<DetectionProbe> probes;
   };
 
   // A pending ScanQuery as Export() writes it: matches of this scan's detections, the view's
@@ -1117,8 +1119,8 @@ class FastSlamModel {
     const SensorView view{config_.sensor_range_m, config_.sensor_fov_rad};
     const bool evidence = config_.evidence == FastSlamEvidence::kOn;
     Status s = FindMatches(trie_, maps_[i], pose, scan.observations, params_, max_range_,
-                           /*use_index=*/true, &sc->query.matches, evidence ? &view : nullptr,
-                           &sc->query.in_view);
+                           /*use_index=*/true, &sc->query.matches, &sc->probes,
+                           evidence ? &view : nullptr, &sc->query.in_view);
     if (!s.ok()) return Status(s.code(), fmt::format("particle {}, {}", first_ + i, s.message()));
     Decide(sc->query.matches, scan.observations.size(), params_, &sc->decisions);
     return Status::Ok();
@@ -1329,7 +1331,7 @@ class FastSlamModel {
   std::vector<AssociationCounts> counts_;  // per particle, along its ancestry
   // Each particle's matches of the current scan, from Advance() to Complete().
   std::vector<ScanQuery> pending_;
-  std::vector<Scratch> scratch_;  // per worker slot
+  mutable std::vector<Scratch> scratch_;  // per worker slot: buffers, not state
 };
 
 }  // namespace grove::fastslam
