@@ -18,15 +18,7 @@
 //     drawn pose. Copies of one parent draw distinct poses (Bailey's order: resample, then
 //     sample). Both filters initialise new landmarks from the pose.
 //
-// The seed's family (FilterTraits): each filter is a choice of pose step (motion sampling, EKF,
-// unscented, central difference), landmark step (EKF, unscented, central difference), weight
-// (the scan's predictive likelihood, or for the sigma-point particle filter the importance ratio
-// at a pose drawn in Advance) and an optional population step (differential evolution, run by
-// Population() after Complete()). The pose covariance holds a covariance (EKF, unscented) or a
-// lower Cholesky factor (central difference), and so do the landmark leaves; the sigma-point
-// pose steps restart their covariance at a fixed value after every scan's draw, so that a path
-// segment's predictions, which depend on it, replay from the segment's start
-// (kPoseRestartVariance).
+// The seed's family: FilterTraits and FilterSteps.
 //
 // Unknown association (config.association != kKnown): the map is keyed by SpatialKey (a
 // landmark's cell and a slot in it) instead of by id. At a scan each particle finds the
@@ -65,6 +57,8 @@
 #include "concurrency/random_stream.h"
 #include "concurrency/worker_pool.h"
 #include "engine/fastslam/data_association.h"
+#include "engine/fastslam/filter_steps.h"
+#include "engine/fastslam/filter_traits.h"
 #include "engine/fastslam/landmark_math.h"
 #include "engine/fastslam/sigma_point_filters.h"
 #include "engine/fastslam/vehicle_model.h"
@@ -78,18 +72,6 @@
 #include "grove/fastslam.h"
 
 namespace grove::fastslam {
-
-// A control held over dt_s.
-struct ControlStep {
-  double v_mps = 0;
-  double steer_rad = 0;
-  double dt_s = 0;
-};
-
-// One scan's observations (validated by the facade).
-struct ScanStep {
-  std::span<const LandmarkObservation> observations;
-};
 
 // The start of a path segment: the pose before the segment's first prediction and the
 // particle's index during the segment.
@@ -105,58 +87,6 @@ inline bool ValidSegmentStart(const SegmentStart& s) {
          std::fabs(s.heading_rad) <= 4 && s.unused == 0;
 }
 
-// A particle's pose covariance, its upper triangle, or for the central-difference filters the
-// lower Cholesky factor [xx 0 0; xy yy 0; xh yh hh].
-struct PoseCovariance {
-  double xx = 0, xy = 0, xh = 0, yy = 0, yh = 0, hh = 0;
-};
-
-// How a filter of FastSlamFilter moves, weights and maps (fastslam.h, README).
-struct FilterTraits {
-  enum class Pose { kSampledMotion, kEkf, kUnscented, kCentralDifference };
-  enum class Map { kEkf, kUnscented, kCentralDifference };
-  Pose pose = Pose::kEkf;
-  Map map = Map::kEkf;
-  // The pose is drawn after resampling (Complete()); otherwise in Advance(), before the weight.
-  bool draws_after_resampling = true;
-  // The weight is p(z | x) p(x | prediction) / q(x) at the drawn pose (the sigma-point particle
-  // filter), not the predictive likelihood.
-  bool importance_ratio = false;
-  // Differential evolution after the draw (Population()).
-  bool evolution = false;
-
-  bool square_root_pose() const { return pose == Pose::kCentralDifference; }
-  bool square_root_map() const { return map == Map::kCentralDifference; }
-  // Whether every scan ends in a draw that restarts the pose covariance: the sigma-point pose
-  // steps need it for the replay of paths (FastSLAM 2.0's mean does not depend on its
-  // covariance, and it draws only at scans with observations, as Bailey's).
-  bool draws_every_scan() const {
-    return pose == Pose::kUnscented || pose == Pose::kCentralDifference;
-  }
-};
-
-inline FilterTraits TraitsOf(FastSlamFilter f) {
-  using P = FilterTraits::Pose;
-  using M = FilterTraits::Map;
-  switch (f) {
-    case FastSlamFilter::kFastSlam1:
-      return {P::kSampledMotion, M::kEkf, false, false, false};
-    case FastSlamFilter::kFastSlam2:
-      return {P::kEkf, M::kEkf, true, false, false};
-    case FastSlamFilter::kUnscented:
-      return {P::kUnscented, M::kUnscented, true, false, false};
-    case FastSlamFilter::kSrcd:
-      return {P::kCentralDifference, M::kCentralDifference, true, false, false};
-    case FastSlamFilter::kSrcdAided:
-      return {P::kEkf, M::kCentralDifference, true, false, false};
-    case FastSlamFilter::kSrcdParticle:
-      return {P::kCentralDifference, M::kEkf, false, true, false};
-    case FastSlamFilter::kDeSrcd:
-      return {P::kCentralDifference, M::kCentralDifference, true, false, true};
-  }
-  return {};
-}
-
 template <int kLog2Degree>
 class FastSlamModel {
  public:
@@ -168,11 +98,7 @@ class FastSlamModel {
   FastSlamModel(const FastSlamConfig& config, int slots, ParticleShare share = {},
                 Collective* ranks = nullptr)
       : config_(config),
-        traits_(TraitsOf(config.filter)),
-        geometry_(VehicleGeometry::Of(config)),
-        noise_{config.sigma_range_m, config.sigma_bearing_rad},
-        control_noise_{config.sigma_speed_mps, config.sigma_steer_rad},
-        rule_{config.ut_alpha, config.ut_beta, config.ut_kappa},
+        steps_(config),
         n_(ranks == nullptr ? static_cast<size_t>(config.particles) : share.count),
         first_(ranks == nullptr ? 0 : share.first),
         total_(static_cast<uint64_t>(config.particles)),
@@ -186,44 +112,28 @@ class FastSlamModel {
                 FastSlamGateDistance2(config.augment_gate, config.gate_unit),
                 config.association == FastSlamAssociation::kExclusive,
                 config.index_cell_m,
-                noise_,
-                traits_.square_root_map(),
-                traits_.map == FilterTraits::Map::kCentralDifference ? config.cd_step : 0},
-        log_p0_(NewLandmarkLogLikelihood(noise_, params_.augment_gate)),
+                steps_.noise(),
+                steps_.traits().square_root_map(),
+                steps_.traits().map == FilterTraits::Map::kCentralDifference ? config.cd_step : 0},
+        log_p0_(NewLandmarkLogLikelihood(steps_.noise(), params_.augment_gate)),
         counts_(ml_ ? n_ : 0),
-        pending_(ml_ && traits_.draws_after_resampling ? n_ : 0),
+        pending_(ml_ && steps_.traits().draws_after_resampling ? n_ : 0),
         scratch_(slots) {
     const VehiclePose start{config.start_x_m, config.start_y_m,
                             WrapAngle(config.start_heading_rad)};
     pose_.assign(n_, start);
     unit_.assign(n_, Unit{std::cos(start.heading_rad), std::sin(start.heading_rad)});
-    cov_.assign(n_, restart_covariance());
-    if (traits_.draws_after_resampling) {
+    cov_.assign(n_, steps_.restart_covariance());
+    if (traits().draws_after_resampling) {
       proposal_mu_.resize(n_);
       proposal_sigma_.resize(n_);
     }
-    if (traits_.evolution) fitness_.resize(n_);
-    q_ << config.sigma_speed_mps * config.sigma_speed_mps, 0, 0,
-        config.sigma_steer_rad * config.sigma_steer_rad;
+    if (traits().evolution) fitness_.resize(n_);
   }
 
   size_t size() const { return n_; }
-  const FilterTraits& traits() const { return traits_; }
-
-  // The pose covariance every particle starts with and, for the sigma-point pose steps, returns
-  // to after each scan's draw: 0 for FastSLAM 2.0's EKF; eps I (unscented) or its factor
-  // sqrt(eps) I (central difference), as Kim's code.
-  PoseCovariance restart_covariance() const {
-    if (traits_.pose == FilterTraits::Pose::kUnscented) {
-      return PoseCovariance{kPoseRestartVariance, 0, 0,
-                            kPoseRestartVariance, 0, kPoseRestartVariance};
-    }
-    if (traits_.square_root_pose()) {
-      const double s = std::sqrt(kPoseRestartVariance);
-      return PoseCovariance{s, 0, 0, s, 0, s};
-    }
-    return PoseCovariance{};
-  }
+  const FilterTraits& traits() const { return steps_.traits(); }
+  const FilterSteps& steps() const { return steps_; }
 
   // Before each scan's update: the longest range so far bounds the landmarks' covariances
   // (SearchRadius()).
@@ -243,47 +153,17 @@ class FastSlamModel {
   // The next Predict() is the first of a path segment (after the start or a scan).
   void set_segment_start(bool v) { segment_start_ = v; }
 
-  // The pose particle `index` reaches from `p`, whose covariance is *cov, by the prediction of
-  // filter step `step` (*cov is advanced too): the one computation of a prediction, for
-  // Predict() and for the replay of paths. *usable is false when the model cannot use the
-  // control (or, for the sigma-point steps, one of its sigma points).
-  VehiclePose PredictPose(const VehiclePose& p, PoseCovariance* cov, const ControlStep& c,
-                          uint64_t step, uint32_t index, bool* usable) const {
-    switch (traits_.pose) {
-      case FilterTraits::Pose::kSampledMotion: {
-        ControlTerms u;
-        *usable = NoisyTerms(c, step, index, &u);
-        return *usable ? MoveVehicle(geometry_, u, p) : p;
-      }
-      case FilterTraits::Pose::kEkf:
-        *usable = SteeringUsable(geometry_, c.steer_rad);
-        if (!*usable) return p;
-        return MoveVehicle(geometry_, ControlTermsOf(geometry_, c.v_mps, c.steer_rad, c.dt_s), p);
-      case FilterTraits::Pose::kUnscented:
-      case FilterTraits::Pose::kCentralDifference: {
-        Eigen::Vector3d mean = ToVector(p);
-        Eigen::Matrix3d m = Stored(*cov);
-        *usable = SigmaPointPredict(c, &mean, &m).ok();
-        if (!*usable) return p;
-        *cov = Store(m);
-        return ToPose(mean);
-      }
-    }
-    *usable = false;
-    return p;
-  }
-
   Status Predict(const ControlStep& c, uint64_t step, size_t begin, size_t end, int slot) {
-    const bool ekf = traits_.pose == FilterTraits::Pose::kEkf;
-    const bool sigma_points = traits_.draws_every_scan();
-    if ((ekf || sigma_points) && !SteeringUsable(geometry_, c.steer_rad)) {
+    const bool ekf = traits().pose == FilterTraits::Pose::kEkf;
+    const bool sigma_points = traits().draws_every_scan();
+    if ((ekf || sigma_points) && !SteeringUsable(steps_.geometry(), c.steer_rad)) {
       return BadSteering(begin);
     }
     // FastSLAM 2.0 moves every particle with the same control: its terms once per batch.
     ControlTerms shared;
     Unit turn{1, 0};
     if (ekf) {
-      shared = ControlTermsOf(geometry_, c.v_mps, c.steer_rad, c.dt_s);
+      shared = ControlTermsOf(steps_.geometry(), c.v_mps, c.steer_rad, c.dt_s);
       turn = Unit{std::cos(shared.turn_rad), std::sin(shared.turn_rad)};
     }
     for (size_t i = begin; i < end; ++i) {
@@ -292,30 +172,30 @@ class FastSlamModel {
         SegmentStart s{p.x_m, p.y_m, p.heading_rad, static_cast<uint32_t>(first_ + i), 0};
         SegmentHistory::Node* node =
             history_.Append(paths_[i], static_cast<uint32_t>(step), s, slot);
-        if (node == nullptr) return NoMemory(i, "path");
+        if (node == nullptr) return NoMemoryError(first_ + i, "path");
         paths_[i] = node;
       }
       VehiclePose next;
       if (sigma_points) {
         Eigen::Vector3d mean = ToVector(p);
-        Eigen::Matrix3d m = Stored(cov_[i]);
-        Status s = SigmaPointPredict(c, &mean, &m);
-        if (!s.ok()) return ParticleStatus(i, s);
+        Eigen::Matrix3d m = steps_.Stored(cov_[i]);
+        Status s = steps_.SigmaPointPredict(c, &mean, &m);
+        if (!s.ok()) return ParticleStatus(first_ + i, s);
         next = ToPose(mean);
-        cov_[i] = Store(m);
+        cov_[i] = steps_.Store(m);
       } else {
         ControlTerms own;
-        if (!ekf && !NoisyTerms(c, step, static_cast<uint32_t>(first_ + i), &own)) {
+        if (!ekf && !steps_.NoisyTerms(c, step, static_cast<uint32_t>(first_ + i), &own)) {
           return BadSteering(i);
         }
         const ControlTerms& u = ekf ? shared : own;
         StepTrig trig;
-        next = MoveVehicle(geometry_, u, p, &trig);
+        next = MoveVehicle(steps_.geometry(), u, p, &trig);
         if (ekf) {
           Eigen::Matrix3d gv;
           Eigen::Matrix<double, 3, 2> gu;
-          VehicleJacobians(geometry_, u, trig, &gv, &gu);
-          PropagateCovariance(gv, gu, &cov_[i]);
+          VehicleJacobians(steps_.geometry(), u, trig, &gv, &gu);
+          steps_.PropagateCovariance(gv, gu, &cov_[i]);
         }
       }
       if (!std::isfinite(next.x_m) || !std::isfinite(next.y_m) ||
@@ -344,14 +224,14 @@ class FastSlamModel {
   Status Advance(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot,
                  double* log_w) {
     if (ml_) return AdvanceUnknown(scan, step, begin, end, slot, log_w);
-    if (scan.observations.empty() && !traits_.draws_every_scan()) return Status::Ok();
+    if (scan.observations.empty() && !traits().draws_every_scan()) return Status::Ok();
     for (size_t i = begin; i < end; ++i) {
       double lw = 0;
-      if (traits_.pose == FilterTraits::Pose::kSampledMotion) {
+      if (traits().pose == FilterTraits::Pose::kSampledMotion) {
         GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &lw));
       } else {
         Eigen::Vector3d mu = ToVector(pose_[i]);
-        Eigen::Matrix3d sigma = Stored(cov_[i]);
+        Eigen::Matrix3d sigma = steps_.Stored(cov_[i]);
         for (const LandmarkObservation& z : scan.observations) {
           const Landmark* l = trie_.Find(maps_[i], static_cast<uint64_t>(z.id));
           if (l == nullptr) continue;
@@ -359,9 +239,9 @@ class FastSlamModel {
           GROVE_RETURN_IF_ERROR(ProposalStepOf(i, z, *l, &mu, &sigma, &w));
           lw += w;
         }
-        if (traits_.draws_after_resampling) {
+        if (traits().draws_after_resampling) {
           proposal_mu_[i] = mu;
-          proposal_sigma_[i] = Store(sigma);
+          proposal_sigma_[i] = steps_.Store(sigma);
         } else {
           // The importance ratio replaces the predictive likelihood.
           GROVE_RETURN_IF_ERROR(DrawAndWeigh(scan, step, i, nullptr, mu, sigma, &lw));
@@ -378,13 +258,14 @@ class FastSlamModel {
   // copy has its parent's), keyed by the particle's new index, then the landmark updates from
   // the drawn pose (for differential evolution, Population() does them after moving the poses).
   Status Complete(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot) {
-    if (!traits_.draws_after_resampling) return Status::Ok();
-    if (scan.observations.empty() && !traits_.draws_every_scan()) return Status::Ok();
+    if (!traits().draws_after_resampling) return Status::Ok();
+    if (scan.observations.empty() && !traits().draws_every_scan()) return Status::Ok();
     for (size_t i = begin; i < end; ++i) {
-      GROVE_RETURN_IF_ERROR(Draw(step, i, proposal_mu_[i], Stored(proposal_sigma_[i]), &pose_[i]));
+      GROVE_RETURN_IF_ERROR(steps_.Draw(step, first_ + i, proposal_mu_[i],
+                                        steps_.Stored(proposal_sigma_[i]), &pose_[i]));
       unit_[i] = Unit{std::cos(pose_[i].heading_rad), std::sin(pose_[i].heading_rad)};
-      cov_[i] = restart_covariance();
-      if (traits_.evolution || scan.observations.empty()) continue;
+      cov_[i] = steps_.restart_covariance();
+      if (traits().evolution || scan.observations.empty()) continue;
       GROVE_RETURN_IF_ERROR(UpdateMap(scan, i, slot));
     }
     return Status::Ok();
@@ -403,7 +284,7 @@ class FastSlamModel {
   // particles there are no r1, r2, and without an observation of a mapped landmark no fitness:
   // then nothing moves.
   Status Population(const ScanStep& scan, uint64_t step, WorkerPool& workers) {
-    if (!traits_.evolution || scan.observations.empty()) return Status::Ok();
+    if (!traits().evolution || scan.observations.empty()) return Status::Ok();
     std::atomic<bool> evidence{false};
     GROVE_RETURN_IF_ERROR(RunInBatches(workers, n_, static_cast<size_t>(config_.batch),
                                        &batch_status_, [&](int slot, size_t b, size_t e) {
@@ -479,7 +360,7 @@ class FastSlamModel {
   // *terms (may be null) gets the number of observations summed.
   double Fitness(const ScanStep& scan, size_t i, const VehiclePose& pose, int slot,
                  int* terms = nullptr) const {
-    const Eigen::Matrix2d r = SensorCovariance(noise_);
+    const Eigen::Matrix2d r = SensorCovariance(steps_.noise());
     double f = 0;
     if (terms != nullptr) *terms = 0;
     auto add = [&](const LandmarkObservation& z, const Landmark& l) {
@@ -510,7 +391,7 @@ class FastSlamModel {
     GatherValues(parents, workers, &pose_);
     GatherValues(parents, workers, &unit_);
     GatherValues(parents, workers, &cov_);
-    if (traits_.draws_after_resampling) {
+    if (traits().draws_after_resampling) {
       GatherValues(parents, workers, &proposal_mu_);
       GatherValues(parents, workers, &proposal_sigma_);
     }
@@ -638,7 +519,7 @@ class FastSlamModel {
     for (uint32_t i : which) w->Put(pose_[i]);
     for (uint32_t i : which) w->Put(unit_[i]);
     for (uint32_t i : which) w->Put(cov_[i]);
-    if (traits_.draws_after_resampling) {
+    if (traits().draws_after_resampling) {
       for (uint32_t i : which) {
         for (int k = 0; k < 3; ++k) w->Put<double>(proposal_mu_[i](k));
         w->Put(proposal_sigma_[i]);
@@ -686,7 +567,7 @@ class FastSlamModel {
     for (size_t i = at; i < end; ++i) {
       GROVE_RETURN_IF_ERROR(CheckParticle(r, i - at, pose_[i], unit_[i], cov_[i]));
     }
-    if (traits_.draws_after_resampling) {
+    if (traits().draws_after_resampling) {
       proposal_mu_.resize(end);
       proposal_sigma_.resize(end);
       for (size_t i = at; i < end; ++i) {
@@ -780,66 +661,6 @@ class FastSlamModel {
            std::isfinite(l.xy) && std::isfinite(l.yy) && l.xx >= 0 && l.yy >= 0 && l.tag >= -1;
   }
 
-  static Eigen::Matrix3d Full(const PoseCovariance& c) {
-    return (Eigen::Matrix3d() << c.xx, c.xy, c.xh, c.xy, c.yy, c.yh, c.xh, c.yh, c.hh).finished();
-  }
-  static PoseCovariance Upper(const Eigen::Matrix3d& m) {
-    return PoseCovariance{m(0, 0), 0.5 * (m(0, 1) + m(1, 0)), 0.5 * (m(0, 2) + m(2, 0)),
-                          m(1, 1), 0.5 * (m(1, 2) + m(2, 1)), m(2, 2)};
-  }
-  // The stored pose covariance as a matrix: the covariance, or the lower factor.
-  Eigen::Matrix3d Stored(const PoseCovariance& c) const {
-    if (!traits_.square_root_pose()) return Full(c);
-    return (Eigen::Matrix3d() << c.xx, 0, 0, c.xy, c.yy, 0, c.xh, c.yh, c.hh).finished();
-  }
-  PoseCovariance Store(const Eigen::Matrix3d& m) const {
-    if (!traits_.square_root_pose()) return Upper(m);
-    return PoseCovariance{m(0, 0), m(1, 0), m(2, 0), m(1, 1), m(2, 1), m(2, 2)};
-  }
-
-  // Sigma <- Gv Sigma Gv^T + Gu Q Gu^T on the upper triangle, for the Jacobians' shape: Gv is
-  // the identity but for its heading column (gv(0,2), gv(1,2)) and Q is diagonal. Writing
-  // Gv = I + a e_h^T with a = (gv(0,2), gv(1,2), 0) and c = Sigma e_h, the first term is
-  // Sigma + a c^T + c a^T + Sigma_hh a a^T; the second is q_v g_v g_v^T + q_g g_g g_g^T.
-  void PropagateCovariance(const Eigen::Matrix3d& gv, const Eigen::Matrix<double, 3, 2>& gu,
-                           PoseCovariance* p) const {
-    const double ax = gv(0, 2), ay = gv(1, 2);
-    const double cx = p->xh, cy = p->yh, ch = p->hh;
-    const double qv = q_(0, 0), qg = q_(1, 1);
-    const double v0 = gu(0, 0), v1 = gu(1, 0), v2 = gu(2, 0);
-    const double g0 = gu(0, 1), g1 = gu(1, 1), g2 = gu(2, 1);
-    PoseCovariance out;
-    out.xx = p->xx + 2 * ax * cx + ch * ax * ax + qv * v0 * v0 + qg * g0 * g0;
-    out.xy = p->xy + ax * cy + cx * ay + ch * ax * ay + qv * v0 * v1 + qg * g0 * g1;
-    out.xh = p->xh + ax * ch + qv * v0 * v2 + qg * g0 * g2;
-    out.yy = p->yy + 2 * ay * cy + ch * ay * ay + qv * v1 * v1 + qg * g1 * g1;
-    out.yh = p->yh + ay * ch + qv * v1 * v2 + qg * g1 * g2;
-    out.hh = p->hh + qv * v2 * v2 + qg * g2 * g2;
-    *p = out;
-  }
-
-  // The unscented or central-difference prediction of (mean, m) over the control.
-  Status SigmaPointPredict(const ControlStep& c, Eigen::Vector3d* mean, Eigen::Matrix3d* m) const {
-    if (traits_.pose == FilterTraits::Pose::kUnscented) {
-      return UnscentedPredict(geometry_, c.v_mps, c.steer_rad, c.dt_s, control_noise_, rule_, mean,
-                              m);
-    }
-    return CentralDifferencePredict(geometry_, c.v_mps, c.steer_rad, c.dt_s, control_noise_,
-                                    config_.cd_step, mean, m);
-  }
-
-  // FastSLAM 1.0: particle `index`'s own control for step `step`, drawn from N(u, Q); false
-  // when the vehicle model cannot use the drawn steering angle.
-  bool NoisyTerms(const ControlStep& c, uint64_t step, uint32_t index, ControlTerms* u) const {
-    double v = c.v_mps, g = c.steer_rad;
-    RandomStream rs(config_.seed, step + 1, index, StreamPurpose::kMotion);
-    if (config_.sigma_speed_mps > 0) v += config_.sigma_speed_mps * rs.NextNormal();
-    if (config_.sigma_steer_rad > 0) g += config_.sigma_steer_rad * rs.NextNormal();
-    if (!SteeringUsable(geometry_, g)) return false;
-    *u = ControlTermsOf(geometry_, v, g, c.dt_s);
-    return true;
-  }
-
   Status BadSteering(size_t i) const {
     return FailedPreconditionError(fmt::format(
         "particle {}'s steering angle is outside what the {} model can use (|G| < pi/2 and "
@@ -847,63 +668,12 @@ class FastSlamModel {
         first_ + i, FastSlamVehicleName(config_.vehicle)));
   }
 
-  // ---- The filters' per-observation steps ----
-
-  // The covariance reading of a leaf.
-  Landmark CovarianceLeaf(const Landmark& leaf) const {
-    return traits_.square_root_map() ? WithCovariance(leaf) : leaf;
-  }
-  // The square-root reading of a leaf: the lower Cholesky factor of a covariance leaf (for a
-  // singular one, the triangular factor of its eigen-root).
-  Status SquareRootLeaf(const Landmark& leaf, Landmark* out) const {
-    *out = leaf;
-    if (traits_.square_root_map()) return Status::Ok();
-    Eigen::Matrix2d root;
-    if (!PsdSquareRoot<2>(Covariance(leaf), &root)) {
-      return FailedPreconditionError("the landmark covariance is not positive semi-definite");
-    }
-    SetCholeskyFactor(TriangularFactor<2, 2>(root), out);
-    return Status::Ok();
-  }
-
   // One observation's proposal step on (mu, sigma) by the filter's pose step; *w gets its
   // predictive log-likelihood.
   Status ProposalStepOf(size_t i, const LandmarkObservation& z, const Landmark& leaf,
                         Eigen::Vector3d* mu, Eigen::Matrix3d* sigma, double* w) const {
-    const RangeBearing rb{z.range_m, z.bearing_rad};
-    Status s;
-    switch (traits_.pose) {
-      case FilterTraits::Pose::kUnscented:
-        s = UnscentedProposalStep(mu, sigma, CovarianceLeaf(leaf), rb, noise_, rule_, w);
-        break;
-      case FilterTraits::Pose::kCentralDifference: {
-        Landmark root;
-        s = SquareRootLeaf(leaf, &root);
-        if (s.ok()) {
-          s = CentralDifferenceProposalStep(mu, sigma, root, rb, noise_, config_.cd_step, w);
-        }
-        break;
-      }
-      default:
-        s = ProposalStep(mu, sigma, CovarianceLeaf(leaf), rb, noise_, w);
-        break;
-    }
-    if (!s.ok()) return ParticleError(i, z, s);
-    return Status::Ok();
-  }
-
-  // A draw from N(mu, sigma) (sigma a covariance or a factor) keyed by (step, i).
-  Status Draw(uint64_t step, size_t i, const Eigen::Vector3d& mu, const Eigen::Matrix3d& sigma,
-              VehiclePose* out) const {
-    RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(first_ + i),
-                    StreamPurpose::kProposal);
-    const Eigen::Vector3d normals(rs.NextNormal(), rs.NextNormal(), rs.NextNormal());
-    Status s = traits_.square_root_pose() ? SamplePoseFromFactor(mu, sigma, normals, out)
-                                          : SamplePose(mu, sigma, normals, out);
-    if (!s.ok()) {
-      return FailedPreconditionError(
-          fmt::format("particle {}'s proposal: {}", first_ + i, s.message()));
-    }
+    Status s = steps_.ProposalStep(z, leaf, mu, sigma, w);
+    if (!s.ok()) return ParticleError(first_ + i, z, s);
     return Status::Ok();
   }
 
@@ -917,9 +687,9 @@ class FastSlamModel {
                       const std::vector<Decision>* decisions, const Eigen::Vector3d& mu,
                       const Eigen::Matrix3d& sigma, double* lw) {
     const Eigen::Vector3d prior_mu = ToVector(pose_[i]);
-    const Eigen::Matrix3d prior = Stored(cov_[i]);
+    const Eigen::Matrix3d prior = steps_.Stored(cov_[i]);
     VehiclePose x;
-    GROVE_RETURN_IF_ERROR(Draw(step, i, mu, sigma, &x));
+    GROVE_RETURN_IF_ERROR(steps_.Draw(step, first_ + i, mu, sigma, &x));
     double w = 0;
     for (size_t j = 0; j < scan.observations.size(); ++j) {
       const LandmarkObservation& z = scan.observations[j];
@@ -935,48 +705,17 @@ class FastSlamModel {
         if (l == nullptr) continue;
       }
       double ll = 0;
-      Status s = ObservationLogLikelihood(x, RangeBearing{z.range_m, z.bearing_rad}, noise_,
-                                          CovarianceLeaf(*l), &ll);
-      if (!s.ok()) return ParticleError(i, z, s);
+      Status s = ObservationLogLikelihood(x, RangeBearing{z.range_m, z.bearing_rad}, steps_.noise(),
+                                          steps_.CovarianceLeaf(*l), &ll);
+      if (!s.ok()) return ParticleError(first_ + i, z, s);
       w += ll;
     }
-    const Eigen::Vector3d xv = ToVector(x);
-    if (!(prior.diagonal().array() > 0).all() || !(sigma.diagonal().array() > 0).all()) {
-      return FailedPreconditionError(
-          fmt::format("particle {}: a pose covariance is singular: the importance ratio is not "
-                      "defined",
-                      first_ + i));
-    }
-    w += LogDensityOfFactor<3>(prior, PoseDifference(xv, prior_mu)) -
-         LogDensityOfFactor<3>(sigma, PoseDifference(xv, mu));
-    if (!std::isfinite(w)) {
-      return FailedPreconditionError(
-          fmt::format("particle {}'s importance weight is not finite", first_ + i));
-    }
+    GROVE_RETURN_IF_ERROR(steps_.AddImportanceRatio(first_ + i, prior_mu, prior, x, mu, sigma, &w));
     *lw = w;
     pose_[i] = x;
     unit_[i] = Unit{std::cos(x.heading_rad), std::sin(x.heading_rad)};
-    cov_[i] = restart_covariance();
+    cov_[i] = steps_.restart_covariance();
     return Status::Ok();
-  }
-
-  // A leaf's update by z from a known pose, by the filter's landmark step.
-  Status UpdateLeaf(const VehiclePose& pose, const RangeBearing& z, Landmark* l, double* ll) const {
-    switch (traits_.map) {
-      case FilterTraits::Map::kUnscented:
-        return UnscentedUpdateLandmark(pose, z, noise_, rule_, l, ll);
-      case FilterTraits::Map::kCentralDifference:
-        return CentralDifferenceUpdateLandmark(pose, z, noise_, config_.cd_step, l, ll);
-      default:
-        return UpdateLandmark(pose, z, noise_, l, ll);
-    }
-  }
-  // A new leaf from z seen at `pose` (U-FastSLAM initialises as the EKF does: Kim's add_feature).
-  Landmark NewLeaf(const VehiclePose& pose, const RangeBearing& z) const {
-    if (traits_.map == FilterTraits::Map::kCentralDifference) {
-      return CentralDifferenceInitLandmark(pose, z, noise_, config_.cd_step);
-    }
-    return InitLandmark(pose, z, noise_);
   }
 
   // The landmark updates of particle i's scan from its pose now.
@@ -1003,13 +742,13 @@ class FastSlamModel {
       const bool ok = trie_.Update(&maps_[i], static_cast<uint64_t>(z.id), slot,
                                    [&](Landmark& l, bool existed) {
                                      if (!existed) {
-                                       l = NewLeaf(pose, rb);
+                                       l = steps_.NewLeaf(pose, rb);
                                      } else {
-                                       s = UpdateLeaf(pose, rb, &l, &ll);
+                                       s = steps_.UpdateLeaf(pose, rb, &l, &ll);
                                      }
                                    });
-      if (!ok) return NoMemory(i, "map");
-      if (!s.ok()) return ParticleError(i, z, s);
+      if (!ok) return NoMemoryError(first_ + i, "map");
+      if (!s.ok()) return ParticleError(first_ + i, z, s);
       *log_w += ll;
     }
     return Status::Ok();
@@ -1129,8 +868,8 @@ class FastSlamModel {
   Status AdvanceUnknown(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot,
                         double* log_w) {
     Scratch& sc = scratch_[slot];
-    const bool sampled = traits_.pose == FilterTraits::Pose::kSampledMotion;
-    if (scan.observations.empty() && !traits_.draws_every_scan()) {
+    const bool sampled = traits().pose == FilterTraits::Pose::kSampledMotion;
+    if (scan.observations.empty() && !traits().draws_every_scan()) {
       // Nothing to weigh or draw; the evidence of what is in view still falls.
       if (config_.evidence == FastSlamEvidence::kOff) return Status::Ok();
       for (size_t i = begin; i < end; ++i) {
@@ -1143,7 +882,7 @@ class FastSlamModel {
       GROVE_RETURN_IF_ERROR(DecideScan(scan, i, pose_[i], &sc));
       double lw = 0;
       Eigen::Vector3d mu = ToVector(pose_[i]);
-      Eigen::Matrix3d sigma = Stored(cov_[i]);
+      Eigen::Matrix3d sigma = steps_.Stored(cov_[i]);
       for (size_t j = 0; j < sc.decisions.size(); ++j) {
         const Decision& d = sc.decisions[j];
         if (d.kind != Decision::kAssociated) {
@@ -1159,9 +898,9 @@ class FastSlamModel {
       }
       if (sampled) {
         GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
-      } else if (traits_.draws_after_resampling) {
+      } else if (traits().draws_after_resampling) {
         proposal_mu_[i] = mu;
-        proposal_sigma_[i] = Store(sigma);
+        proposal_sigma_[i] = steps_.Store(sigma);
         pending_[i] = sc.query;
         if (scan.observations.empty() && config_.evidence == FastSlamEvidence::kOn) {
           // The evidence of an empty scan is applied now, from the predicted mean (Complete()
@@ -1200,7 +939,7 @@ class FastSlamModel {
     }
     if (!trie_.Update(&maps_[i], SpatialKey(cell, k), slot,
                       [&](Landmark& leaf, bool) { leaf = l; })) {
-      return NoMemory(i, "map");
+      return NoMemoryError(first_ + i, "map");
     }
     return Status::Ok();
   }
@@ -1220,12 +959,12 @@ class FastSlamModel {
       Status s;
       int32_t tag = -1;
       const bool ok = trie_.Update(&maps_[i], d.key, slot, [&](Landmark& l, bool) {
-        s = UpdateLeaf(pose, RangeBearing{z.range_m, z.bearing_rad}, &l, nullptr);
+        s = steps_.UpdateLeaf(pose, RangeBearing{z.range_m, z.bearing_rad}, &l, nullptr);
         if (l.evidence < (1 << 30)) ++l.evidence;
         tag = l.tag;
       });
-      if (!ok) return NoMemory(i, "map");
-      if (!s.ok()) return ParticleError(i, z, s);
+      if (!ok) return NoMemoryError(first_ + i, "map");
+      if (!s.ok()) return ParticleError(first_ + i, z, s);
       ++counts.associated;
       if (z.id >= 0 && tag >= 0) {
         ++counts.tagged;
@@ -1250,10 +989,10 @@ class FastSlamModel {
               --l.evidence;
               remove = l.evidence < config_.evidence_threshold;
             })) {
-          return NoMemory(i, "map");
+          return NoMemoryError(first_ + i, "map");
         }
         if (remove) {
-          if (!trie_.Erase(&maps_[i], touched[k], slot)) return NoMemory(i, "map");
+          if (!trie_.Erase(&maps_[i], touched[k], slot)) return NoMemoryError(first_ + i, "map");
           ++counts.removed;
         }
       }
@@ -1266,14 +1005,14 @@ class FastSlamModel {
       const Landmark l = *trie_.Find(maps_[i], key);
       Cell cell;
       if (CellOf(l.x_m, l.y_m, params_.cell_m, &cell) && cell == CellOfKey(key)) continue;
-      if (!trie_.Erase(&maps_[i], key, slot)) return NoMemory(i, "map");
+      if (!trie_.Erase(&maps_[i], key, slot)) return NoMemoryError(first_ + i, "map");
       GROVE_RETURN_IF_ERROR(Insert(i, slot, l));
     }
     // 4. New landmarks.
     for (size_t j = 0; j < sc->decisions.size(); ++j) {
       if (sc->decisions[j].kind != Decision::kNew) continue;
       const LandmarkObservation& z = scan.observations[j];
-      Landmark l = NewLeaf(pose, RangeBearing{z.range_m, z.bearing_rad});
+      Landmark l = steps_.NewLeaf(pose, RangeBearing{z.range_m, z.bearing_rad});
       l.evidence = 1;
       l.tag = z.id >= 0 ? static_cast<int32_t>(z.id) : -1;
       GROVE_RETURN_IF_ERROR(Insert(i, slot, l));
@@ -1282,31 +1021,13 @@ class FastSlamModel {
     return Status::Ok();
   }
 
-  // Errors of particle i here, named by the filter's index.
-  Status NoMemory(size_t i, const char* what) const {
-    return ResourceExhaustedError(
-        fmt::format("out of memory for particle {}'s {}", first_ + i, what));
-  }
-  Status ParticleError(size_t i, const LandmarkObservation& z, const Status& s) const {
-    return Status(s.code(),
-                  fmt::format("particle {}, landmark {}: {}", first_ + i, z.id, s.message()));
-  }
-  Status ParticleStatus(size_t i, const Status& s) const {
-    return Status(s.code(), fmt::format("particle {}: {}", first_ + i, s.message()));
-  }
-
   const FastSlamConfig config_;
-  const FilterTraits traits_;
-  const VehicleGeometry geometry_;
-  const SensorNoise noise_;
-  const ControlNoise control_noise_;
-  const UnscentedRule rule_;
+  const FilterSteps steps_;
   size_t n_;                 // particles here (more after an Import(), until the next Gather())
   const uint64_t first_;     // the filter's index of particle 0 here
   const uint64_t total_;     // the filter's particles
   Collective* const ranks_;  // null: this model holds every particle
   size_t scan_size_ = 0;     // the last scan's detections (NoteScan())
-  Eigen::Matrix2d q_;
   Trie trie_;
   SegmentHistory history_;
   VersionSet<Trie> maps_;
