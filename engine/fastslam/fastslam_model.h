@@ -20,17 +20,7 @@
 //
 // The seed's family: FilterTraits and FilterSteps.
 //
-// Unknown association (config.association != kKnown): the map is keyed by SpatialKey (a
-// landmark's cell and a slot in it) instead of by id. At a scan each particle finds the
-// candidates of every detection with a range query of its own trie, decides with the gates
-// (data_association.h), adds the associated detections' likelihoods and p0 for the others, and
-// then (FastSLAM 1.0 in Advance, 2.0 in Complete from the drawn pose) updates the associated
-// landmarks, lowers the evidence of those in view and not seen (removing the ones below the
-// threshold; the view is found by the same range query as the candidates, so it is judged from
-// the pose the decisions were made from: for FastSLAM 2.0 the predicted mean), moves an updated
-// landmark whose mean left its cell to a slot of its new cell, and adds the new landmarks.
-// FastSLAM 2.0 decides from the predicted pose mean (Bailey's order); the query Advance() made is
-// kept per particle and gathered with it for Complete().
+// Unknown association (config.association != kKnown): UnknownAssociation.
 //
 // Paths: a particle does not store a pose per step. Its history holds one entry per path
 // segment: the pose and particle index at the first prediction after the start or a scan.
@@ -61,6 +51,7 @@
 #include "engine/fastslam/filter_traits.h"
 #include "engine/fastslam/landmark_math.h"
 #include "engine/fastslam/sigma_point_filters.h"
+#include "engine/fastslam/unknown_association.h"
 #include "engine/fastslam/vehicle_model.h"
 #include "engine/filter/generation.h"
 #include "engine/filter/particle_filter.h"
@@ -107,18 +98,7 @@ class FastSlamModel {
         history_(slots),
         maps_(&trie_, n_),
         paths_(&history_, n_),
-        ml_(config.association != FastSlamAssociation::kKnown),
-        params_{FastSlamGateDistance2(config.reject_gate, config.gate_unit),
-                FastSlamGateDistance2(config.augment_gate, config.gate_unit),
-                config.association == FastSlamAssociation::kExclusive,
-                config.index_cell_m,
-                steps_.noise(),
-                steps_.traits().square_root_map(),
-                steps_.traits().map == FilterTraits::Map::kCentralDifference ? config.cd_step : 0},
-        log_p0_(NewLandmarkLogLikelihood(steps_.noise(), params_.augment_gate)),
-        counts_(ml_ ? n_ : 0),
-        pending_(ml_ && steps_.traits().draws_after_resampling ? n_ : 0),
-        scratch_(slots) {
+        association_(config, steps_.traits(), n_, first_, slots) {
     const VehiclePose start{config.start_x_m, config.start_y_m,
                             WrapAngle(config.start_heading_rad)};
     pose_.assign(n_, start);
@@ -135,19 +115,16 @@ class FastSlamModel {
   const FilterTraits& traits() const { return steps_.traits(); }
   const FilterSteps& steps() const { return steps_; }
 
-  // Before each scan's update: the longest range so far bounds the landmarks' covariances
-  // (SearchRadius()).
-  void NoteScan(const ScanStep& scan) {
-    for (const LandmarkObservation& z : scan.observations)
-      max_range_ = std::max(max_range_, z.range_m);
-    scan_size_ = scan.observations.size();
-  }
-  bool unknown_association() const { return ml_; }
+  // Before each scan's update (UnknownAssociation::NoteScan()).
+  void NoteScan(const ScanStep& scan) { association_.NoteScan(scan); }
+  bool unknown_association() const { return association_.active(); }
   // Unknown association: stores `l` in particle i's map as a new landmark would be (benchmarks
-  // build big maps with it). REQUIRES: ml_, and l's covariance within the bound SearchRadius()
-  // assumes for the ranges NoteScan() has seen.
-  Status InsertLandmark(size_t i, const Landmark& l, int slot) { return Insert(i, slot, l); }
-  const AssociationCounts& counts(size_t i) const { return counts_[i]; }
+  // build big maps with it). REQUIRES: unknown_association(), and l's covariance within the
+  // bound SearchRadius() assumes for the ranges NoteScan() has seen.
+  Status InsertLandmark(size_t i, const Landmark& l, int slot) {
+    return association_.Insert(&trie_, &maps_[i], i, slot, l);
+  }
+  const AssociationCounts& counts(size_t i) const { return association_.counts(i); }
   const EvolutionCounts& evolution_counts() const { return evolution_; }
 
   // The next Predict() is the first of a path segment (after the start or a scan).
@@ -223,7 +200,7 @@ class FastSlamModel {
   // the landmark updates.
   Status Advance(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot,
                  double* log_w) {
-    if (ml_) return AdvanceUnknown(scan, step, begin, end, slot, log_w);
+    if (association_.active()) return AdvanceUnknown(scan, step, begin, end, slot, log_w);
     if (scan.observations.empty() && !traits().draws_every_scan()) return Status::Ok();
     for (size_t i = begin; i < end; ++i) {
       double lw = 0;
@@ -369,11 +346,8 @@ class FastSlamModel {
           Innovation(RangeBearing{z.range_m, z.bearing_rad}, Observe(pose, l.x_m, l.y_m));
       f -= 0.5 * (v(0) * v(0) / r(0, 0) + v(1) * v(1) / r(1, 1));
     };
-    if (ml_) {
-      Scratch& sc = scratch_[slot];
-      std::vector<Decision>& decisions = sc.decisions;
-      sc.query.matches = pending_[i].matches;  // Decide() reorders them
-      Decide(sc.query.matches, scan.observations.size(), params_, &decisions);
+    if (association_.active()) {
+      const std::vector<Decision>& decisions = association_.PendingDecisions(scan, i, slot);
       for (size_t j = 0; j < decisions.size(); ++j) {
         if (decisions[j].kind != Decision::kAssociated) continue;
         add(scan.observations[j], *trie_.Find(maps_[i], decisions[j].key));
@@ -395,8 +369,7 @@ class FastSlamModel {
       GatherValues(parents, workers, &proposal_mu_);
       GatherValues(parents, workers, &proposal_sigma_);
     }
-    if (ml_) GatherValues(parents, workers, &counts_);
-    if (!pending_.empty()) GatherValues(parents, workers, &pending_);
+    association_.Gather(parents, workers);
     maps_.Gather(parents, workers);
     paths_.Gather(parents, workers);
     n_ = parents.size();  // imported particles were named by parents or are dropped
@@ -441,8 +414,7 @@ class FastSlamModel {
     w->PutBytes(cov_.data(), n_ * sizeof(PoseCovariance));
     w->PutBytes(unit_.data(), n_ * sizeof(Unit));
     w->Put<uint8_t>(segment_start_ ? 1 : 0);
-    w->Put<double>(max_range_);
-    w->PutBytes(counts_.data(), counts_.size() * sizeof(AssociationCounts));
+    association_.Save(w);
     w->Put<int64_t>(evolution_.trials);
     w->Put<int64_t>(evolution_.accepted);
     trie_.Save(maps_.roots(), w);
@@ -464,15 +436,8 @@ class FastSlamModel {
     uint8_t segment = 0;
     GROVE_RETURN_IF_ERROR(r->Get("segment flag", &segment));
     if (segment > 1) return r->Error("segment flag", "not 0 or 1");
-    double max_range = 0;
-    GROVE_RETURN_IF_ERROR(r->Get("longest range", &max_range));
-    if (!(max_range >= 0) || !std::isfinite(max_range)) {
-      return r->Error("longest range", "negative or not finite");
-    }
-    std::vector<AssociationCounts> counts(counts_.size());
-    GROVE_RETURN_IF_ERROR(r->GetBytes("association counts", counts.data(),
-                                      counts.size() * sizeof(AssociationCounts)));
-    for (const AssociationCounts& c : counts) GROVE_RETURN_IF_ERROR(CheckCounts(r, c));
+    typename UnknownAssociation<Trie>::Saved association;
+    GROVE_RETURN_IF_ERROR(association_.Read(r, &association));
     EvolutionCounts evolution;
     GROVE_RETURN_IF_ERROR(r->Get("evolution trials", &evolution.trials));
     GROVE_RETURN_IF_ERROR(r->Get("evolution accepted", &evolution.accepted));
@@ -505,8 +470,7 @@ class FastSlamModel {
     cov_.swap(cov);
     unit_.swap(unit);
     segment_start_ = segment == 1;
-    max_range_ = max_range;
-    counts_.swap(counts);
+    association_.Restore(&association);
     evolution_ = evolution;
     maps_.Replace(std::move(roots));
     paths_.Replace(std::move(heads));
@@ -525,26 +489,7 @@ class FastSlamModel {
         w->Put(proposal_sigma_[i]);
       }
     }
-    if (ml_) {
-      for (uint32_t i : which) w->Put(counts_[i]);
-    }
-    if (!pending_.empty()) {
-      // An empty scan's query is not used after Advance() (and its view may name landmarks its
-      // evidence removed): none is sent.
-      const ScanQuery none;
-      for (uint32_t i : which) {
-        const ScanQuery& q = scan_size_ > 0 ? pending_[i] : none;
-        w->Put<uint64_t>(q.matches.size());
-        for (const Match& m : q.matches) {
-          w->Put<uint32_t>(m.detection);
-          w->Put<uint64_t>(m.key);
-          w->Put<double>(m.log_likelihood);
-          w->Put<double>(m.d2);
-        }
-        w->Put<uint64_t>(q.in_view.size());
-        w->PutBytes(q.in_view.data(), q.in_view.size() * sizeof(uint64_t));
-      }
-    }
+    association_.Export(which, w);
     SegmentHistory::Save(paths_.Pick(which), w);
     trie_.Save(maps_.Pick(which), w);
   }
@@ -582,16 +527,7 @@ class FastSlamModel {
         }
       }
     }
-    if (ml_) {
-      counts_.resize(end);
-      GROVE_RETURN_IF_ERROR(r->GetBytes("association counts", counts_.data() + at,
-                                        count * sizeof(AssociationCounts)));
-      for (size_t i = at; i < end; ++i) GROVE_RETURN_IF_ERROR(CheckCounts(r, counts_[i]));
-    }
-    if (!pending_.empty()) {
-      pending_.resize(end);
-      for (size_t i = at; i < end; ++i) GROVE_RETURN_IF_ERROR(ReadQuery(r, &pending_[i]));
-    }
+    GROVE_RETURN_IF_ERROR(association_.Import(r, at, count));
     std::vector<SegmentHistory::Node*> heads;
     GROVE_RETURN_IF_ERROR(
         history_.Load(r, count, static_cast<uint32_t>(steps), 0, &ValidSegmentStart, &heads));
@@ -604,16 +540,7 @@ class FastSlamModel {
     }
     if (s.ok()) s = trie_.Load(r, count, 0, &ValidLandmark, &roots);
     // The pending matches and views name landmarks of the particle's own map.
-    for (size_t k = 0; k < count && s.ok() && !pending_.empty(); ++k) {
-      const ScanQuery& q = pending_[at + k];
-      auto known = [&](uint64_t key) { return trie_.Find(roots[k], key) != nullptr; };
-      for (const Match& m : q.matches) {
-        if (!known(m.key)) s = r->Error("matches", "a match names a landmark not in the map");
-      }
-      for (uint64_t key : q.in_view) {
-        if (!known(key)) s = r->Error("view", "a landmark in view is not in the map");
-      }
-    }
+    if (s.ok()) s = association_.CheckImported(r, trie_, roots, at);
     if (!s.ok()) {
       for (auto* h : heads) history_.Release(h, 0);
       for (auto* root : roots) trie_.Release(root, 0);
@@ -648,14 +575,6 @@ class FastSlamModel {
     }
     return Status::Ok();
   }
-  static Status CheckCounts(ByteReader* r, const AssociationCounts& c) {
-    for (int64_t v :
-         {c.associated, c.created, c.ignored, c.removed, c.dropped, c.tagged, c.wrong}) {
-      if (v < 0) return r->Error("association counts", "a count is negative");
-    }
-    return Status::Ok();
-  }
-
   static bool ValidLandmark(const Landmark& l) {
     return std::isfinite(l.x_m) && std::isfinite(l.y_m) && std::isfinite(l.xx) &&
            std::isfinite(l.xy) && std::isfinite(l.yy) && l.xx >= 0 && l.yy >= 0 && l.tag >= -1;
@@ -696,7 +615,7 @@ class FastSlamModel {
       const Landmark* l = nullptr;
       if (decisions != nullptr) {
         if ((*decisions)[j].kind != Decision::kAssociated) {
-          w += log_p0_;
+          w += association_.log_p0();
           continue;
         }
         l = trie_.Find(maps_[i], (*decisions)[j].key);
@@ -720,12 +639,8 @@ class FastSlamModel {
 
   // The landmark updates of particle i's scan from its pose now.
   Status UpdateMap(const ScanStep& scan, size_t i, int slot) {
-    if (ml_) {
-      // The matches Advance() found from the predicted mean (a copy has its parent's).
-      Scratch& sc = scratch_[slot];
-      sc.query = pending_[i];
-      Decide(sc.query.matches, scan.observations.size(), params_, &sc.decisions);
-      return ApplyScan(scan, i, slot, &sc);
+    if (association_.active()) {
+      return association_.ApplyPending(steps_, &trie_, &maps_[i], scan, i, pose_[i], slot);
     }
     double unused = 0;
     return UpdateLandmarks(scan, i, slot, &unused);
@@ -810,83 +725,32 @@ class FastSlamModel {
     return VehiclePose{u[0], u[1], WrapAngle(u[2])};
   }
 
-  // ---- Unknown association ----
+  using Scratch = typename UnknownAssociation<Trie>::Scratch;
 
-  // What one range query found for a particle's scan: the pairs within an augment gate and,
-  // with the evidence on, the landmarks in view.
-  struct ScanQuery {
-    std::vector<Match> matches;
-    std::vector<uint64_t> in_view;  // increasing
-  };
-  // A worker slot's buffers, reused from particle to particle.
-  struct alignas(kFalseSharingBytes) Scratch {
-    ScanQuery query;
-    std::vector<Decision> decisions;
-    std::vector<uint64_t> keys;
-    std::vector<DetectionProbe> probes;
-  };
-
-  // A pending ScanQuery as Export() writes it: matches of this scan's detections, the view's
-  // keys increasing (their landmarks are checked against the map once it is read).
-  Status ReadQuery(ByteReader* r, ScanQuery* q) const {
-    constexpr size_t kMatchBytes = sizeof(uint32_t) + sizeof(uint64_t) + 2 * sizeof(double);
-    uint64_t count = 0;
-    GROVE_RETURN_IF_ERROR(r->GetCount("match count", kMatchBytes, &count));
-    q->matches.resize(count);
-    for (Match& m : q->matches) {
-      GROVE_RETURN_IF_ERROR(r->Get("match detection", &m.detection));
-      GROVE_RETURN_IF_ERROR(r->Get("match key", &m.key));
-      GROVE_RETURN_IF_ERROR(r->Get("match likelihood", &m.log_likelihood));
-      GROVE_RETURN_IF_ERROR(r->Get("match distance", &m.d2));
-      if (m.detection >= scan_size_ || std::isnan(m.log_likelihood) || !(m.d2 >= 0)) {
-        return r->Error("matches", "a detection that is not the scan's, or a bad likelihood");
-      }
-    }
-    GROVE_RETURN_IF_ERROR(r->GetCount("view count", sizeof(uint64_t), &count));
-    q->in_view.resize(count);
-    GROVE_RETURN_IF_ERROR(r->GetBytes("view", q->in_view.data(), count * sizeof(uint64_t)));
-    for (size_t k = 1; k < count; ++k) {
-      if (q->in_view[k] <= q->in_view[k - 1]) return r->Error("view", "keys not increasing");
-    }
-    return Status::Ok();
-  }
-
-  // The query and decisions of particle i's scan seen from `pose`, into sc.
-  Status DecideScan(const ScanStep& scan, size_t i, const VehiclePose& pose, Scratch* sc) const {
-    sc->query.matches.clear();
-    sc->query.in_view.clear();
-    const SensorView view{config_.sensor_range_m, config_.sensor_fov_rad};
-    const bool evidence = config_.evidence == FastSlamEvidence::kOn;
-    Status s = FindMatches(trie_, maps_[i], pose, scan.observations, params_, max_range_,
-                           /*use_index=*/true, &sc->query.matches, &sc->probes,
-                           evidence ? &view : nullptr, &sc->query.in_view);
-    if (!s.ok()) return Status(s.code(), fmt::format("particle {}, {}", first_ + i, s.message()));
-    Decide(sc->query.matches, scan.observations.size(), params_, &sc->decisions);
-    return Status::Ok();
-  }
-
+  // Unknown association's Advance(): particle by particle, the decisions from its pose now,
+  // the weight, and (but for the filters that draw after resampling) the map changes.
   Status AdvanceUnknown(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot,
                         double* log_w) {
-    Scratch& sc = scratch_[slot];
+    Scratch& sc = association_.scratch(slot);
     const bool sampled = traits().pose == FilterTraits::Pose::kSampledMotion;
     if (scan.observations.empty() && !traits().draws_every_scan()) {
       // Nothing to weigh or draw; the evidence of what is in view still falls.
-      if (config_.evidence == FastSlamEvidence::kOff) return Status::Ok();
+      if (!association_.evidence()) return Status::Ok();
       for (size_t i = begin; i < end; ++i) {
-        GROVE_RETURN_IF_ERROR(DecideScan(scan, i, pose_[i], &sc));
+        GROVE_RETURN_IF_ERROR(DecideScan(scan, i, &sc));
         GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
       }
       return Status::Ok();
     }
     for (size_t i = begin; i < end; ++i) {
-      GROVE_RETURN_IF_ERROR(DecideScan(scan, i, pose_[i], &sc));
+      GROVE_RETURN_IF_ERROR(DecideScan(scan, i, &sc));
       double lw = 0;
       Eigen::Vector3d mu = ToVector(pose_[i]);
       Eigen::Matrix3d sigma = steps_.Stored(cov_[i]);
       for (size_t j = 0; j < sc.decisions.size(); ++j) {
         const Decision& d = sc.decisions[j];
         if (d.kind != Decision::kAssociated) {
-          lw += log_p0_;
+          lw += association_.log_p0();
         } else if (sampled) {
           lw += d.log_likelihood;
         } else {
@@ -901,8 +765,8 @@ class FastSlamModel {
       } else if (traits().draws_after_resampling) {
         proposal_mu_[i] = mu;
         proposal_sigma_[i] = steps_.Store(sigma);
-        pending_[i] = sc.query;
-        if (scan.observations.empty() && config_.evidence == FastSlamEvidence::kOn) {
+        association_.KeepQuery(i, sc);
+        if (scan.observations.empty() && association_.evidence()) {
           // The evidence of an empty scan is applied now, from the predicted mean (Complete()
           // only draws).
           GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
@@ -916,109 +780,13 @@ class FastSlamModel {
     return Status::Ok();
   }
 
-  // The first free slot of `cell` in particle i's map, or -1.
-  int FreeSlot(size_t i, const Cell& cell) const {
-    for (int k = 0; k < kSlotsPerCell; ++k) {
-      if (trie_.Find(maps_[i], SpatialKey(cell, k)) == nullptr) return k;
-    }
-    return -1;
+  // Unknown association: particle i's query and decisions from its pose now, into sc.
+  Status DecideScan(const ScanStep& scan, size_t i, Scratch* sc) const {
+    return association_.DecideScan(trie_, maps_[i], scan, i, pose_[i], sc);
   }
-
-  // Stores `l` in a free slot of the cell of its mean; counts a drop when the cell is full.
-  Status Insert(size_t i, int slot, const Landmark& l) {
-    Cell cell;
-    if (!CellOf(l.x_m, l.y_m, params_.cell_m, &cell)) {
-      return FailedPreconditionError(fmt::format(
-          "particle {}: a landmark at ({}, {}) is outside the landmark index (|x|, |y| < {} m)",
-          first_ + i, l.x_m, l.y_m, static_cast<double>(kMaxCell) * params_.cell_m));
-    }
-    const int k = FreeSlot(i, cell);
-    if (k < 0) {
-      ++counts_[i].dropped;
-      return Status::Ok();
-    }
-    if (!trie_.Update(&maps_[i], SpatialKey(cell, k), slot,
-                      [&](Landmark& leaf, bool) { leaf = l; })) {
-      return NoMemoryError(first_ + i, "map");
-    }
-    return Status::Ok();
-  }
-  // Applies particle i's decisions in sc from its pose now (the view in sc is the one the
-  // decisions were made from; see the file comment).
+  // Unknown association: applies particle i's decisions in sc from its pose now.
   Status ApplyScan(const ScanStep& scan, size_t i, int slot, Scratch* sc) {
-    const VehiclePose pose = pose_[i];
-    AssociationCounts& counts = counts_[i];
-    std::vector<uint64_t>& touched = sc->keys;
-    touched.clear();
-    // 1. Updates of the associated landmarks.
-    for (size_t j = 0; j < sc->decisions.size(); ++j) {
-      const Decision& d = sc->decisions[j];
-      const LandmarkObservation& z = scan.observations[j];
-      if (d.kind == Decision::kIgnored) ++counts.ignored;
-      if (d.kind != Decision::kAssociated) continue;
-      Status s;
-      int32_t tag = -1;
-      const bool ok = trie_.Update(&maps_[i], d.key, slot, [&](Landmark& l, bool) {
-        s = steps_.UpdateLeaf(pose, RangeBearing{z.range_m, z.bearing_rad}, &l, nullptr);
-        if (l.evidence < (1 << 30)) ++l.evidence;
-        tag = l.tag;
-      });
-      if (!ok) return NoMemoryError(first_ + i, "map");
-      if (!s.ok()) return ParticleError(first_ + i, z, s);
-      ++counts.associated;
-      if (z.id >= 0 && tag >= 0) {
-        ++counts.tagged;
-        counts.wrong += tag != z.id;
-      }
-      touched.push_back(d.key);
-    }
-    // 2. Evidence of the landmarks in view and not seen: near no detection's augment gate.
-    if (config_.evidence == FastSlamEvidence::kOn) {
-      std::vector<Match>& near = sc->query.matches;  // every pair within an augment gate
-      std::sort(near.begin(), near.end(),
-                [](const Match& a, const Match& b) { return a.key < b.key; });
-      const size_t first_missed = touched.size();
-      for (uint64_t key : sc->query.in_view) {
-        auto it = std::lower_bound(near.begin(), near.end(), key,
-                                   [](const Match& m, uint64_t k) { return m.key < k; });
-        if (it == near.end() || it->key != key) touched.push_back(key);
-      }
-      for (size_t k = first_missed; k < touched.size(); ++k) {
-        bool remove = false;
-        if (!trie_.Update(&maps_[i], touched[k], slot, [&](Landmark& l, bool) {
-              --l.evidence;
-              remove = l.evidence < config_.evidence_threshold;
-            })) {
-          return NoMemoryError(first_ + i, "map");
-        }
-        if (remove) {
-          if (!trie_.Erase(&maps_[i], touched[k], slot)) return NoMemoryError(first_ + i, "map");
-          ++counts.removed;
-        }
-      }
-      touched.resize(first_missed);
-    }
-    // 3. An updated landmark whose mean left its cell moves to a slot of its new cell.
-    std::sort(touched.begin(), touched.end());
-    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-    for (uint64_t key : touched) {
-      const Landmark l = *trie_.Find(maps_[i], key);
-      Cell cell;
-      if (CellOf(l.x_m, l.y_m, params_.cell_m, &cell) && cell == CellOfKey(key)) continue;
-      if (!trie_.Erase(&maps_[i], key, slot)) return NoMemoryError(first_ + i, "map");
-      GROVE_RETURN_IF_ERROR(Insert(i, slot, l));
-    }
-    // 4. New landmarks.
-    for (size_t j = 0; j < sc->decisions.size(); ++j) {
-      if (sc->decisions[j].kind != Decision::kNew) continue;
-      const LandmarkObservation& z = scan.observations[j];
-      Landmark l = steps_.NewLeaf(pose, RangeBearing{z.range_m, z.bearing_rad});
-      l.evidence = 1;
-      l.tag = z.id >= 0 ? static_cast<int32_t>(z.id) : -1;
-      GROVE_RETURN_IF_ERROR(Insert(i, slot, l));
-      ++counts.created;
-    }
-    return Status::Ok();
+    return association_.ApplyScan(steps_, &trie_, &maps_[i], scan, i, pose_[i], slot, sc);
   }
 
   const FastSlamConfig config_;
@@ -1027,7 +795,6 @@ class FastSlamModel {
   const uint64_t first_;     // the filter's index of particle 0 here
   const uint64_t total_;     // the filter's particles
   Collective* const ranks_;  // null: this model holds every particle
-  size_t scan_size_ = 0;     // the last scan's detections (NoteScan())
   Trie trie_;
   SegmentHistory history_;
   VersionSet<Trie> maps_;
@@ -1044,15 +811,7 @@ class FastSlamModel {
   EvolutionCounts evolution_;
   std::vector<Status> batch_status_;
   bool segment_start_ = true;
-  // Unknown association.
-  const bool ml_;
-  const AssociationParams params_;
-  const double log_p0_;
-  double max_range_ = 0;                   // the longest detection range so far
-  std::vector<AssociationCounts> counts_;  // per particle, along its ancestry
-  // Each particle's matches of the current scan, from Advance() to Complete().
-  std::vector<ScanQuery> pending_;
-  mutable std::vector<Scratch> scratch_;  // per worker slot: buffers, not state
+  UnknownAssociation<Trie> association_;
 };
 
 }  // namespace grove::fastslam
