@@ -2,13 +2,12 @@
 // over the degree of its landmark trees.
 //
 // Per particle (structure of arrays): the vehicle pose and its unit heading vector, FastSLAM
-// 2.0's pose covariance, the map (a version of a PersistentTrie keyed by landmark id, leaves
-// holding a landmark Gaussian) and the path history.
+// 2.0's pose covariance (ParticlePoses), the map (a version of a PersistentTrie keyed by landmark
+// id, leaves holding a landmark Gaussian) and the path history.
 //
-// Steps:
+// Steps (each filter's pose and landmark steps: FilterTraits, FilterSteps):
 //   Predict(ControlStep): FastSLAM 1.0 draws the particle's own control from N(u, Q) and moves;
-//     FastSLAM 2.0 moves the mean with the control and propagates the pose covariance,
-//     Sigma' = Gv Sigma Gv^T + Gu Q Gu^T.
+//     FastSLAM 2.0 moves the mean with the control and propagates the pose covariance.
 //   Advance(ScanStep): FastSLAM 1.0 adds log N(v; 0, S) of each observation of a known
 //     landmark and updates it (EKF, Joseph form); FastSLAM 2.0 refines the pose mean and
 //     covariance by each observation of a known landmark and adds each one's predictive
@@ -17,26 +16,24 @@
 //     pose from it (its covariance then starts again at 0) and the landmark updates from the
 //     drawn pose. Copies of one parent draw distinct poses (Bailey's order: resample, then
 //     sample). Both filters initialise new landmarks from the pose.
-//
-// The seed's family: FilterTraits and FilterSteps.
-//
-// Unknown association (config.association != kKnown): UnknownAssociation.
+//   Population(ScanStep), after Complete(): differential evolution (DifferentialEvolution), then
+//     the landmark updates from the moved poses.
+// Under unknown association (config.association != kKnown) the map is keyed by SpatialKey and
+// each scan's decisions and map changes are UnknownAssociation's.
 //
 // Paths: a particle does not store a pose per step. Its history holds one entry per path
 // segment: the pose and particle index at the first prediction after the start or a scan.
 // Within a segment a particle keeps its index (resampling happens only at scans), so its poses
-// there are the same predictions redone from the segment's start (PredictPose() draws the same
-// numbers from the counter-based streams). The pose after a segment's closing scan is the next
-// entry's start pose. A path thus costs one node per scan, not one per control step, and the
-// histories of copies share their common part (Ancestry).
+// there are the same predictions redone from the segment's start (FilterSteps::PredictPose()
+// draws the same numbers from the counter-based streams). The pose after a segment's closing
+// scan is the next entry's start pose. A path thus costs one node per scan, not one per control
+// step, and the histories of copies share their common part (Ancestry).
 #ifndef GROVE_ENGINE_FASTSLAM_FASTSLAM_MODEL_H_
 #define GROVE_ENGINE_FASTSLAM_FASTSLAM_MODEL_H_
 
 #include <fmt/format.h>
 
 #include <Eigen/Core>
-#include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -44,16 +41,15 @@
 #include <string>
 #include <vector>
 
-#include "concurrency/random_stream.h"
 #include "concurrency/worker_pool.h"
 #include "engine/fastslam/data_association.h"
+#include "engine/fastslam/differential_evolution.h"
 #include "engine/fastslam/filter_steps.h"
 #include "engine/fastslam/filter_traits.h"
 #include "engine/fastslam/landmark_math.h"
-#include "engine/fastslam/sigma_point_filters.h"
+#include "engine/fastslam/particle_poses.h"
 #include "engine/fastslam/unknown_association.h"
 #include "engine/fastslam/vehicle_model.h"
-#include "engine/filter/generation.h"
 #include "engine/filter/particle_filter.h"
 #include "engine/io/checkpoint_io.h"
 #include "engine/persistent/ancestry.h"
@@ -93,23 +89,15 @@ class FastSlamModel {
         n_(ranks == nullptr ? static_cast<size_t>(config.particles) : share.count),
         first_(ranks == nullptr ? 0 : share.first),
         total_(static_cast<uint64_t>(config.particles)),
-        ranks_(ranks),
         trie_(1, slots),
         history_(slots),
         maps_(&trie_, n_),
         paths_(&history_, n_),
-        association_(config, steps_.traits(), n_, first_, slots) {
-    const VehiclePose start{config.start_x_m, config.start_y_m,
-                            WrapAngle(config.start_heading_rad)};
-    pose_.assign(n_, start);
-    unit_.assign(n_, Unit{std::cos(start.heading_rad), std::sin(start.heading_rad)});
-    cov_.assign(n_, steps_.restart_covariance());
-    if (traits().draws_after_resampling) {
-      proposal_mu_.resize(n_);
-      proposal_sigma_.resize(n_);
-    }
-    if (traits().evolution) fitness_.resize(n_);
-  }
+        poses_(n_,
+               VehiclePose{config.start_x_m, config.start_y_m, WrapAngle(config.start_heading_rad)},
+               steps_.restart_covariance(), steps_.traits().draws_after_resampling),
+        association_(config, steps_.traits(), n_, first_, slots),
+        evolution_(config, steps_.traits().evolution, n_, first_, ranks) {}
 
   size_t size() const { return n_; }
   const FilterTraits& traits() const { return steps_.traits(); }
@@ -125,26 +113,29 @@ class FastSlamModel {
     return association_.Insert(&trie_, &maps_[i], i, slot, l);
   }
   const AssociationCounts& counts(size_t i) const { return association_.counts(i); }
-  const EvolutionCounts& evolution_counts() const { return evolution_; }
+  const EvolutionCounts& evolution_counts() const { return evolution_.counts(); }
 
   // The next Predict() is the first of a path segment (after the start or a scan).
   void set_segment_start(bool v) { segment_start_ = v; }
 
+  // The prediction of particles [begin, end) over control c (FilterSteps::PredictPose() redoes
+  // one of them).
   Status Predict(const ControlStep& c, uint64_t step, size_t begin, size_t end, int slot) {
     const bool ekf = traits().pose == FilterTraits::Pose::kEkf;
     const bool sigma_points = traits().draws_every_scan();
-    if ((ekf || sigma_points) && !SteeringUsable(steps_.geometry(), c.steer_rad)) {
+    const VehicleGeometry& geometry = steps_.geometry();
+    if ((ekf || sigma_points) && !SteeringUsable(geometry, c.steer_rad)) {
       return BadSteering(begin);
     }
     // FastSLAM 2.0 moves every particle with the same control: its terms once per batch.
     ControlTerms shared;
-    Unit turn{1, 0};
+    HeadingUnit turn{1, 0};
     if (ekf) {
-      shared = ControlTermsOf(steps_.geometry(), c.v_mps, c.steer_rad, c.dt_s);
-      turn = Unit{std::cos(shared.turn_rad), std::sin(shared.turn_rad)};
+      shared = ControlTermsOf(geometry, c.v_mps, c.steer_rad, c.dt_s);
+      turn = HeadingUnit{std::cos(shared.turn_rad), std::sin(shared.turn_rad)};
     }
     for (size_t i = begin; i < end; ++i) {
-      const VehiclePose p = pose_[i];
+      const VehiclePose p = poses_.pose(i);
       if (segment_start_) {
         SegmentStart s{p.x_m, p.y_m, p.heading_rad, static_cast<uint32_t>(first_ + i), 0};
         SegmentHistory::Node* node =
@@ -155,11 +146,11 @@ class FastSlamModel {
       VehiclePose next;
       if (sigma_points) {
         Eigen::Vector3d mean = ToVector(p);
-        Eigen::Matrix3d m = steps_.Stored(cov_[i]);
+        Eigen::Matrix3d m = steps_.Stored(poses_.cov(i));
         Status s = steps_.SigmaPointPredict(c, &mean, &m);
         if (!s.ok()) return ParticleStatus(first_ + i, s);
         next = ToPose(mean);
-        cov_[i] = steps_.Store(m);
+        poses_.cov(i) = steps_.Store(m);
       } else {
         ControlTerms own;
         if (!ekf && !steps_.NoisyTerms(c, step, static_cast<uint32_t>(first_ + i), &own)) {
@@ -167,12 +158,12 @@ class FastSlamModel {
         }
         const ControlTerms& u = ekf ? shared : own;
         StepTrig trig;
-        next = MoveVehicle(steps_.geometry(), u, p, &trig);
+        next = MoveVehicle(geometry, u, p, &trig);
         if (ekf) {
           Eigen::Matrix3d gv;
           Eigen::Matrix<double, 3, 2> gu;
-          VehicleJacobians(steps_.geometry(), u, trig, &gv, &gu);
-          steps_.PropagateCovariance(gv, gu, &cov_[i]);
+          VehicleJacobians(geometry, u, trig, &gv, &gu);
+          steps_.PropagateCovariance(gv, gu, &poses_.cov(i));
         }
       }
       if (!std::isfinite(next.x_m) || !std::isfinite(next.y_m) ||
@@ -181,14 +172,14 @@ class FastSlamModel {
                                                    first_ + i, next.x_m, next.y_m,
                                                    next.heading_rad));
       }
-      pose_[i] = next;
+      poses_.pose(i) = next;
       if (ekf) {
         // The heading turns by the same angle for every particle: rotate its unit vector (only
         // the mean pose reads it) instead of a sine and cosine per particle.
-        const Unit& h = unit_[i];
-        unit_[i] = Unit{h.c * turn.c - h.s * turn.s, h.s * turn.c + h.c * turn.s};
+        const HeadingUnit& h = poses_.unit(i);
+        poses_.unit(i) = HeadingUnit{h.c * turn.c - h.s * turn.s, h.s * turn.c + h.c * turn.s};
       } else {
-        unit_[i] = Unit{std::cos(next.heading_rad), std::sin(next.heading_rad)};
+        poses_.unit(i) = HeadingUnit{std::cos(next.heading_rad), std::sin(next.heading_rad)};
       }
     }
     return Status::Ok();
@@ -207,8 +198,8 @@ class FastSlamModel {
       if (traits().pose == FilterTraits::Pose::kSampledMotion) {
         GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &lw));
       } else {
-        Eigen::Vector3d mu = ToVector(pose_[i]);
-        Eigen::Matrix3d sigma = steps_.Stored(cov_[i]);
+        Eigen::Vector3d mu = ToVector(poses_.pose(i));
+        Eigen::Matrix3d sigma = steps_.Stored(poses_.cov(i));
         for (const LandmarkObservation& z : scan.observations) {
           const Landmark* l = trie_.Find(maps_[i], static_cast<uint64_t>(z.id));
           if (l == nullptr) continue;
@@ -217,8 +208,8 @@ class FastSlamModel {
           lw += w;
         }
         if (traits().draws_after_resampling) {
-          proposal_mu_[i] = mu;
-          proposal_sigma_[i] = steps_.Store(sigma);
+          poses_.proposal_mu(i) = mu;
+          poses_.proposal_sigma(i) = steps_.Store(sigma);
         } else {
           // The importance ratio replaces the predictive likelihood.
           GROVE_RETURN_IF_ERROR(DrawAndWeigh(scan, step, i, nullptr, mu, sigma, &lw));
@@ -238,10 +229,11 @@ class FastSlamModel {
     if (!traits().draws_after_resampling) return Status::Ok();
     if (scan.observations.empty() && !traits().draws_every_scan()) return Status::Ok();
     for (size_t i = begin; i < end; ++i) {
-      GROVE_RETURN_IF_ERROR(steps_.Draw(step, first_ + i, proposal_mu_[i],
-                                        steps_.Stored(proposal_sigma_[i]), &pose_[i]));
-      unit_[i] = Unit{std::cos(pose_[i].heading_rad), std::sin(pose_[i].heading_rad)};
-      cov_[i] = steps_.restart_covariance();
+      VehiclePose& pose = poses_.pose(i);
+      GROVE_RETURN_IF_ERROR(steps_.Draw(step, first_ + i, poses_.proposal_mu(i),
+                                        steps_.Stored(poses_.proposal_sigma(i)), &pose));
+      poses_.unit(i) = HeadingUnit{std::cos(pose.heading_rad), std::sin(pose.heading_rad)};
+      poses_.cov(i) = steps_.restart_covariance();
       if (traits().evolution || scan.observations.empty()) continue;
       GROVE_RETURN_IF_ERROR(UpdateMap(scan, i, slot));
     }
@@ -249,81 +241,20 @@ class FastSlamModel {
   }
 
   // Differential evolution (kDeSrcd) over the drawn poses, then their landmark updates; nothing
-  // for the other filters. DE/best/1/bin (Storn and Price; the seed's Eqs. 29-31): for each
-  // generation, each particle i forms the trial u from the mutant v = x_best + F (x_r1 - x_r2)
-  // (r1, r2 distinct and not i) by binomial crossover (coordinate j from v when a uniform draw is
-  // below Cr or j = j_rand, else from x_i), and u replaces x_i when its fitness is strictly
-  // higher. The fitness (Eq. 32) is log exp(-1/2 sum_j v_j^T R^-1 v_j) over the scan's
-  // observations of landmarks in particle i's own map (its associations under unknown
-  // association), v_j = z_j - h(x, landmark mean). Generations are synchronous (every trial is
-  // formed from the generation's poses), every draw comes from the stream (seed, step, particle,
-  // kDifferentialEvolution + 256 generation): the same at any thread count. With fewer than 3
-  // particles there are no r1, r2, and without an observation of a mapped landmark no fitness:
-  // then nothing moves.
+  // for the other filters.
   Status Population(const ScanStep& scan, uint64_t step, WorkerPool& workers) {
     if (!traits().evolution || scan.observations.empty()) return Status::Ok();
-    std::atomic<bool> evidence{false};
-    GROVE_RETURN_IF_ERROR(RunInBatches(workers, n_, static_cast<size_t>(config_.batch),
-                                       &batch_status_, [&](int slot, size_t b, size_t e) {
-                                         for (size_t i = b; i < e; ++i) {
-                                           int terms = 0;
-                                           fitness_[i] = Fitness(scan, i, pose_[i], slot, &terms);
-                                           // Relaxed: read after the loop's join.
-                                           if (terms > 0) {
-                                             evidence.store(true, std::memory_order_relaxed);
-                                           }
-                                         }
-                                         return Status::Ok();
-                                       }));
-    // Without an observation of a mapped landmark every fitness is 0 and there is nothing to
-    // improve. Across ranks every rank decides alike, from every rank's evidence.
-    bool any = evidence.load(std::memory_order_relaxed);
-    if (ranks_ != nullptr) {
-      std::vector<uint8_t> all;
-      const uint8_t mine = any ? 1 : 0;
-      GROVE_RETURN_IF_ERROR(AllGatherValues<uint8_t>(*ranks_, std::span(&mine, 1), &all));
-      any = std::find(all.begin(), all.end(), uint8_t{1}) != all.end();
-    }
-    if (total_ >= 3 && any) {
-      std::vector<VehiclePose> trial(n_);
-      std::vector<double> trial_fitness(n_);
-      std::vector<VehiclePose> everyone;  // across ranks: every particle's pose, in order
-      for (int64_t g = 0; g < config_.de_generations; ++g) {
-        VehiclePose x_best;
-        GROVE_RETURN_IF_ERROR(BestPose(&x_best));
-        std::span<const VehiclePose> population = pose_;
-        if (ranks_ != nullptr) {
-          GROVE_RETURN_IF_ERROR(AllGatherValues<VehiclePose>(
-              *ranks_, std::span<const VehiclePose>(pose_.data(), n_), &everyone));
-          population = everyone;
-        }
-        const uint32_t purpose =
-            StreamPurpose::kDifferentialEvolution + 256 * static_cast<uint32_t>(g);
-        GROVE_RETURN_IF_ERROR(RunInBatches(
-            workers, n_, static_cast<size_t>(config_.batch), &batch_status_,
-            [&](int slot, size_t b, size_t e) {
-              for (size_t i = b; i < e; ++i) {
-                RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(first_ + i), purpose);
-                trial[i] = TrialPose(first_ + i, population, x_best, &rs);
-                trial_fitness[i] = Fitness(scan, i, trial[i], slot);
-              }
-              return Status::Ok();
-            }));
-        for (size_t i = 0; i < n_; ++i) {
-          ++evolution_.trials;
-          if (trial_fitness[i] > fitness_[i]) {
-            ++evolution_.accepted;
-            pose_[i] = trial[i];
-            fitness_[i] = trial_fitness[i];
-          }
-        }
-      }
-    }
+    GROVE_RETURN_IF_ERROR(
+        evolution_.Evolve(step, workers, poses_.poses(),
+                          [&](size_t i, const VehiclePose& pose, int slot, int* terms) {
+                            return Fitness(scan, i, pose, slot, terms);
+                          }));
     return RunInBatches(
         workers, n_, static_cast<size_t>(config_.batch), &batch_status_,
         [&](int slot, size_t b, size_t e) -> Status {
           for (size_t i = b; i < e; ++i) {
-            unit_[i] = Unit{std::cos(pose_[i].heading_rad), std::sin(pose_[i].heading_rad)};
+            const VehiclePose& p = poses_.pose(i);
+            poses_.unit(i) = HeadingUnit{std::cos(p.heading_rad), std::sin(p.heading_rad)};
             GROVE_RETURN_IF_ERROR(UpdateMap(scan, i, slot));
           }
           return Status::Ok();
@@ -362,13 +293,7 @@ class FastSlamModel {
   }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
-    GatherValues(parents, workers, &pose_);
-    GatherValues(parents, workers, &unit_);
-    GatherValues(parents, workers, &cov_);
-    if (traits().draws_after_resampling) {
-      GatherValues(parents, workers, &proposal_mu_);
-      GatherValues(parents, workers, &proposal_sigma_);
-    }
+    poses_.Gather(parents, workers);
     association_.Gather(parents, workers);
     maps_.Gather(parents, workers);
     paths_.Gather(parents, workers);
@@ -385,13 +310,13 @@ class FastSlamModel {
     return history_.CheckCounts(paths_.AllReferences());
   }
 
-  double x(size_t i) const { return pose_[i].x_m; }
-  double y(size_t i) const { return pose_[i].y_m; }
+  double x(size_t i) const { return poses_.pose(i).x_m; }
+  double y(size_t i) const { return poses_.pose(i).y_m; }
   // The heading's unit vector: cos and sin of heading(i) to round-off (FastSLAM 2.0 turns it
   // by rotation between scans).
-  double cos_heading(size_t i) const { return unit_[i].c; }
-  double sin_heading(size_t i) const { return unit_[i].s; }
-  const VehiclePose& pose(size_t i) const { return pose_[i]; }
+  double cos_heading(size_t i) const { return poses_.unit(i).c; }
+  double sin_heading(size_t i) const { return poses_.unit(i).s; }
+  const VehiclePose& pose(size_t i) const { return poses_.pose(i); }
   const typename Trie::Node* map(size_t i) const { return maps_[i]; }
   const SegmentHistory::Node* path(size_t i) const { return paths_[i]; }
   const Trie& trie() const { return trie_; }
@@ -410,13 +335,10 @@ class FastSlamModel {
   // The particles' state after a step: poses, covariances, the segment flag, maps and paths.
   void Save(ByteWriter* w) const {
     w->Put<uint64_t>(n_);
-    w->PutBytes(pose_.data(), n_ * sizeof(VehiclePose));
-    w->PutBytes(cov_.data(), n_ * sizeof(PoseCovariance));
-    w->PutBytes(unit_.data(), n_ * sizeof(Unit));
+    poses_.Save(w);
     w->Put<uint8_t>(segment_start_ ? 1 : 0);
     association_.Save(w);
-    w->Put<int64_t>(evolution_.trials);
-    w->Put<int64_t>(evolution_.accepted);
+    evolution_.Save(w);
     trie_.Save(maps_.roots(), w);
     SegmentHistory::Save(paths_.roots(), w);
   }
@@ -424,26 +346,15 @@ class FastSlamModel {
   // Replaces the state of a new model with a saved one taken after step `steps`.
   Status Load(ByteReader* r, uint64_t steps) {
     GROVE_RETURN_IF_ERROR(ReadParticleCount(r, n_));
-    std::vector<VehiclePose> pose(n_);
-    std::vector<PoseCovariance> cov(n_);
-    GROVE_RETURN_IF_ERROR(r->GetBytes("poses", pose.data(), n_ * sizeof(VehiclePose)));
-    GROVE_RETURN_IF_ERROR(r->GetBytes("pose covariances", cov.data(), n_ * sizeof(PoseCovariance)));
-    std::vector<Unit> unit(n_);
-    GROVE_RETURN_IF_ERROR(r->GetBytes("heading vectors", unit.data(), n_ * sizeof(Unit)));
-    for (size_t i = 0; i < n_; ++i) {
-      GROVE_RETURN_IF_ERROR(CheckParticle(r, i, pose[i], unit[i], cov[i]));
-    }
+    ParticlePoses::Saved poses;
+    GROVE_RETURN_IF_ERROR(ParticlePoses::Read(r, n_, &poses));
     uint8_t segment = 0;
     GROVE_RETURN_IF_ERROR(r->Get("segment flag", &segment));
     if (segment > 1) return r->Error("segment flag", "not 0 or 1");
     typename UnknownAssociation<Trie>::Saved association;
     GROVE_RETURN_IF_ERROR(association_.Read(r, &association));
     EvolutionCounts evolution;
-    GROVE_RETURN_IF_ERROR(r->Get("evolution trials", &evolution.trials));
-    GROVE_RETURN_IF_ERROR(r->Get("evolution accepted", &evolution.accepted));
-    if (!(evolution.accepted >= 0 && evolution.accepted <= evolution.trials)) {
-      return r->Error("evolution counts", "negative, or more accepted than tried");
-    }
+    GROVE_RETURN_IF_ERROR(DifferentialEvolution::ReadCounts(r, &evolution));
     std::vector<typename Trie::Node*> roots;
     GROVE_RETURN_IF_ERROR(trie_.Load(r, n_, 0, &ValidLandmark, &roots));
     if (steps >= UINT32_MAX) {
@@ -453,11 +364,7 @@ class FastSlamModel {
     std::vector<SegmentHistory::Node*> heads;
     Status s = history_.Load(r, n_, static_cast<uint32_t>(steps), 0, &ValidSegmentStart, &heads);
     if (s.ok() && steps > 0) {
-      for (size_t i = 0; i < n_ && s.ok(); ++i) {
-        if (heads[i] == nullptr || heads[i]->value.index >= total_) {
-          s = r->Error("path", "particle " + std::to_string(i) + " has no path or a bad index");
-        }
-      }
+      s = CheckPaths(r, heads);
       if (!s.ok()) {
         for (auto* h : heads) history_.Release(h, 0);
       }
@@ -466,12 +373,10 @@ class FastSlamModel {
       for (auto* root : roots) trie_.Release(root, 0);
       return s;
     }
-    pose_.swap(pose);
-    cov_.swap(cov);
-    unit_.swap(unit);
+    poses_.Restore(&poses);
     segment_start_ = segment == 1;
     association_.Restore(&association);
-    evolution_ = evolution;
+    evolution_.Restore(evolution);
     maps_.Replace(std::move(roots));
     paths_.Replace(std::move(heads));
     return Status::Ok();
@@ -480,15 +385,7 @@ class FastSlamModel {
   // Particles `which` (increasing) for another rank: their values, the scan's pending
   // proposals and matches, their paths and their maps, each shared entry and node written once.
   void Export(std::span<const uint32_t> which, ByteWriter* w) const {
-    for (uint32_t i : which) w->Put(pose_[i]);
-    for (uint32_t i : which) w->Put(unit_[i]);
-    for (uint32_t i : which) w->Put(cov_[i]);
-    if (traits().draws_after_resampling) {
-      for (uint32_t i : which) {
-        for (int k = 0; k < 3; ++k) w->Put<double>(proposal_mu_[i](k));
-        w->Put(proposal_sigma_[i]);
-      }
-    }
+    poses_.Export(which, w);
     association_.Export(which, w);
     SegmentHistory::Save(paths_.Pick(which), w);
     trie_.Save(maps_.Pick(which), w);
@@ -497,47 +394,18 @@ class FastSlamModel {
   // Appends `count` particles written by Export() after step `steps`: size() grows by count
   // until the next Gather(). Checks every value. On error the model must not step again.
   Status Import(ByteReader* r, size_t count, uint64_t steps) {
-    if (count > r->remaining() / (sizeof(VehiclePose) + sizeof(Unit) + sizeof(PoseCovariance))) {
+    if (count > r->remaining() / ParticlePoses::kMessageBytes) {
       return r->Error("particle count", "larger than the message");
     }
     if (steps >= UINT32_MAX) return r->Error("step", "too many steps");
-    const size_t at = n_, end = n_ + count;
-    pose_.resize(end);
-    unit_.resize(end);
-    cov_.resize(end);
-    GROVE_RETURN_IF_ERROR(r->GetBytes("poses", pose_.data() + at, count * sizeof(VehiclePose)));
-    GROVE_RETURN_IF_ERROR(r->GetBytes("heading vectors", unit_.data() + at, count * sizeof(Unit)));
-    GROVE_RETURN_IF_ERROR(
-        r->GetBytes("pose covariances", cov_.data() + at, count * sizeof(PoseCovariance)));
-    for (size_t i = at; i < end; ++i) {
-      GROVE_RETURN_IF_ERROR(CheckParticle(r, i - at, pose_[i], unit_[i], cov_[i]));
-    }
-    if (traits().draws_after_resampling) {
-      proposal_mu_.resize(end);
-      proposal_sigma_.resize(end);
-      for (size_t i = at; i < end; ++i) {
-        for (int k = 0; k < 3; ++k) {
-          GROVE_RETURN_IF_ERROR(r->Get("proposal mean", &proposal_mu_[i](k)));
-        }
-        GROVE_RETURN_IF_ERROR(r->Get("proposal covariance", &proposal_sigma_[i]));
-        const PoseCovariance& c = proposal_sigma_[i];
-        if (!proposal_mu_[i].allFinite() ||
-            !std::isfinite(c.xx + c.xy + c.xh + c.yy + c.yh + c.hh)) {
-          return r->Error("proposal", "a value is not finite");
-        }
-      }
-    }
+    const size_t at = n_;
+    GROVE_RETURN_IF_ERROR(poses_.Import(r, count));
     GROVE_RETURN_IF_ERROR(association_.Import(r, at, count));
     std::vector<SegmentHistory::Node*> heads;
     GROVE_RETURN_IF_ERROR(
         history_.Load(r, count, static_cast<uint32_t>(steps), 0, &ValidSegmentStart, &heads));
     std::vector<typename Trie::Node*> roots;
-    Status s;
-    for (size_t k = 0; k < count && s.ok(); ++k) {
-      if (steps > 0 && (heads[k] == nullptr || heads[k]->value.index >= total_)) {
-        s = r->Error("path", "particle " + std::to_string(k) + " has no path or a bad index");
-      }
-    }
+    Status s = steps > 0 ? CheckPaths(r, heads) : Status::Ok();
     if (s.ok()) s = trie_.Load(r, count, 0, &ValidLandmark, &roots);
     // The pending matches and views name landmarks of the particle's own map.
     if (s.ok()) s = association_.CheckImported(r, trie_, roots, at);
@@ -548,36 +416,26 @@ class FastSlamModel {
     }
     paths_.Append(heads);
     maps_.Append(roots);
-    n_ = end;
+    n_ = at + count;
     return Status::Ok();
   }
 
  private:
-  struct Unit {
-    double c, s;
-  };
+  using Scratch = typename UnknownAssociation<Trie>::Scratch;
 
-  // Checks of a particle's values read from a checkpoint or a message (`k`: its place there).
-  static Status CheckParticle(ByteReader* r, size_t k, const VehiclePose& p, const Unit& u,
-                              const PoseCovariance& c) {
-    if (!(std::fabs(u.c * u.c + u.s * u.s - 1) < 1e-6)) {
-      return r->Error("heading vectors", "not a unit vector");
-    }
-    if (!std::isfinite(p.x_m) || !std::isfinite(p.y_m) || !(std::fabs(p.heading_rad) <= 4)) {
-      return r->Error("poses", "particle " + std::to_string(k) + "'s pose is not finite");
-    }
-    for (double v : {c.xx, c.xy, c.xh, c.yy, c.yh, c.hh}) {
-      if (!std::isfinite(v)) return r->Error("pose covariances", "a value is not finite");
-    }
-    // Variances, or a factor's diagonal.
-    if (!(c.xx >= 0 && c.yy >= 0 && c.hh >= 0)) {
-      return r->Error("pose covariances", "a variance is negative");
-    }
-    return Status::Ok();
-  }
   static bool ValidLandmark(const Landmark& l) {
     return std::isfinite(l.x_m) && std::isfinite(l.y_m) && std::isfinite(l.xx) &&
            std::isfinite(l.xy) && std::isfinite(l.yy) && l.xx >= 0 && l.yy >= 0 && l.tag >= -1;
+  }
+
+  // Every particle of `heads` read after a step has a path, its index one of the filter's.
+  Status CheckPaths(ByteReader* r, const std::vector<SegmentHistory::Node*>& heads) const {
+    for (size_t k = 0; k < heads.size(); ++k) {
+      if (heads[k] == nullptr || heads[k]->value.index >= total_) {
+        return r->Error("path", "particle " + std::to_string(k) + " has no path or a bad index");
+      }
+    }
+    return Status::Ok();
   }
 
   Status BadSteering(size_t i) const {
@@ -605,8 +463,8 @@ class FastSlamModel {
   Status DrawAndWeigh(const ScanStep& scan, uint64_t step, size_t i,
                       const std::vector<Decision>* decisions, const Eigen::Vector3d& mu,
                       const Eigen::Matrix3d& sigma, double* lw) {
-    const Eigen::Vector3d prior_mu = ToVector(pose_[i]);
-    const Eigen::Matrix3d prior = steps_.Stored(cov_[i]);
+    const Eigen::Vector3d prior_mu = ToVector(poses_.pose(i));
+    const Eigen::Matrix3d prior = steps_.Stored(poses_.cov(i));
     VehiclePose x;
     GROVE_RETURN_IF_ERROR(steps_.Draw(step, first_ + i, mu, sigma, &x));
     double w = 0;
@@ -631,101 +489,11 @@ class FastSlamModel {
     }
     GROVE_RETURN_IF_ERROR(steps_.AddImportanceRatio(first_ + i, prior_mu, prior, x, mu, sigma, &w));
     *lw = w;
-    pose_[i] = x;
-    unit_[i] = Unit{std::cos(x.heading_rad), std::sin(x.heading_rad)};
-    cov_[i] = steps_.restart_covariance();
+    poses_.pose(i) = x;
+    poses_.unit(i) = HeadingUnit{std::cos(x.heading_rad), std::sin(x.heading_rad)};
+    poses_.cov(i) = steps_.restart_covariance();
     return Status::Ok();
   }
-
-  // The landmark updates of particle i's scan from its pose now.
-  Status UpdateMap(const ScanStep& scan, size_t i, int slot) {
-    if (association_.active()) {
-      return association_.ApplyPending(steps_, &trie_, &maps_[i], scan, i, pose_[i], slot);
-    }
-    double unused = 0;
-    return UpdateLandmarks(scan, i, slot, &unused);
-  }
-
-  // The update of each observed landmark from particle i's pose (new ones initialised);
-  // *log_w gets the sum of the known ones' log-likelihoods.
-  Status UpdateLandmarks(const ScanStep& scan, size_t i, int slot, double* log_w) {
-    const VehiclePose pose = pose_[i];
-    for (const LandmarkObservation& z : scan.observations) {
-      const RangeBearing rb{z.range_m, z.bearing_rad};
-      Status s;
-      double ll = 0;
-      const bool ok = trie_.Update(&maps_[i], static_cast<uint64_t>(z.id), slot,
-                                   [&](Landmark& l, bool existed) {
-                                     if (!existed) {
-                                       l = steps_.NewLeaf(pose, rb);
-                                     } else {
-                                       s = steps_.UpdateLeaf(pose, rb, &l, &ll);
-                                     }
-                                   });
-      if (!ok) return NoMemoryError(first_ + i, "map");
-      if (!s.ok()) return ParticleError(first_ + i, z, s);
-      *log_w += ll;
-    }
-    return Status::Ok();
-  }
-
-  // ---- Differential evolution ----
-
-  // The pose of the first particle of highest fitness (across ranks, the whole filter's).
-  Status BestPose(VehiclePose* best) const {
-    struct Best {
-      double fitness;
-      VehiclePose pose;
-    };
-    const size_t k = static_cast<size_t>(
-        std::max_element(fitness_.begin(), fitness_.begin() + static_cast<ptrdiff_t>(n_)) -
-        fitness_.begin());
-    Best mine{fitness_[k], pose_[k]};
-    if (ranks_ == nullptr) {
-      *best = mine.pose;
-      return Status::Ok();
-    }
-    std::vector<Best> all;
-    GROVE_RETURN_IF_ERROR(AllGatherValues<Best>(*ranks_, std::span(&mine, 1), &all));
-    // The first strict maximum in rank order is the first in particle order.
-    size_t q = 0;
-    for (size_t r = 1; r < all.size(); ++r) {
-      if (all[r].fitness > all[q].fitness) q = r;
-    }
-    *best = all[q].pose;
-    return Status::Ok();
-  }
-
-  // The trial pose of the filter's particle i (DE/best/1/bin), from `population`, every
-  // particle's pose in the filter's order. REQUIRES: total_ >= 3.
-  VehiclePose TrialPose(size_t i, std::span<const VehiclePose> population, const VehiclePose& best,
-                        RandomStream* rs) const {
-    const size_t n = population.size();
-    auto other = [&](size_t a, size_t b) {
-      for (;;) {
-        const size_t k = static_cast<size_t>(rs->NextUniform() * static_cast<double>(n));
-        if (k < n && k != a && k != b) return k;
-      }
-    };
-    const size_t r1 = other(i, i);
-    const size_t r2 = other(i, r1);
-    const int j_rand = std::min(2, static_cast<int>(rs->NextUniform() * 3));
-    const VehiclePose& a = population[r1];
-    const VehiclePose& b = population[r2];
-    const double mutant[3] = {
-        best.x_m + config_.de_scale * (a.x_m - b.x_m),
-        best.y_m + config_.de_scale * (a.y_m - b.y_m),
-        best.heading_rad + config_.de_scale * WrapAngle(a.heading_rad - b.heading_rad)};
-    const double target[3] = {population[i].x_m, population[i].y_m, population[i].heading_rad};
-    double u[3];
-    for (int j = 0; j < 3; ++j) {
-      const bool cross = rs->NextUniform() < config_.de_crossover || j == j_rand;
-      u[j] = cross ? mutant[j] : target[j];
-    }
-    return VehiclePose{u[0], u[1], WrapAngle(u[2])};
-  }
-
-  using Scratch = typename UnknownAssociation<Trie>::Scratch;
 
   // Unknown association's Advance(): particle by particle, the decisions from its pose now,
   // the weight, and (but for the filters that draw after resampling) the map changes.
@@ -745,8 +513,8 @@ class FastSlamModel {
     for (size_t i = begin; i < end; ++i) {
       GROVE_RETURN_IF_ERROR(DecideScan(scan, i, &sc));
       double lw = 0;
-      Eigen::Vector3d mu = ToVector(pose_[i]);
-      Eigen::Matrix3d sigma = steps_.Stored(cov_[i]);
+      Eigen::Vector3d mu = ToVector(poses_.pose(i));
+      Eigen::Matrix3d sigma = steps_.Stored(poses_.cov(i));
       for (size_t j = 0; j < sc.decisions.size(); ++j) {
         const Decision& d = sc.decisions[j];
         if (d.kind != Decision::kAssociated) {
@@ -763,8 +531,8 @@ class FastSlamModel {
       if (sampled) {
         GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
       } else if (traits().draws_after_resampling) {
-        proposal_mu_[i] = mu;
-        proposal_sigma_[i] = steps_.Store(sigma);
+        poses_.proposal_mu(i) = mu;
+        poses_.proposal_sigma(i) = steps_.Store(sigma);
         association_.KeepQuery(i, sc);
         if (scan.observations.empty() && association_.evidence()) {
           // The evidence of an empty scan is applied now, from the predicted mean (Complete()
@@ -782,36 +550,59 @@ class FastSlamModel {
 
   // Unknown association: particle i's query and decisions from its pose now, into sc.
   Status DecideScan(const ScanStep& scan, size_t i, Scratch* sc) const {
-    return association_.DecideScan(trie_, maps_[i], scan, i, pose_[i], sc);
+    return association_.DecideScan(trie_, maps_[i], scan, i, poses_.pose(i), sc);
   }
   // Unknown association: applies particle i's decisions in sc from its pose now.
   Status ApplyScan(const ScanStep& scan, size_t i, int slot, Scratch* sc) {
-    return association_.ApplyScan(steps_, &trie_, &maps_[i], scan, i, pose_[i], slot, sc);
+    return association_.ApplyScan(steps_, &trie_, &maps_[i], scan, i, poses_.pose(i), slot, sc);
+  }
+
+  // The landmark updates of particle i's scan from its pose now.
+  Status UpdateMap(const ScanStep& scan, size_t i, int slot) {
+    if (association_.active()) {
+      return association_.ApplyPending(steps_, &trie_, &maps_[i], scan, i, poses_.pose(i), slot);
+    }
+    double unused = 0;
+    return UpdateLandmarks(scan, i, slot, &unused);
+  }
+
+  // The update of each observed landmark from particle i's pose (new ones initialised);
+  // *log_w gets the sum of the known ones' log-likelihoods.
+  Status UpdateLandmarks(const ScanStep& scan, size_t i, int slot, double* log_w) {
+    const VehiclePose pose = poses_.pose(i);
+    for (const LandmarkObservation& z : scan.observations) {
+      const RangeBearing rb{z.range_m, z.bearing_rad};
+      Status s;
+      double ll = 0;
+      const bool ok = trie_.Update(&maps_[i], static_cast<uint64_t>(z.id), slot,
+                                   [&](Landmark& l, bool existed) {
+                                     if (!existed) {
+                                       l = steps_.NewLeaf(pose, rb);
+                                     } else {
+                                       s = steps_.UpdateLeaf(pose, rb, &l, &ll);
+                                     }
+                                   });
+      if (!ok) return NoMemoryError(first_ + i, "map");
+      if (!s.ok()) return ParticleError(first_ + i, z, s);
+      *log_w += ll;
+    }
+    return Status::Ok();
   }
 
   const FastSlamConfig config_;
   const FilterSteps steps_;
-  size_t n_;                 // particles here (more after an Import(), until the next Gather())
-  const uint64_t first_;     // the filter's index of particle 0 here
-  const uint64_t total_;     // the filter's particles
-  Collective* const ranks_;  // null: this model holds every particle
+  size_t n_;              // particles here (more after an Import(), until the next Gather())
+  const uint64_t first_;  // the filter's index of particle 0 here
+  const uint64_t total_;  // the filter's particles
   Trie trie_;
   SegmentHistory history_;
   VersionSet<Trie> maps_;
   VersionSet<SegmentHistory> paths_;
-  std::vector<VehiclePose> pose_;
-  std::vector<Unit> unit_;
-  std::vector<PoseCovariance> cov_;
-  // Each particle's proposal of the current scan, from Advance() to Complete() (the filters that
-  // draw after resampling).
-  std::vector<Eigen::Vector3d> proposal_mu_;
-  std::vector<PoseCovariance> proposal_sigma_;
-  // Differential evolution: each particle's fitness, the counts and the loops' batch statuses.
-  std::vector<double> fitness_;
-  EvolutionCounts evolution_;
-  std::vector<Status> batch_status_;
+  ParticlePoses poses_;
   bool segment_start_ = true;
   UnknownAssociation<Trie> association_;
+  DifferentialEvolution evolution_;
+  std::vector<Status> batch_status_;  // RunInBatches' scratch
 };
 
 }  // namespace grove::fastslam
