@@ -247,7 +247,7 @@ class FastSlam::Impl {
     for (size_t j = 0; j < chain.size(); ++j) {
       const fastslam::SegmentStart& s = chain[j]->value;
       VehiclePose p{s.x_m, s.y_m, s.heading_rad};
-      // A segment starts after a draw, with the restarted covariance (fastslam_model.h).
+      // A segment starts after a draw, with the restarted covariance (filter_steps.h).
       fastslam::PoseCovariance cov = model_.steps().restart_covariance();
       const size_t stop = j + 1 < chain.size() ? chain[j + 1]->step : steps;
       for (size_t k = chain[j]->step; k < stop; ++k) {
