@@ -113,29 +113,33 @@ struct SensorView {  // FastSlamConfig's sensor_range_m and sensor_fov_rad
   double fov_rad;
 };
 
+// A detection's point in the plane and its squared candidate radius (FindMatches' scratch).
+struct DetectionProbe {
+  double x, y, radius2;
+};
+
 // Appends the matches of every detection of `scan` against the map `root` of `trie` (keyed by
 // SpatialKey) seen from `pose`; with `view`, also the keys of the landmarks in view, in
 // increasing order, to *in_view (the same range query). use_index: candidates from the spatial
 // range query; false: from every landmark of the map, unfiltered (the reference the index and the
-// radius are tested against). Errors: those of ObservationLogLikelihood, naming the detection.
+// radius are tested against). *probes is scratch, kept by the caller (per worker) between calls.
+// Errors: those of ObservationLogLikelihood, naming the detection.
 template <typename Trie>
 Status FindMatches(const Trie& trie, const typename Trie::Node* root, const VehiclePose& pose,
                    std::span<const LandmarkObservation> scan, const AssociationParams& params,
                    double max_range_m, bool use_index, std::vector<Match>* out,
-                   const SensorView* view = nullptr, std::vector<uint64_t>* in_view = nullptr) {
+                   std::vector<DetectionProbe>* probe_scratch, const SensorView* view = nullptr,
+                   std::vector<uint64_t>* in_view = nullptr) {
   const Eigen::Matrix2d r = SensorCovariance(params.noise);
   const double sr2 = r(0, 0), sb2 = r(1, 1);
   // Each detection's point and candidate radius, and the box around all of them (and the
   // view): one range query per scan, each landmark in it tested against every detection.
-  struct Probe {
-    double x, y, radius2;
-  };
-  thread_local std::vector<Probe> probes;
+  std::vector<DetectionProbe>& probes = *probe_scratch;
   probes.clear();
   double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
   bool bounded = true;
   for (const LandmarkObservation& z : scan) {
-    Probe p;
+    DetectionProbe p;
     DetectionPoint(pose, z, &p.x, &p.y);
     const double radius =
         SearchRadius(z.range_m, max_range_m, params.noise, params.augment_gate, params.init_cd_h);
@@ -176,7 +180,7 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
     // without the likelihood. Computed for the first detection within the radius.
     double reach2 = -1;
     for (size_t j = 0; j < scan.size(); ++j) {
-      const Probe& p = probes[j];
+      const DetectionProbe& p = probes[j];
       const double dx = l.x_m - p.x, dy = l.y_m - p.y;
       const double d2 = dx * dx + dy * dy;
       if (use_index) {

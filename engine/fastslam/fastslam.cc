@@ -247,8 +247,8 @@ class FastSlam::Impl {
     for (size_t j = 0; j < chain.size(); ++j) {
       const fastslam::SegmentStart& s = chain[j]->value;
       VehiclePose p{s.x_m, s.y_m, s.heading_rad};
-      // A segment starts after a draw, with the restarted covariance (fastslam_model.h).
-      fastslam::PoseCovariance cov = model_.restart_covariance();
+      // A segment starts after a draw, with the restarted covariance (filter_steps.h).
+      fastslam::PoseCovariance cov = model_.steps().restart_covariance();
       const size_t stop = j + 1 < chain.size() ? chain[j + 1]->step : steps;
       for (size_t k = chain[j]->step; k < stop; ++k) {
         if (log_[k].kind == kScanUpdate) {
@@ -262,7 +262,7 @@ class FastSlam::Impl {
           }
         } else {
           bool usable = true;
-          p = model_.PredictPose(p, &cov, log_[k].control, k, s.index, &usable);
+          p = model_.steps().PredictPose(p, &cov, log_[k].control, k, s.index, &usable);
         }
         if (log_[k].kind != kScanPredict) {
           out.push_back({times[k + 1], Pose2{p.x_m, p.y_m, p.heading_rad}});

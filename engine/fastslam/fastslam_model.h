@@ -2,13 +2,12 @@
 // over the degree of its landmark trees.
 //
 // Per particle (structure of arrays): the vehicle pose and its unit heading vector, FastSLAM
-// 2.0's pose covariance, the map (a version of a PersistentTrie keyed by landmark id, leaves
-// holding a landmark Gaussian) and the path history.
+// 2.0's pose covariance (ParticlePoses), the map (a version of a PersistentTrie keyed by landmark
+// id, leaves holding a landmark Gaussian) and the path history.
 //
-// Steps:
+// Steps (each filter's pose and landmark steps: FilterTraits, FilterSteps):
 //   Predict(ControlStep): FastSLAM 1.0 draws the particle's own control from N(u, Q) and moves;
-//     FastSLAM 2.0 moves the mean with the control and propagates the pose covariance,
-//     Sigma' = Gv Sigma Gv^T + Gu Q Gu^T.
+//     FastSLAM 2.0 moves the mean with the control and propagates the pose covariance.
 //   Advance(ScanStep): FastSLAM 1.0 adds log N(v; 0, S) of each observation of a known
 //     landmark and updates it (EKF, Joseph form); FastSLAM 2.0 refines the pose mean and
 //     covariance by each observation of a known landmark and adds each one's predictive
@@ -17,44 +16,24 @@
 //     pose from it (its covariance then starts again at 0) and the landmark updates from the
 //     drawn pose. Copies of one parent draw distinct poses (Bailey's order: resample, then
 //     sample). Both filters initialise new landmarks from the pose.
-//
-// The seed's family (FilterTraits): each filter is a choice of pose step (motion sampling, EKF,
-// unscented, central difference), landmark step (EKF, unscented, central difference), weight
-// (the scan's predictive likelihood, or for the sigma-point particle filter the importance ratio
-// at a pose drawn in Advance) and an optional population step (differential evolution, run by
-// Population() after Complete()). The pose covariance holds a covariance (EKF, unscented) or a
-// lower Cholesky factor (central difference), and so do the landmark leaves; the sigma-point
-// pose steps restart their covariance at a fixed value after every scan's draw, so that a path
-// segment's predictions, which depend on it, replay from the segment's start
-// (kPoseRestartVariance).
-//
-// Unknown association (config.association != kKnown): the map is keyed by SpatialKey (a
-// landmark's cell and a slot in it) instead of by id. At a scan each particle finds the
-// candidates of every detection with a range query of its own trie, decides with the gates
-// (data_association.h), adds the associated detections' likelihoods and p0 for the others, and
-// then (FastSLAM 1.0 in Advance, 2.0 in Complete from the drawn pose) updates the associated
-// landmarks, lowers the evidence of those in view and not seen (removing the ones below the
-// threshold; the view is found by the same range query as the candidates, so it is judged from
-// the pose the decisions were made from: for FastSLAM 2.0 the predicted mean), moves an updated
-// landmark whose mean left its cell to a slot of its new cell, and adds the new landmarks.
-// FastSLAM 2.0 decides from the predicted pose mean (Bailey's order); the query Advance() made is
-// kept per particle and gathered with it for Complete().
+//   Population(ScanStep), after Complete(): differential evolution (DifferentialEvolution), then
+//     the landmark updates from the moved poses.
+// Under unknown association (config.association != kKnown) the map is keyed by SpatialKey and
+// each scan's decisions and map changes are UnknownAssociation's.
 //
 // Paths: a particle does not store a pose per step. Its history holds one entry per path
 // segment: the pose and particle index at the first prediction after the start or a scan.
 // Within a segment a particle keeps its index (resampling happens only at scans), so its poses
-// there are the same predictions redone from the segment's start (PredictPose() draws the same
-// numbers from the counter-based streams). The pose after a segment's closing scan is the next
-// entry's start pose. A path thus costs one node per scan, not one per control step, and the
-// histories of copies share their common part (Ancestry).
+// there are the same predictions redone from the segment's start (FilterSteps::PredictPose()
+// draws the same numbers from the counter-based streams). The pose after a segment's closing
+// scan is the next entry's start pose. A path thus costs one node per scan, not one per control
+// step, and the histories of copies share their common part (Ancestry).
 #ifndef GROVE_ENGINE_FASTSLAM_FASTSLAM_MODEL_H_
 #define GROVE_ENGINE_FASTSLAM_FASTSLAM_MODEL_H_
 
 #include <fmt/format.h>
 
 #include <Eigen/Core>
-#include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -62,13 +41,15 @@
 #include <string>
 #include <vector>
 
-#include "concurrency/random_stream.h"
 #include "concurrency/worker_pool.h"
 #include "engine/fastslam/data_association.h"
+#include "engine/fastslam/differential_evolution.h"
+#include "engine/fastslam/filter_steps.h"
+#include "engine/fastslam/filter_traits.h"
 #include "engine/fastslam/landmark_math.h"
-#include "engine/fastslam/sigma_point_filters.h"
+#include "engine/fastslam/particle_poses.h"
+#include "engine/fastslam/unknown_association.h"
 #include "engine/fastslam/vehicle_model.h"
-#include "engine/filter/generation.h"
 #include "engine/filter/particle_filter.h"
 #include "engine/io/checkpoint_io.h"
 #include "engine/persistent/ancestry.h"
@@ -78,18 +59,6 @@
 #include "grove/fastslam.h"
 
 namespace grove::fastslam {
-
-// A control held over dt_s.
-struct ControlStep {
-  double v_mps = 0;
-  double steer_rad = 0;
-  double dt_s = 0;
-};
-
-// One scan's observations (validated by the facade).
-struct ScanStep {
-  std::span<const LandmarkObservation> observations;
-};
 
 // The start of a path segment: the pose before the segment's first prediction and the
 // particle's index during the segment.
@@ -105,58 +74,6 @@ inline bool ValidSegmentStart(const SegmentStart& s) {
          std::fabs(s.heading_rad) <= 4 && s.unused == 0;
 }
 
-// A particle's pose covariance, its upper triangle, or for the central-difference filters the
-// lower Cholesky factor [xx 0 0; xy yy 0; xh yh hh].
-struct PoseCovariance {
-  double xx = 0, xy = 0, xh = 0, yy = 0, yh = 0, hh = 0;
-};
-
-// How a filter of FastSlamFilter moves, weights and maps (fastslam.h, README).
-struct FilterTraits {
-  enum class Pose { kSampledMotion, kEkf, kUnscented, kCentralDifference };
-  enum class Map { kEkf, kUnscented, kCentralDifference };
-  Pose pose = Pose::kEkf;
-  Map map = Map::kEkf;
-  // The pose is drawn after resampling (Complete()); otherwise in Advance(), before the weight.
-  bool draws_after_resampling = true;
-  // The weight is p(z | x) p(x | prediction) / q(x) at the drawn pose (the sigma-point particle
-  // filter), not the predictive likelihood.
-  bool importance_ratio = false;
-  // Differential evolution after the draw (Population()).
-  bool evolution = false;
-
-  bool square_root_pose() const { return pose == Pose::kCentralDifference; }
-  bool square_root_map() const { return map == Map::kCentralDifference; }
-  // Whether every scan ends in a draw that restarts the pose covariance: the sigma-point pose
-  // steps need it for the replay of paths (FastSLAM 2.0's mean does not depend on its
-  // covariance, and it draws only at scans with observations, as Bailey's).
-  bool draws_every_scan() const {
-    return pose == Pose::kUnscented || pose == Pose::kCentralDifference;
-  }
-};
-
-inline FilterTraits TraitsOf(FastSlamFilter f) {
-  using P = FilterTraits::Pose;
-  using M = FilterTraits::Map;
-  switch (f) {
-    case FastSlamFilter::kFastSlam1:
-      return {P::kSampledMotion, M::kEkf, false, false, false};
-    case FastSlamFilter::kFastSlam2:
-      return {P::kEkf, M::kEkf, true, false, false};
-    case FastSlamFilter::kUnscented:
-      return {P::kUnscented, M::kUnscented, true, false, false};
-    case FastSlamFilter::kSrcd:
-      return {P::kCentralDifference, M::kCentralDifference, true, false, false};
-    case FastSlamFilter::kSrcdAided:
-      return {P::kEkf, M::kCentralDifference, true, false, false};
-    case FastSlamFilter::kSrcdParticle:
-      return {P::kCentralDifference, M::kEkf, false, true, false};
-    case FastSlamFilter::kDeSrcd:
-      return {P::kCentralDifference, M::kCentralDifference, true, false, true};
-  }
-  return {};
-}
-
 template <int kLog2Degree>
 class FastSlamModel {
  public:
@@ -168,154 +85,85 @@ class FastSlamModel {
   FastSlamModel(const FastSlamConfig& config, int slots, ParticleShare share = {},
                 Collective* ranks = nullptr)
       : config_(config),
-        traits_(TraitsOf(config.filter)),
-        geometry_(VehicleGeometry::Of(config)),
-        noise_{config.sigma_range_m, config.sigma_bearing_rad},
-        control_noise_{config.sigma_speed_mps, config.sigma_steer_rad},
-        rule_{config.ut_alpha, config.ut_beta, config.ut_kappa},
+        steps_(config),
         n_(ranks == nullptr ? static_cast<size_t>(config.particles) : share.count),
         first_(ranks == nullptr ? 0 : share.first),
         total_(static_cast<uint64_t>(config.particles)),
-        ranks_(ranks),
         trie_(1, slots),
         history_(slots),
         maps_(&trie_, n_),
         paths_(&history_, n_),
-        ml_(config.association != FastSlamAssociation::kKnown),
-        params_{FastSlamGateDistance2(config.reject_gate, config.gate_unit),
-                FastSlamGateDistance2(config.augment_gate, config.gate_unit),
-                config.association == FastSlamAssociation::kExclusive,
-                config.index_cell_m,
-                noise_,
-                traits_.square_root_map(),
-                traits_.map == FilterTraits::Map::kCentralDifference ? config.cd_step : 0},
-        log_p0_(NewLandmarkLogLikelihood(noise_, params_.augment_gate)),
-        counts_(ml_ ? n_ : 0),
-        pending_(ml_ && traits_.draws_after_resampling ? n_ : 0),
-        scratch_(slots) {
-    const VehiclePose start{config.start_x_m, config.start_y_m,
-                            WrapAngle(config.start_heading_rad)};
-    pose_.assign(n_, start);
-    unit_.assign(n_, Unit{std::cos(start.heading_rad), std::sin(start.heading_rad)});
-    cov_.assign(n_, restart_covariance());
-    if (traits_.draws_after_resampling) {
-      proposal_mu_.resize(n_);
-      proposal_sigma_.resize(n_);
-    }
-    if (traits_.evolution) fitness_.resize(n_);
-    q_ << config.sigma_speed_mps * config.sigma_speed_mps, 0, 0,
-        config.sigma_steer_rad * config.sigma_steer_rad;
-  }
+        poses_(n_,
+               VehiclePose{config.start_x_m, config.start_y_m, WrapAngle(config.start_heading_rad)},
+               steps_.restart_covariance(), steps_.traits().draws_after_resampling),
+        association_(config, steps_.traits(), n_, first_, slots),
+        evolution_(config, steps_.traits().evolution, n_, first_, ranks) {}
 
   size_t size() const { return n_; }
-  const FilterTraits& traits() const { return traits_; }
+  const FilterTraits& traits() const { return steps_.traits(); }
+  const FilterSteps& steps() const { return steps_; }
 
-  // The pose covariance every particle starts with and, for the sigma-point pose steps, returns
-  // to after each scan's draw: 0 for FastSLAM 2.0's EKF; eps I (unscented) or its factor
-  // sqrt(eps) I (central difference), as Kim's code.
-  PoseCovariance restart_covariance() const {
-    if (traits_.pose == FilterTraits::Pose::kUnscented) {
-      return PoseCovariance{kPoseRestartVariance, 0, 0,
-                            kPoseRestartVariance, 0, kPoseRestartVariance};
-    }
-    if (traits_.square_root_pose()) {
-      const double s = std::sqrt(kPoseRestartVariance);
-      return PoseCovariance{s, 0, 0, s, 0, s};
-    }
-    return PoseCovariance{};
-  }
-
-  // Before each scan's update: the longest range so far bounds the landmarks' covariances
-  // (SearchRadius()).
-  void NoteScan(const ScanStep& scan) {
-    for (const LandmarkObservation& z : scan.observations)
-      max_range_ = std::max(max_range_, z.range_m);
-    scan_size_ = scan.observations.size();
-  }
-  bool unknown_association() const { return ml_; }
+  // Before each scan's update (UnknownAssociation::NoteScan()).
+  void NoteScan(const ScanStep& scan) { association_.NoteScan(scan); }
+  bool unknown_association() const { return association_.active(); }
   // Unknown association: stores `l` in particle i's map as a new landmark would be (benchmarks
-  // build big maps with it). REQUIRES: ml_, and l's covariance within the bound SearchRadius()
-  // assumes for the ranges NoteScan() has seen.
-  Status InsertLandmark(size_t i, const Landmark& l, int slot) { return Insert(i, slot, l); }
-  const AssociationCounts& counts(size_t i) const { return counts_[i]; }
-  const EvolutionCounts& evolution_counts() const { return evolution_; }
+  // build big maps with it). REQUIRES: unknown_association(), and l's covariance within the
+  // bound SearchRadius() assumes for the ranges NoteScan() has seen.
+  Status InsertLandmark(size_t i, const Landmark& l, int slot) {
+    return association_.Insert(&trie_, &maps_[i], i, slot, l);
+  }
+  const AssociationCounts& counts(size_t i) const { return association_.counts(i); }
+  const EvolutionCounts& evolution_counts() const { return evolution_.counts(); }
 
   // The next Predict() is the first of a path segment (after the start or a scan).
   void set_segment_start(bool v) { segment_start_ = v; }
 
-  // The pose particle `index` reaches from `p`, whose covariance is *cov, by the prediction of
-  // filter step `step` (*cov is advanced too): the one computation of a prediction, for
-  // Predict() and for the replay of paths. *usable is false when the model cannot use the
-  // control (or, for the sigma-point steps, one of its sigma points).
-  VehiclePose PredictPose(const VehiclePose& p, PoseCovariance* cov, const ControlStep& c,
-                          uint64_t step, uint32_t index, bool* usable) const {
-    switch (traits_.pose) {
-      case FilterTraits::Pose::kSampledMotion: {
-        ControlTerms u;
-        *usable = NoisyTerms(c, step, index, &u);
-        return *usable ? MoveVehicle(geometry_, u, p) : p;
-      }
-      case FilterTraits::Pose::kEkf:
-        *usable = SteeringUsable(geometry_, c.steer_rad);
-        if (!*usable) return p;
-        return MoveVehicle(geometry_, ControlTermsOf(geometry_, c.v_mps, c.steer_rad, c.dt_s), p);
-      case FilterTraits::Pose::kUnscented:
-      case FilterTraits::Pose::kCentralDifference: {
-        Eigen::Vector3d mean = ToVector(p);
-        Eigen::Matrix3d m = Stored(*cov);
-        *usable = SigmaPointPredict(c, &mean, &m).ok();
-        if (!*usable) return p;
-        *cov = Store(m);
-        return ToPose(mean);
-      }
-    }
-    *usable = false;
-    return p;
-  }
-
+  // The prediction of particles [begin, end) over control c (FilterSteps::PredictPose() redoes
+  // one of them).
   Status Predict(const ControlStep& c, uint64_t step, size_t begin, size_t end, int slot) {
-    const bool ekf = traits_.pose == FilterTraits::Pose::kEkf;
-    const bool sigma_points = traits_.draws_every_scan();
-    if ((ekf || sigma_points) && !SteeringUsable(geometry_, c.steer_rad)) {
+    const bool ekf = traits().pose == FilterTraits::Pose::kEkf;
+    const bool sigma_points = traits().draws_every_scan();
+    const VehicleGeometry& geometry = steps_.geometry();
+    if ((ekf || sigma_points) && !SteeringUsable(geometry, c.steer_rad)) {
       return BadSteering(begin);
     }
     // FastSLAM 2.0 moves every particle with the same control: its terms once per batch.
     ControlTerms shared;
-    Unit turn{1, 0};
+    HeadingUnit turn{1, 0};
     if (ekf) {
-      shared = ControlTermsOf(geometry_, c.v_mps, c.steer_rad, c.dt_s);
-      turn = Unit{std::cos(shared.turn_rad), std::sin(shared.turn_rad)};
+      shared = ControlTermsOf(geometry, c.v_mps, c.steer_rad, c.dt_s);
+      turn = HeadingUnit{std::cos(shared.turn_rad), std::sin(shared.turn_rad)};
     }
     for (size_t i = begin; i < end; ++i) {
-      const VehiclePose p = pose_[i];
+      const VehiclePose p = poses_.pose(i);
       if (segment_start_) {
         SegmentStart s{p.x_m, p.y_m, p.heading_rad, static_cast<uint32_t>(first_ + i), 0};
         SegmentHistory::Node* node =
             history_.Append(paths_[i], static_cast<uint32_t>(step), s, slot);
-        if (node == nullptr) return NoMemory(i, "path");
+        if (node == nullptr) return NoMemoryError(first_ + i, "path");
         paths_[i] = node;
       }
       VehiclePose next;
       if (sigma_points) {
         Eigen::Vector3d mean = ToVector(p);
-        Eigen::Matrix3d m = Stored(cov_[i]);
-        Status s = SigmaPointPredict(c, &mean, &m);
-        if (!s.ok()) return ParticleStatus(i, s);
+        Eigen::Matrix3d m = steps_.Stored(poses_.cov(i));
+        Status s = steps_.SigmaPointPredict(c, &mean, &m);
+        if (!s.ok()) return ParticleStatus(first_ + i, s);
         next = ToPose(mean);
-        cov_[i] = Store(m);
+        poses_.cov(i) = steps_.Store(m);
       } else {
         ControlTerms own;
-        if (!ekf && !NoisyTerms(c, step, static_cast<uint32_t>(first_ + i), &own)) {
+        if (!ekf && !steps_.NoisyTerms(c, step, static_cast<uint32_t>(first_ + i), &own)) {
           return BadSteering(i);
         }
         const ControlTerms& u = ekf ? shared : own;
         StepTrig trig;
-        next = MoveVehicle(geometry_, u, p, &trig);
+        next = MoveVehicle(geometry, u, p, &trig);
         if (ekf) {
           Eigen::Matrix3d gv;
           Eigen::Matrix<double, 3, 2> gu;
-          VehicleJacobians(geometry_, u, trig, &gv, &gu);
-          PropagateCovariance(gv, gu, &cov_[i]);
+          VehicleJacobians(geometry, u, trig, &gv, &gu);
+          steps_.PropagateCovariance(gv, gu, &poses_.cov(i));
         }
       }
       if (!std::isfinite(next.x_m) || !std::isfinite(next.y_m) ||
@@ -324,14 +172,14 @@ class FastSlamModel {
                                                    first_ + i, next.x_m, next.y_m,
                                                    next.heading_rad));
       }
-      pose_[i] = next;
+      poses_.pose(i) = next;
       if (ekf) {
         // The heading turns by the same angle for every particle: rotate its unit vector (only
         // the mean pose reads it) instead of a sine and cosine per particle.
-        const Unit& h = unit_[i];
-        unit_[i] = Unit{h.c * turn.c - h.s * turn.s, h.s * turn.c + h.c * turn.s};
+        const HeadingUnit& h = poses_.unit(i);
+        poses_.unit(i) = HeadingUnit{h.c * turn.c - h.s * turn.s, h.s * turn.c + h.c * turn.s};
       } else {
-        unit_[i] = Unit{std::cos(next.heading_rad), std::sin(next.heading_rad)};
+        poses_.unit(i) = HeadingUnit{std::cos(next.heading_rad), std::sin(next.heading_rad)};
       }
     }
     return Status::Ok();
@@ -343,15 +191,15 @@ class FastSlamModel {
   // the landmark updates.
   Status Advance(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot,
                  double* log_w) {
-    if (ml_) return AdvanceUnknown(scan, step, begin, end, slot, log_w);
-    if (scan.observations.empty() && !traits_.draws_every_scan()) return Status::Ok();
+    if (association_.active()) return AdvanceUnknown(scan, step, begin, end, slot, log_w);
+    if (scan.observations.empty() && !traits().draws_every_scan()) return Status::Ok();
     for (size_t i = begin; i < end; ++i) {
       double lw = 0;
-      if (traits_.pose == FilterTraits::Pose::kSampledMotion) {
+      if (traits().pose == FilterTraits::Pose::kSampledMotion) {
         GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &lw));
       } else {
-        Eigen::Vector3d mu = ToVector(pose_[i]);
-        Eigen::Matrix3d sigma = Stored(cov_[i]);
+        Eigen::Vector3d mu = ToVector(poses_.pose(i));
+        Eigen::Matrix3d sigma = steps_.Stored(poses_.cov(i));
         for (const LandmarkObservation& z : scan.observations) {
           const Landmark* l = trie_.Find(maps_[i], static_cast<uint64_t>(z.id));
           if (l == nullptr) continue;
@@ -359,9 +207,9 @@ class FastSlamModel {
           GROVE_RETURN_IF_ERROR(ProposalStepOf(i, z, *l, &mu, &sigma, &w));
           lw += w;
         }
-        if (traits_.draws_after_resampling) {
-          proposal_mu_[i] = mu;
-          proposal_sigma_[i] = Store(sigma);
+        if (traits().draws_after_resampling) {
+          poses_.proposal_mu(i) = mu;
+          poses_.proposal_sigma(i) = steps_.Store(sigma);
         } else {
           // The importance ratio replaces the predictive likelihood.
           GROVE_RETURN_IF_ERROR(DrawAndWeigh(scan, step, i, nullptr, mu, sigma, &lw));
@@ -378,108 +226,49 @@ class FastSlamModel {
   // copy has its parent's), keyed by the particle's new index, then the landmark updates from
   // the drawn pose (for differential evolution, Population() does them after moving the poses).
   Status Complete(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot) {
-    if (!traits_.draws_after_resampling) return Status::Ok();
-    if (scan.observations.empty() && !traits_.draws_every_scan()) return Status::Ok();
+    if (!traits().draws_after_resampling) return Status::Ok();
+    if (scan.observations.empty() && !traits().draws_every_scan()) return Status::Ok();
     for (size_t i = begin; i < end; ++i) {
-      GROVE_RETURN_IF_ERROR(Draw(step, i, proposal_mu_[i], Stored(proposal_sigma_[i]), &pose_[i]));
-      unit_[i] = Unit{std::cos(pose_[i].heading_rad), std::sin(pose_[i].heading_rad)};
-      cov_[i] = restart_covariance();
-      if (traits_.evolution || scan.observations.empty()) continue;
+      VehiclePose& pose = poses_.pose(i);
+      GROVE_RETURN_IF_ERROR(steps_.Draw(step, first_ + i, poses_.proposal_mu(i),
+                                        steps_.Stored(poses_.proposal_sigma(i)), &pose));
+      poses_.unit(i) = HeadingUnit{std::cos(pose.heading_rad), std::sin(pose.heading_rad)};
+      poses_.cov(i) = steps_.restart_covariance();
+      if (traits().evolution || scan.observations.empty()) continue;
       GROVE_RETURN_IF_ERROR(UpdateMap(scan, i, slot));
     }
     return Status::Ok();
   }
 
   // Differential evolution (kDeSrcd) over the drawn poses, then their landmark updates; nothing
-  // for the other filters. DE/best/1/bin (Storn and Price; the seed's Eqs. 29-31): for each
-  // generation, each particle i forms the trial u from the mutant v = x_best + F (x_r1 - x_r2)
-  // (r1, r2 distinct and not i) by binomial crossover (coordinate j from v when a uniform draw is
-  // below Cr or j = j_rand, else from x_i), and u replaces x_i when its fitness is strictly
-  // higher. The fitness (Eq. 32) is log exp(-1/2 sum_j v_j^T R^-1 v_j) over the scan's
-  // observations of landmarks in particle i's own map (its associations under unknown
-  // association), v_j = z_j - h(x, landmark mean). Generations are synchronous (every trial is
-  // formed from the generation's poses), every draw comes from the stream (seed, step, particle,
-  // kDifferentialEvolution + 256 generation): the same at any thread count. With fewer than 3
-  // particles there are no r1, r2, and without an observation of a mapped landmark no fitness:
-  // then nothing moves.
+  // for the other filters.
   Status Population(const ScanStep& scan, uint64_t step, WorkerPool& workers) {
-    if (!traits_.evolution || scan.observations.empty()) return Status::Ok();
-    std::atomic<bool> evidence{false};
-    GROVE_RETURN_IF_ERROR(RunInBatches(workers, n_, static_cast<size_t>(config_.batch),
-                                       &batch_status_, [&](int, size_t b, size_t e) {
-                                         for (size_t i = b; i < e; ++i) {
-                                           int terms = 0;
-                                           fitness_[i] = Fitness(scan, i, pose_[i], &terms);
-                                           // Relaxed: read after the loop's join.
-                                           if (terms > 0) {
-                                             evidence.store(true, std::memory_order_relaxed);
-                                           }
-                                         }
-                                         return Status::Ok();
-                                       }));
-    // Without an observation of a mapped landmark every fitness is 0 and there is nothing to
-    // improve. Across ranks every rank decides alike, from every rank's evidence.
-    bool any = evidence.load(std::memory_order_relaxed);
-    if (ranks_ != nullptr) {
-      std::vector<uint8_t> all;
-      const uint8_t mine = any ? 1 : 0;
-      GROVE_RETURN_IF_ERROR(AllGatherValues<uint8_t>(*ranks_, std::span(&mine, 1), &all));
-      any = std::find(all.begin(), all.end(), uint8_t{1}) != all.end();
-    }
-    if (total_ >= 3 && any) {
-      std::vector<VehiclePose> trial(n_);
-      std::vector<double> trial_fitness(n_);
-      std::vector<VehiclePose> everyone;  // across ranks: every particle's pose, in order
-      for (int64_t g = 0; g < config_.de_generations; ++g) {
-        VehiclePose x_best;
-        GROVE_RETURN_IF_ERROR(BestPose(&x_best));
-        std::span<const VehiclePose> population = pose_;
-        if (ranks_ != nullptr) {
-          GROVE_RETURN_IF_ERROR(AllGatherValues<VehiclePose>(
-              *ranks_, std::span<const VehiclePose>(pose_.data(), n_), &everyone));
-          population = everyone;
-        }
-        const uint32_t purpose =
-            StreamPurpose::kDifferentialEvolution + 256 * static_cast<uint32_t>(g);
-        GROVE_RETURN_IF_ERROR(RunInBatches(
-            workers, n_, static_cast<size_t>(config_.batch), &batch_status_,
-            [&](int, size_t b, size_t e) {
-              for (size_t i = b; i < e; ++i) {
-                RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(first_ + i), purpose);
-                trial[i] = TrialPose(first_ + i, population, x_best, &rs);
-                trial_fitness[i] = Fitness(scan, i, trial[i]);
-              }
-              return Status::Ok();
-            }));
-        for (size_t i = 0; i < n_; ++i) {
-          ++evolution_.trials;
-          if (trial_fitness[i] > fitness_[i]) {
-            ++evolution_.accepted;
-            pose_[i] = trial[i];
-            fitness_[i] = trial_fitness[i];
-          }
-        }
-      }
-    }
+    if (!traits().evolution || scan.observations.empty()) return Status::Ok();
+    GROVE_RETURN_IF_ERROR(
+        evolution_.Evolve(step, workers, poses_.poses(),
+                          [&](size_t i, const VehiclePose& pose, int slot, int* terms) {
+                            return Fitness(scan, i, pose, slot, terms);
+                          }));
     return RunInBatches(
         workers, n_, static_cast<size_t>(config_.batch), &batch_status_,
         [&](int slot, size_t b, size_t e) -> Status {
           for (size_t i = b; i < e; ++i) {
-            unit_[i] = Unit{std::cos(pose_[i].heading_rad), std::sin(pose_[i].heading_rad)};
+            const VehiclePose& p = poses_.pose(i);
+            poses_.unit(i) = HeadingUnit{std::cos(p.heading_rad), std::sin(p.heading_rad)};
             GROVE_RETURN_IF_ERROR(UpdateMap(scan, i, slot));
           }
           return Status::Ok();
         });
   }
 
-  // Differential evolution's fitness of `pose` for particle i at this scan (public for tests):
-  // the seed's Eq. 32 as a logarithm, -1/2 sum_j v_j^T R^-1 v_j over the scan's observations of
-  // landmarks in particle i's map (under unknown association its associations, from the query
-  // Advance() kept).
+  // Differential evolution's fitness of `pose` for particle i at this scan, from worker slot
+  // `slot` (public for tests): the seed's Eq. 32 as a logarithm, -1/2 sum_j v_j^T R^-1 v_j over
+  // the scan's observations of landmarks in particle i's map (under unknown association its
+  // associations, from the query Advance() kept).
   // *terms (may be null) gets the number of observations summed.
-  double Fitness(const ScanStep& scan, size_t i, const VehiclePose& pose,
+  double Fitness(const ScanStep& scan, size_t i, const VehiclePose& pose, int slot,
                  int* terms = nullptr) const {
-    const Eigen::Matrix2d r = SensorCovariance(noise_);
+    const Eigen::Matrix2d r = SensorCovariance(steps_.noise());
     double f = 0;
     if (terms != nullptr) *terms = 0;
     auto add = [&](const LandmarkObservation& z, const Landmark& l) {
@@ -488,11 +277,8 @@ class FastSlamModel {
           Innovation(RangeBearing{z.range_m, z.bearing_rad}, Observe(pose, l.x_m, l.y_m));
       f -= 0.5 * (v(0) * v(0) / r(0, 0) + v(1) * v(1) / r(1, 1));
     };
-    if (ml_) {
-      thread_local std::vector<Match> matches;
-      thread_local std::vector<Decision> decisions;
-      matches = pending_[i].matches;  // Decide() reorders them
-      Decide(matches, scan.observations.size(), params_, &decisions);
+    if (association_.active()) {
+      const std::vector<Decision>& decisions = association_.PendingDecisions(scan, i, slot);
       for (size_t j = 0; j < decisions.size(); ++j) {
         if (decisions[j].kind != Decision::kAssociated) continue;
         add(scan.observations[j], *trie_.Find(maps_[i], decisions[j].key));
@@ -507,15 +293,8 @@ class FastSlamModel {
   }
 
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
-    GatherValues(parents, workers, &pose_);
-    GatherValues(parents, workers, &unit_);
-    GatherValues(parents, workers, &cov_);
-    if (traits_.draws_after_resampling) {
-      GatherValues(parents, workers, &proposal_mu_);
-      GatherValues(parents, workers, &proposal_sigma_);
-    }
-    if (ml_) GatherValues(parents, workers, &counts_);
-    if (!pending_.empty()) GatherValues(parents, workers, &pending_);
+    poses_.Gather(parents, workers);
+    association_.Gather(parents, workers);
     maps_.Gather(parents, workers);
     paths_.Gather(parents, workers);
     n_ = parents.size();  // imported particles were named by parents or are dropped
@@ -531,13 +310,13 @@ class FastSlamModel {
     return history_.CheckCounts(paths_.AllReferences());
   }
 
-  double x(size_t i) const { return pose_[i].x_m; }
-  double y(size_t i) const { return pose_[i].y_m; }
+  double x(size_t i) const { return poses_.pose(i).x_m; }
+  double y(size_t i) const { return poses_.pose(i).y_m; }
   // The heading's unit vector: cos and sin of heading(i) to round-off (FastSLAM 2.0 turns it
   // by rotation between scans).
-  double cos_heading(size_t i) const { return unit_[i].c; }
-  double sin_heading(size_t i) const { return unit_[i].s; }
-  const VehiclePose& pose(size_t i) const { return pose_[i]; }
+  double cos_heading(size_t i) const { return poses_.unit(i).c; }
+  double sin_heading(size_t i) const { return poses_.unit(i).s; }
+  const VehiclePose& pose(size_t i) const { return poses_.pose(i); }
   const typename Trie::Node* map(size_t i) const { return maps_[i]; }
   const SegmentHistory::Node* path(size_t i) const { return paths_[i]; }
   const Trie& trie() const { return trie_; }
@@ -556,14 +335,10 @@ class FastSlamModel {
   // The particles' state after a step: poses, covariances, the segment flag, maps and paths.
   void Save(ByteWriter* w) const {
     w->Put<uint64_t>(n_);
-    w->PutBytes(pose_.data(), n_ * sizeof(VehiclePose));
-    w->PutBytes(cov_.data(), n_ * sizeof(PoseCovariance));
-    w->PutBytes(unit_.data(), n_ * sizeof(Unit));
+    poses_.Save(w);
     w->Put<uint8_t>(segment_start_ ? 1 : 0);
-    w->Put<double>(max_range_);
-    w->PutBytes(counts_.data(), counts_.size() * sizeof(AssociationCounts));
-    w->Put<int64_t>(evolution_.trials);
-    w->Put<int64_t>(evolution_.accepted);
+    association_.Save(w);
+    evolution_.Save(w);
     trie_.Save(maps_.roots(), w);
     SegmentHistory::Save(paths_.roots(), w);
   }
@@ -571,33 +346,15 @@ class FastSlamModel {
   // Replaces the state of a new model with a saved one taken after step `steps`.
   Status Load(ByteReader* r, uint64_t steps) {
     GROVE_RETURN_IF_ERROR(ReadParticleCount(r, n_));
-    std::vector<VehiclePose> pose(n_);
-    std::vector<PoseCovariance> cov(n_);
-    GROVE_RETURN_IF_ERROR(r->GetBytes("poses", pose.data(), n_ * sizeof(VehiclePose)));
-    GROVE_RETURN_IF_ERROR(r->GetBytes("pose covariances", cov.data(), n_ * sizeof(PoseCovariance)));
-    std::vector<Unit> unit(n_);
-    GROVE_RETURN_IF_ERROR(r->GetBytes("heading vectors", unit.data(), n_ * sizeof(Unit)));
-    for (size_t i = 0; i < n_; ++i) {
-      GROVE_RETURN_IF_ERROR(CheckParticle(r, i, pose[i], unit[i], cov[i]));
-    }
+    ParticlePoses::Saved poses;
+    GROVE_RETURN_IF_ERROR(ParticlePoses::Read(r, n_, &poses));
     uint8_t segment = 0;
     GROVE_RETURN_IF_ERROR(r->Get("segment flag", &segment));
     if (segment > 1) return r->Error("segment flag", "not 0 or 1");
-    double max_range = 0;
-    GROVE_RETURN_IF_ERROR(r->Get("longest range", &max_range));
-    if (!(max_range >= 0) || !std::isfinite(max_range)) {
-      return r->Error("longest range", "negative or not finite");
-    }
-    std::vector<AssociationCounts> counts(counts_.size());
-    GROVE_RETURN_IF_ERROR(r->GetBytes("association counts", counts.data(),
-                                      counts.size() * sizeof(AssociationCounts)));
-    for (const AssociationCounts& c : counts) GROVE_RETURN_IF_ERROR(CheckCounts(r, c));
+    typename UnknownAssociation<Trie>::Saved association;
+    GROVE_RETURN_IF_ERROR(association_.Read(r, &association));
     EvolutionCounts evolution;
-    GROVE_RETURN_IF_ERROR(r->Get("evolution trials", &evolution.trials));
-    GROVE_RETURN_IF_ERROR(r->Get("evolution accepted", &evolution.accepted));
-    if (!(evolution.accepted >= 0 && evolution.accepted <= evolution.trials)) {
-      return r->Error("evolution counts", "negative, or more accepted than tried");
-    }
+    GROVE_RETURN_IF_ERROR(DifferentialEvolution::ReadCounts(r, &evolution));
     std::vector<typename Trie::Node*> roots;
     GROVE_RETURN_IF_ERROR(trie_.Load(r, n_, 0, &ValidLandmark, &roots));
     if (steps >= UINT32_MAX) {
@@ -607,11 +364,7 @@ class FastSlamModel {
     std::vector<SegmentHistory::Node*> heads;
     Status s = history_.Load(r, n_, static_cast<uint32_t>(steps), 0, &ValidSegmentStart, &heads);
     if (s.ok() && steps > 0) {
-      for (size_t i = 0; i < n_ && s.ok(); ++i) {
-        if (heads[i] == nullptr || heads[i]->value.index >= total_) {
-          s = r->Error("path", "particle " + std::to_string(i) + " has no path or a bad index");
-        }
-      }
+      s = CheckPaths(r, heads);
       if (!s.ok()) {
         for (auto* h : heads) history_.Release(h, 0);
       }
@@ -620,13 +373,10 @@ class FastSlamModel {
       for (auto* root : roots) trie_.Release(root, 0);
       return s;
     }
-    pose_.swap(pose);
-    cov_.swap(cov);
-    unit_.swap(unit);
+    poses_.Restore(&poses);
     segment_start_ = segment == 1;
-    max_range_ = max_range;
-    counts_.swap(counts);
-    evolution_ = evolution;
+    association_.Restore(&association);
+    evolution_.Restore(evolution);
     maps_.Replace(std::move(roots));
     paths_.Replace(std::move(heads));
     return Status::Ok();
@@ -635,35 +385,8 @@ class FastSlamModel {
   // Particles `which` (increasing) for another rank: their values, the scan's pending
   // proposals and matches, their paths and their maps, each shared entry and node written once.
   void Export(std::span<const uint32_t> which, ByteWriter* w) const {
-    for (uint32_t i : which) w->Put(pose_[i]);
-    for (uint32_t i : which) w->Put(unit_[i]);
-    for (uint32_t i : which) w->Put(cov_[i]);
-    if (traits_.draws_after_resampling) {
-      for (uint32_t i : which) {
-        for (int k = 0; k < 3; ++k) w->Put<double>(proposal_mu_[i](k));
-        w->Put(proposal_sigma_[i]);
-      }
-    }
-    if (ml_) {
-      for (uint32_t i : which) w->Put(counts_[i]);
-    }
-    if (!pending_.empty()) {
-      // An empty scan's query is not used after Advance() (and its view may name landmarks its
-      // evidence removed): none is sent.
-      const ScanQuery none;
-      for (uint32_t i : which) {
-        const ScanQuery& q = scan_size_ > 0 ? pending_[i] : none;
-        w->Put<uint64_t>(q.matches.size());
-        for (const Match& m : q.matches) {
-          w->Put<uint32_t>(m.detection);
-          w->Put<uint64_t>(m.key);
-          w->Put<double>(m.log_likelihood);
-          w->Put<double>(m.d2);
-        }
-        w->Put<uint64_t>(q.in_view.size());
-        w->PutBytes(q.in_view.data(), q.in_view.size() * sizeof(uint64_t));
-      }
-    }
+    poses_.Export(which, w);
+    association_.Export(which, w);
     SegmentHistory::Save(paths_.Pick(which), w);
     trie_.Save(maps_.Pick(which), w);
   }
@@ -671,68 +394,21 @@ class FastSlamModel {
   // Appends `count` particles written by Export() after step `steps`: size() grows by count
   // until the next Gather(). Checks every value. On error the model must not step again.
   Status Import(ByteReader* r, size_t count, uint64_t steps) {
-    if (count > r->remaining() / (sizeof(VehiclePose) + sizeof(Unit) + sizeof(PoseCovariance))) {
+    if (count > r->remaining() / ParticlePoses::kMessageBytes) {
       return r->Error("particle count", "larger than the message");
     }
     if (steps >= UINT32_MAX) return r->Error("step", "too many steps");
-    const size_t at = n_, end = n_ + count;
-    pose_.resize(end);
-    unit_.resize(end);
-    cov_.resize(end);
-    GROVE_RETURN_IF_ERROR(r->GetBytes("poses", pose_.data() + at, count * sizeof(VehiclePose)));
-    GROVE_RETURN_IF_ERROR(r->GetBytes("heading vectors", unit_.data() + at, count * sizeof(Unit)));
-    GROVE_RETURN_IF_ERROR(
-        r->GetBytes("pose covariances", cov_.data() + at, count * sizeof(PoseCovariance)));
-    for (size_t i = at; i < end; ++i) {
-      GROVE_RETURN_IF_ERROR(CheckParticle(r, i - at, pose_[i], unit_[i], cov_[i]));
-    }
-    if (traits_.draws_after_resampling) {
-      proposal_mu_.resize(end);
-      proposal_sigma_.resize(end);
-      for (size_t i = at; i < end; ++i) {
-        for (int k = 0; k < 3; ++k) {
-          GROVE_RETURN_IF_ERROR(r->Get("proposal mean", &proposal_mu_[i](k)));
-        }
-        GROVE_RETURN_IF_ERROR(r->Get("proposal covariance", &proposal_sigma_[i]));
-        const PoseCovariance& c = proposal_sigma_[i];
-        if (!proposal_mu_[i].allFinite() ||
-            !std::isfinite(c.xx + c.xy + c.xh + c.yy + c.yh + c.hh)) {
-          return r->Error("proposal", "a value is not finite");
-        }
-      }
-    }
-    if (ml_) {
-      counts_.resize(end);
-      GROVE_RETURN_IF_ERROR(r->GetBytes("association counts", counts_.data() + at,
-                                        count * sizeof(AssociationCounts)));
-      for (size_t i = at; i < end; ++i) GROVE_RETURN_IF_ERROR(CheckCounts(r, counts_[i]));
-    }
-    if (!pending_.empty()) {
-      pending_.resize(end);
-      for (size_t i = at; i < end; ++i) GROVE_RETURN_IF_ERROR(ReadQuery(r, &pending_[i]));
-    }
+    const size_t at = n_;
+    GROVE_RETURN_IF_ERROR(poses_.Import(r, count));
+    GROVE_RETURN_IF_ERROR(association_.Import(r, at, count));
     std::vector<SegmentHistory::Node*> heads;
     GROVE_RETURN_IF_ERROR(
         history_.Load(r, count, static_cast<uint32_t>(steps), 0, &ValidSegmentStart, &heads));
     std::vector<typename Trie::Node*> roots;
-    Status s;
-    for (size_t k = 0; k < count && s.ok(); ++k) {
-      if (steps > 0 && (heads[k] == nullptr || heads[k]->value.index >= total_)) {
-        s = r->Error("path", "particle " + std::to_string(k) + " has no path or a bad index");
-      }
-    }
+    Status s = steps > 0 ? CheckPaths(r, heads) : Status::Ok();
     if (s.ok()) s = trie_.Load(r, count, 0, &ValidLandmark, &roots);
     // The pending matches and views name landmarks of the particle's own map.
-    for (size_t k = 0; k < count && s.ok() && !pending_.empty(); ++k) {
-      const ScanQuery& q = pending_[at + k];
-      auto known = [&](uint64_t key) { return trie_.Find(roots[k], key) != nullptr; };
-      for (const Match& m : q.matches) {
-        if (!known(m.key)) s = r->Error("matches", "a match names a landmark not in the map");
-      }
-      for (uint64_t key : q.in_view) {
-        if (!known(key)) s = r->Error("view", "a landmark in view is not in the map");
-      }
-    }
+    if (s.ok()) s = association_.CheckImported(r, trie_, roots, at);
     if (!s.ok()) {
       for (auto* h : heads) history_.Release(h, 0);
       for (auto* root : roots) trie_.Release(root, 0);
@@ -740,104 +416,26 @@ class FastSlamModel {
     }
     paths_.Append(heads);
     maps_.Append(roots);
-    n_ = end;
+    n_ = at + count;
     return Status::Ok();
   }
 
  private:
-  struct Unit {
-    double c, s;
-  };
-
-  // Checks of a particle's values read from a checkpoint or a message (`k`: its place there).
-  static Status CheckParticle(ByteReader* r, size_t k, const VehiclePose& p, const Unit& u,
-                              const PoseCovariance& c) {
-    if (!(std::fabs(u.c * u.c + u.s * u.s - 1) < 1e-6)) {
-      return r->Error("heading vectors", "not a unit vector");
-    }
-    if (!std::isfinite(p.x_m) || !std::isfinite(p.y_m) || !(std::fabs(p.heading_rad) <= 4)) {
-      return r->Error("poses", "particle " + std::to_string(k) + "'s pose is not finite");
-    }
-    for (double v : {c.xx, c.xy, c.xh, c.yy, c.yh, c.hh}) {
-      if (!std::isfinite(v)) return r->Error("pose covariances", "a value is not finite");
-    }
-    // Variances, or a factor's diagonal.
-    if (!(c.xx >= 0 && c.yy >= 0 && c.hh >= 0)) {
-      return r->Error("pose covariances", "a variance is negative");
-    }
-    return Status::Ok();
-  }
-  static Status CheckCounts(ByteReader* r, const AssociationCounts& c) {
-    for (int64_t v :
-         {c.associated, c.created, c.ignored, c.removed, c.dropped, c.tagged, c.wrong}) {
-      if (v < 0) return r->Error("association counts", "a count is negative");
-    }
-    return Status::Ok();
-  }
+  using Scratch = typename UnknownAssociation<Trie>::Scratch;
 
   static bool ValidLandmark(const Landmark& l) {
     return std::isfinite(l.x_m) && std::isfinite(l.y_m) && std::isfinite(l.xx) &&
            std::isfinite(l.xy) && std::isfinite(l.yy) && l.xx >= 0 && l.yy >= 0 && l.tag >= -1;
   }
 
-  static Eigen::Matrix3d Full(const PoseCovariance& c) {
-    return (Eigen::Matrix3d() << c.xx, c.xy, c.xh, c.xy, c.yy, c.yh, c.xh, c.yh, c.hh).finished();
-  }
-  static PoseCovariance Upper(const Eigen::Matrix3d& m) {
-    return PoseCovariance{m(0, 0), 0.5 * (m(0, 1) + m(1, 0)), 0.5 * (m(0, 2) + m(2, 0)),
-                          m(1, 1), 0.5 * (m(1, 2) + m(2, 1)), m(2, 2)};
-  }
-  // The stored pose covariance as a matrix: the covariance, or the lower factor.
-  Eigen::Matrix3d Stored(const PoseCovariance& c) const {
-    if (!traits_.square_root_pose()) return Full(c);
-    return (Eigen::Matrix3d() << c.xx, 0, 0, c.xy, c.yy, 0, c.xh, c.yh, c.hh).finished();
-  }
-  PoseCovariance Store(const Eigen::Matrix3d& m) const {
-    if (!traits_.square_root_pose()) return Upper(m);
-    return PoseCovariance{m(0, 0), m(1, 0), m(2, 0), m(1, 1), m(2, 1), m(2, 2)};
-  }
-
-  // Sigma <- Gv Sigma Gv^T + Gu Q Gu^T on the upper triangle, for the Jacobians' shape: Gv is
-  // the identity but for its heading column (gv(0,2), gv(1,2)) and Q is diagonal. Writing
-  // Gv = I + a e_h^T with a = (gv(0,2), gv(1,2), 0) and c = Sigma e_h, the first term is
-  // Sigma + a c^T + c a^T + Sigma_hh a a^T; the second is q_v g_v g_v^T + q_g g_g g_g^T.
-  void PropagateCovariance(const Eigen::Matrix3d& gv, const Eigen::Matrix<double, 3, 2>& gu,
-                           PoseCovariance* p) const {
-    const double ax = gv(0, 2), ay = gv(1, 2);
-    const double cx = p->xh, cy = p->yh, ch = p->hh;
-    const double qv = q_(0, 0), qg = q_(1, 1);
-    const double v0 = gu(0, 0), v1 = gu(1, 0), v2 = gu(2, 0);
-    const double g0 = gu(0, 1), g1 = gu(1, 1), g2 = gu(2, 1);
-    PoseCovariance out;
-    out.xx = p->xx + 2 * ax * cx + ch * ax * ax + qv * v0 * v0 + qg * g0 * g0;
-    out.xy = p->xy + ax * cy + cx * ay + ch * ax * ay + qv * v0 * v1 + qg * g0 * g1;
-    out.xh = p->xh + ax * ch + qv * v0 * v2 + qg * g0 * g2;
-    out.yy = p->yy + 2 * ay * cy + ch * ay * ay + qv * v1 * v1 + qg * g1 * g1;
-    out.yh = p->yh + ay * ch + qv * v1 * v2 + qg * g1 * g2;
-    out.hh = p->hh + qv * v2 * v2 + qg * g2 * g2;
-    *p = out;
-  }
-
-  // The unscented or central-difference prediction of (mean, m) over the control.
-  Status SigmaPointPredict(const ControlStep& c, Eigen::Vector3d* mean, Eigen::Matrix3d* m) const {
-    if (traits_.pose == FilterTraits::Pose::kUnscented) {
-      return UnscentedPredict(geometry_, c.v_mps, c.steer_rad, c.dt_s, control_noise_, rule_, mean,
-                              m);
+  // Every particle of `heads` read after a step has a path, its index one of the filter's.
+  Status CheckPaths(ByteReader* r, const std::vector<SegmentHistory::Node*>& heads) const {
+    for (size_t k = 0; k < heads.size(); ++k) {
+      if (heads[k] == nullptr || heads[k]->value.index >= total_) {
+        return r->Error("path", "particle " + std::to_string(k) + " has no path or a bad index");
+      }
     }
-    return CentralDifferencePredict(geometry_, c.v_mps, c.steer_rad, c.dt_s, control_noise_,
-                                    config_.cd_step, mean, m);
-  }
-
-  // FastSLAM 1.0: particle `index`'s own control for step `step`, drawn from N(u, Q); false
-  // when the vehicle model cannot use the drawn steering angle.
-  bool NoisyTerms(const ControlStep& c, uint64_t step, uint32_t index, ControlTerms* u) const {
-    double v = c.v_mps, g = c.steer_rad;
-    RandomStream rs(config_.seed, step + 1, index, StreamPurpose::kMotion);
-    if (config_.sigma_speed_mps > 0) v += config_.sigma_speed_mps * rs.NextNormal();
-    if (config_.sigma_steer_rad > 0) g += config_.sigma_steer_rad * rs.NextNormal();
-    if (!SteeringUsable(geometry_, g)) return false;
-    *u = ControlTermsOf(geometry_, v, g, c.dt_s);
-    return true;
+    return Status::Ok();
   }
 
   Status BadSteering(size_t i) const {
@@ -847,63 +445,12 @@ class FastSlamModel {
         first_ + i, FastSlamVehicleName(config_.vehicle)));
   }
 
-  // ---- The filters' per-observation steps ----
-
-  // The covariance reading of a leaf.
-  Landmark CovarianceLeaf(const Landmark& leaf) const {
-    return traits_.square_root_map() ? WithCovariance(leaf) : leaf;
-  }
-  // The square-root reading of a leaf: the lower Cholesky factor of a covariance leaf (for a
-  // singular one, the triangular factor of its eigen-root).
-  Status SquareRootLeaf(const Landmark& leaf, Landmark* out) const {
-    *out = leaf;
-    if (traits_.square_root_map()) return Status::Ok();
-    Eigen::Matrix2d root;
-    if (!PsdSquareRoot<2>(Covariance(leaf), &root)) {
-      return FailedPreconditionError("the landmark covariance is not positive semi-definite");
-    }
-    SetCholeskyFactor(TriangularFactor<2, 2>(root), out);
-    return Status::Ok();
-  }
-
   // One observation's proposal step on (mu, sigma) by the filter's pose step; *w gets its
   // predictive log-likelihood.
   Status ProposalStepOf(size_t i, const LandmarkObservation& z, const Landmark& leaf,
                         Eigen::Vector3d* mu, Eigen::Matrix3d* sigma, double* w) const {
-    const RangeBearing rb{z.range_m, z.bearing_rad};
-    Status s;
-    switch (traits_.pose) {
-      case FilterTraits::Pose::kUnscented:
-        s = UnscentedProposalStep(mu, sigma, CovarianceLeaf(leaf), rb, noise_, rule_, w);
-        break;
-      case FilterTraits::Pose::kCentralDifference: {
-        Landmark root;
-        s = SquareRootLeaf(leaf, &root);
-        if (s.ok()) {
-          s = CentralDifferenceProposalStep(mu, sigma, root, rb, noise_, config_.cd_step, w);
-        }
-        break;
-      }
-      default:
-        s = ProposalStep(mu, sigma, CovarianceLeaf(leaf), rb, noise_, w);
-        break;
-    }
-    if (!s.ok()) return ParticleError(i, z, s);
-    return Status::Ok();
-  }
-
-  // A draw from N(mu, sigma) (sigma a covariance or a factor) keyed by (step, i).
-  Status Draw(uint64_t step, size_t i, const Eigen::Vector3d& mu, const Eigen::Matrix3d& sigma,
-              VehiclePose* out) const {
-    RandomStream rs(config_.seed, step + 1, static_cast<uint32_t>(first_ + i),
-                    StreamPurpose::kProposal);
-    const Eigen::Vector3d normals(rs.NextNormal(), rs.NextNormal(), rs.NextNormal());
-    Status s = traits_.square_root_pose() ? SamplePoseFromFactor(mu, sigma, normals, out)
-                                          : SamplePose(mu, sigma, normals, out);
-    if (!s.ok()) {
-      return FailedPreconditionError(
-          fmt::format("particle {}'s proposal: {}", first_ + i, s.message()));
-    }
+    Status s = steps_.ProposalStep(z, leaf, mu, sigma, w);
+    if (!s.ok()) return ParticleError(first_ + i, z, s);
     return Status::Ok();
   }
 
@@ -916,17 +463,17 @@ class FastSlamModel {
   Status DrawAndWeigh(const ScanStep& scan, uint64_t step, size_t i,
                       const std::vector<Decision>* decisions, const Eigen::Vector3d& mu,
                       const Eigen::Matrix3d& sigma, double* lw) {
-    const Eigen::Vector3d prior_mu = ToVector(pose_[i]);
-    const Eigen::Matrix3d prior = Stored(cov_[i]);
+    const Eigen::Vector3d prior_mu = ToVector(poses_.pose(i));
+    const Eigen::Matrix3d prior = steps_.Stored(poses_.cov(i));
     VehiclePose x;
-    GROVE_RETURN_IF_ERROR(Draw(step, i, mu, sigma, &x));
+    GROVE_RETURN_IF_ERROR(steps_.Draw(step, first_ + i, mu, sigma, &x));
     double w = 0;
     for (size_t j = 0; j < scan.observations.size(); ++j) {
       const LandmarkObservation& z = scan.observations[j];
       const Landmark* l = nullptr;
       if (decisions != nullptr) {
         if ((*decisions)[j].kind != Decision::kAssociated) {
-          w += log_p0_;
+          w += association_.log_p0();
           continue;
         }
         l = trie_.Find(maps_[i], (*decisions)[j].key);
@@ -935,217 +482,43 @@ class FastSlamModel {
         if (l == nullptr) continue;
       }
       double ll = 0;
-      Status s = ObservationLogLikelihood(x, RangeBearing{z.range_m, z.bearing_rad}, noise_,
-                                          CovarianceLeaf(*l), &ll);
-      if (!s.ok()) return ParticleError(i, z, s);
+      Status s = ObservationLogLikelihood(x, RangeBearing{z.range_m, z.bearing_rad}, steps_.noise(),
+                                          steps_.CovarianceLeaf(*l), &ll);
+      if (!s.ok()) return ParticleError(first_ + i, z, s);
       w += ll;
     }
-    const Eigen::Vector3d xv = ToVector(x);
-    if (!(prior.diagonal().array() > 0).all() || !(sigma.diagonal().array() > 0).all()) {
-      return FailedPreconditionError(
-          fmt::format("particle {}: a pose covariance is singular: the importance ratio is not "
-                      "defined",
-                      first_ + i));
-    }
-    w += LogDensityOfFactor<3>(prior, PoseDifference(xv, prior_mu)) -
-         LogDensityOfFactor<3>(sigma, PoseDifference(xv, mu));
-    if (!std::isfinite(w)) {
-      return FailedPreconditionError(
-          fmt::format("particle {}'s importance weight is not finite", first_ + i));
-    }
+    GROVE_RETURN_IF_ERROR(steps_.AddImportanceRatio(first_ + i, prior_mu, prior, x, mu, sigma, &w));
     *lw = w;
-    pose_[i] = x;
-    unit_[i] = Unit{std::cos(x.heading_rad), std::sin(x.heading_rad)};
-    cov_[i] = restart_covariance();
+    poses_.pose(i) = x;
+    poses_.unit(i) = HeadingUnit{std::cos(x.heading_rad), std::sin(x.heading_rad)};
+    poses_.cov(i) = steps_.restart_covariance();
     return Status::Ok();
   }
 
-  // A leaf's update by z from a known pose, by the filter's landmark step.
-  Status UpdateLeaf(const VehiclePose& pose, const RangeBearing& z, Landmark* l, double* ll) const {
-    switch (traits_.map) {
-      case FilterTraits::Map::kUnscented:
-        return UnscentedUpdateLandmark(pose, z, noise_, rule_, l, ll);
-      case FilterTraits::Map::kCentralDifference:
-        return CentralDifferenceUpdateLandmark(pose, z, noise_, config_.cd_step, l, ll);
-      default:
-        return UpdateLandmark(pose, z, noise_, l, ll);
-    }
-  }
-  // A new leaf from z seen at `pose` (U-FastSLAM initialises as the EKF does: Kim's add_feature).
-  Landmark NewLeaf(const VehiclePose& pose, const RangeBearing& z) const {
-    if (traits_.map == FilterTraits::Map::kCentralDifference) {
-      return CentralDifferenceInitLandmark(pose, z, noise_, config_.cd_step);
-    }
-    return InitLandmark(pose, z, noise_);
-  }
-
-  // The landmark updates of particle i's scan from its pose now.
-  Status UpdateMap(const ScanStep& scan, size_t i, int slot) {
-    if (ml_) {
-      // The matches Advance() found from the predicted mean (a copy has its parent's).
-      Scratch& sc = scratch_[slot];
-      sc.query = pending_[i];
-      Decide(sc.query.matches, scan.observations.size(), params_, &sc.decisions);
-      return ApplyScan(scan, i, slot, &sc);
-    }
-    double unused = 0;
-    return UpdateLandmarks(scan, i, slot, &unused);
-  }
-
-  // The update of each observed landmark from particle i's pose (new ones initialised);
-  // *log_w gets the sum of the known ones' log-likelihoods.
-  Status UpdateLandmarks(const ScanStep& scan, size_t i, int slot, double* log_w) {
-    const VehiclePose pose = pose_[i];
-    for (const LandmarkObservation& z : scan.observations) {
-      const RangeBearing rb{z.range_m, z.bearing_rad};
-      Status s;
-      double ll = 0;
-      const bool ok = trie_.Update(&maps_[i], static_cast<uint64_t>(z.id), slot,
-                                   [&](Landmark& l, bool existed) {
-                                     if (!existed) {
-                                       l = NewLeaf(pose, rb);
-                                     } else {
-                                       s = UpdateLeaf(pose, rb, &l, &ll);
-                                     }
-                                   });
-      if (!ok) return NoMemory(i, "map");
-      if (!s.ok()) return ParticleError(i, z, s);
-      *log_w += ll;
-    }
-    return Status::Ok();
-  }
-
-  // ---- Differential evolution ----
-
-  // The pose of the first particle of highest fitness (across ranks, the whole filter's).
-  Status BestPose(VehiclePose* best) const {
-    struct Best {
-      double fitness;
-      VehiclePose pose;
-    };
-    const size_t k = static_cast<size_t>(
-        std::max_element(fitness_.begin(), fitness_.begin() + static_cast<ptrdiff_t>(n_)) -
-        fitness_.begin());
-    Best mine{fitness_[k], pose_[k]};
-    if (ranks_ == nullptr) {
-      *best = mine.pose;
-      return Status::Ok();
-    }
-    std::vector<Best> all;
-    GROVE_RETURN_IF_ERROR(AllGatherValues<Best>(*ranks_, std::span(&mine, 1), &all));
-    // The first strict maximum in rank order is the first in particle order.
-    size_t q = 0;
-    for (size_t r = 1; r < all.size(); ++r) {
-      if (all[r].fitness > all[q].fitness) q = r;
-    }
-    *best = all[q].pose;
-    return Status::Ok();
-  }
-
-  // The trial pose of the filter's particle i (DE/best/1/bin), from `population`, every
-  // particle's pose in the filter's order. REQUIRES: total_ >= 3.
-  VehiclePose TrialPose(size_t i, std::span<const VehiclePose> population, const VehiclePose& best,
-                        RandomStream* rs) const {
-    const size_t n = population.size();
-    auto other = [&](size_t a, size_t b) {
-      for (;;) {
-        const size_t k = static_cast<size_t>(rs->NextUniform() * static_cast<double>(n));
-        if (k < n && k != a && k != b) return k;
-      }
-    };
-    const size_t r1 = other(i, i);
-    const size_t r2 = other(i, r1);
-    const int j_rand = std::min(2, static_cast<int>(rs->NextUniform() * 3));
-    const VehiclePose& a = population[r1];
-    const VehiclePose& b = population[r2];
-    const double mutant[3] = {
-        best.x_m + config_.de_scale * (a.x_m - b.x_m),
-        best.y_m + config_.de_scale * (a.y_m - b.y_m),
-        best.heading_rad + config_.de_scale * WrapAngle(a.heading_rad - b.heading_rad)};
-    const double target[3] = {population[i].x_m, population[i].y_m, population[i].heading_rad};
-    double u[3];
-    for (int j = 0; j < 3; ++j) {
-      const bool cross = rs->NextUniform() < config_.de_crossover || j == j_rand;
-      u[j] = cross ? mutant[j] : target[j];
-    }
-    return VehiclePose{u[0], u[1], WrapAngle(u[2])};
-  }
-
-  // ---- Unknown association ----
-
-  // What one range query found for a particle's scan: the pairs within an augment gate and,
-  // with the evidence on, the landmarks in view.
-  struct ScanQuery {
-    std::vector<Match> matches;
-    std::vector<uint64_t> in_view;  // increasing
-  };
-  struct alignas(kFalseSharingBytes) Scratch {
-    ScanQuery query;
-    std::vector<Decision> decisions;
-    std::vector<uint64_t> keys;
-  };
-
-  // A pending ScanQuery as Export() writes it: matches of this scan's detections, the view's
-  // keys increasing (their landmarks are checked against the map once it is read).
-  Status ReadQuery(ByteReader* r, ScanQuery* q) const {
-    constexpr size_t kMatchBytes = sizeof(uint32_t) + sizeof(uint64_t) + 2 * sizeof(double);
-    uint64_t count = 0;
-    GROVE_RETURN_IF_ERROR(r->GetCount("match count", kMatchBytes, &count));
-    q->matches.resize(count);
-    for (Match& m : q->matches) {
-      GROVE_RETURN_IF_ERROR(r->Get("match detection", &m.detection));
-      GROVE_RETURN_IF_ERROR(r->Get("match key", &m.key));
-      GROVE_RETURN_IF_ERROR(r->Get("match likelihood", &m.log_likelihood));
-      GROVE_RETURN_IF_ERROR(r->Get("match distance", &m.d2));
-      if (m.detection >= scan_size_ || std::isnan(m.log_likelihood) || !(m.d2 >= 0)) {
-        return r->Error("matches", "a detection that is not the scan's, or a bad likelihood");
-      }
-    }
-    GROVE_RETURN_IF_ERROR(r->GetCount("view count", sizeof(uint64_t), &count));
-    q->in_view.resize(count);
-    GROVE_RETURN_IF_ERROR(r->GetBytes("view", q->in_view.data(), count * sizeof(uint64_t)));
-    for (size_t k = 1; k < count; ++k) {
-      if (q->in_view[k] <= q->in_view[k - 1]) return r->Error("view", "keys not increasing");
-    }
-    return Status::Ok();
-  }
-
-  // The query and decisions of particle i's scan seen from `pose`, into sc.
-  Status DecideScan(const ScanStep& scan, size_t i, const VehiclePose& pose, Scratch* sc) const {
-    sc->query.matches.clear();
-    sc->query.in_view.clear();
-    const SensorView view{config_.sensor_range_m, config_.sensor_fov_rad};
-    const bool evidence = config_.evidence == FastSlamEvidence::kOn;
-    Status s = FindMatches(trie_, maps_[i], pose, scan.observations, params_, max_range_,
-                           /*use_index=*/true, &sc->query.matches, evidence ? &view : nullptr,
-                           &sc->query.in_view);
-    if (!s.ok()) return Status(s.code(), fmt::format("particle {}, {}", first_ + i, s.message()));
-    Decide(sc->query.matches, scan.observations.size(), params_, &sc->decisions);
-    return Status::Ok();
-  }
-
+  // Unknown association's Advance(): particle by particle, the decisions from its pose now,
+  // the weight, and (but for the filters that draw after resampling) the map changes.
   Status AdvanceUnknown(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot,
                         double* log_w) {
-    Scratch& sc = scratch_[slot];
-    const bool sampled = traits_.pose == FilterTraits::Pose::kSampledMotion;
-    if (scan.observations.empty() && !traits_.draws_every_scan()) {
+    Scratch& sc = association_.scratch(slot);
+    const bool sampled = traits().pose == FilterTraits::Pose::kSampledMotion;
+    if (scan.observations.empty() && !traits().draws_every_scan()) {
       // Nothing to weigh or draw; the evidence of what is in view still falls.
-      if (config_.evidence == FastSlamEvidence::kOff) return Status::Ok();
+      if (!association_.evidence()) return Status::Ok();
       for (size_t i = begin; i < end; ++i) {
-        GROVE_RETURN_IF_ERROR(DecideScan(scan, i, pose_[i], &sc));
+        GROVE_RETURN_IF_ERROR(DecideScan(scan, i, &sc));
         GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
       }
       return Status::Ok();
     }
     for (size_t i = begin; i < end; ++i) {
-      GROVE_RETURN_IF_ERROR(DecideScan(scan, i, pose_[i], &sc));
+      GROVE_RETURN_IF_ERROR(DecideScan(scan, i, &sc));
       double lw = 0;
-      Eigen::Vector3d mu = ToVector(pose_[i]);
-      Eigen::Matrix3d sigma = Stored(cov_[i]);
+      Eigen::Vector3d mu = ToVector(poses_.pose(i));
+      Eigen::Matrix3d sigma = steps_.Stored(poses_.cov(i));
       for (size_t j = 0; j < sc.decisions.size(); ++j) {
         const Decision& d = sc.decisions[j];
         if (d.kind != Decision::kAssociated) {
-          lw += log_p0_;
+          lw += association_.log_p0();
         } else if (sampled) {
           lw += d.log_likelihood;
         } else {
@@ -1157,11 +530,11 @@ class FastSlamModel {
       }
       if (sampled) {
         GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
-      } else if (traits_.draws_after_resampling) {
-        proposal_mu_[i] = mu;
-        proposal_sigma_[i] = Store(sigma);
-        pending_[i] = sc.query;
-        if (scan.observations.empty() && config_.evidence == FastSlamEvidence::kOn) {
+      } else if (traits().draws_after_resampling) {
+        poses_.proposal_mu(i) = mu;
+        poses_.proposal_sigma(i) = steps_.Store(sigma);
+        association_.KeepQuery(i, sc);
+        if (scan.observations.empty() && association_.evidence()) {
           // The evidence of an empty scan is applied now, from the predicted mean (Complete()
           // only draws).
           GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
@@ -1175,161 +548,61 @@ class FastSlamModel {
     return Status::Ok();
   }
 
-  // The first free slot of `cell` in particle i's map, or -1.
-  int FreeSlot(size_t i, const Cell& cell) const {
-    for (int k = 0; k < kSlotsPerCell; ++k) {
-      if (trie_.Find(maps_[i], SpatialKey(cell, k)) == nullptr) return k;
-    }
-    return -1;
+  // Unknown association: particle i's query and decisions from its pose now, into sc.
+  Status DecideScan(const ScanStep& scan, size_t i, Scratch* sc) const {
+    return association_.DecideScan(trie_, maps_[i], scan, i, poses_.pose(i), sc);
   }
-
-  // Stores `l` in a free slot of the cell of its mean; counts a drop when the cell is full.
-  Status Insert(size_t i, int slot, const Landmark& l) {
-    Cell cell;
-    if (!CellOf(l.x_m, l.y_m, params_.cell_m, &cell)) {
-      return FailedPreconditionError(fmt::format(
-          "particle {}: a landmark at ({}, {}) is outside the landmark index (|x|, |y| < {} m)",
-          first_ + i, l.x_m, l.y_m, static_cast<double>(kMaxCell) * params_.cell_m));
-    }
-    const int k = FreeSlot(i, cell);
-    if (k < 0) {
-      ++counts_[i].dropped;
-      return Status::Ok();
-    }
-    if (!trie_.Update(&maps_[i], SpatialKey(cell, k), slot,
-                      [&](Landmark& leaf, bool) { leaf = l; })) {
-      return NoMemory(i, "map");
-    }
-    return Status::Ok();
-  }
-  // Applies particle i's decisions in sc from its pose now (the view in sc is the one the
-  // decisions were made from; see the file comment).
+  // Unknown association: applies particle i's decisions in sc from its pose now.
   Status ApplyScan(const ScanStep& scan, size_t i, int slot, Scratch* sc) {
-    const VehiclePose pose = pose_[i];
-    AssociationCounts& counts = counts_[i];
-    std::vector<uint64_t>& touched = sc->keys;
-    touched.clear();
-    // 1. Updates of the associated landmarks.
-    for (size_t j = 0; j < sc->decisions.size(); ++j) {
-      const Decision& d = sc->decisions[j];
-      const LandmarkObservation& z = scan.observations[j];
-      if (d.kind == Decision::kIgnored) ++counts.ignored;
-      if (d.kind != Decision::kAssociated) continue;
-      Status s;
-      int32_t tag = -1;
-      const bool ok = trie_.Update(&maps_[i], d.key, slot, [&](Landmark& l, bool) {
-        s = UpdateLeaf(pose, RangeBearing{z.range_m, z.bearing_rad}, &l, nullptr);
-        if (l.evidence < (1 << 30)) ++l.evidence;
-        tag = l.tag;
-      });
-      if (!ok) return NoMemory(i, "map");
-      if (!s.ok()) return ParticleError(i, z, s);
-      ++counts.associated;
-      if (z.id >= 0 && tag >= 0) {
-        ++counts.tagged;
-        counts.wrong += tag != z.id;
-      }
-      touched.push_back(d.key);
-    }
-    // 2. Evidence of the landmarks in view and not seen: near no detection's augment gate.
-    if (config_.evidence == FastSlamEvidence::kOn) {
-      std::vector<Match>& near = sc->query.matches;  // every pair within an augment gate
-      std::sort(near.begin(), near.end(),
-                [](const Match& a, const Match& b) { return a.key < b.key; });
-      const size_t first_missed = touched.size();
-      for (uint64_t key : sc->query.in_view) {
-        auto it = std::lower_bound(near.begin(), near.end(), key,
-                                   [](const Match& m, uint64_t k) { return m.key < k; });
-        if (it == near.end() || it->key != key) touched.push_back(key);
-      }
-      for (size_t k = first_missed; k < touched.size(); ++k) {
-        bool remove = false;
-        if (!trie_.Update(&maps_[i], touched[k], slot, [&](Landmark& l, bool) {
-              --l.evidence;
-              remove = l.evidence < config_.evidence_threshold;
-            })) {
-          return NoMemory(i, "map");
-        }
-        if (remove) {
-          if (!trie_.Erase(&maps_[i], touched[k], slot)) return NoMemory(i, "map");
-          ++counts.removed;
-        }
-      }
-      touched.resize(first_missed);
-    }
-    // 3. An updated landmark whose mean left its cell moves to a slot of its new cell.
-    std::sort(touched.begin(), touched.end());
-    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-    for (uint64_t key : touched) {
-      const Landmark l = *trie_.Find(maps_[i], key);
-      Cell cell;
-      if (CellOf(l.x_m, l.y_m, params_.cell_m, &cell) && cell == CellOfKey(key)) continue;
-      if (!trie_.Erase(&maps_[i], key, slot)) return NoMemory(i, "map");
-      GROVE_RETURN_IF_ERROR(Insert(i, slot, l));
-    }
-    // 4. New landmarks.
-    for (size_t j = 0; j < sc->decisions.size(); ++j) {
-      if (sc->decisions[j].kind != Decision::kNew) continue;
-      const LandmarkObservation& z = scan.observations[j];
-      Landmark l = NewLeaf(pose, RangeBearing{z.range_m, z.bearing_rad});
-      l.evidence = 1;
-      l.tag = z.id >= 0 ? static_cast<int32_t>(z.id) : -1;
-      GROVE_RETURN_IF_ERROR(Insert(i, slot, l));
-      ++counts.created;
-    }
-    return Status::Ok();
+    return association_.ApplyScan(steps_, &trie_, &maps_[i], scan, i, poses_.pose(i), slot, sc);
   }
 
-  // Errors of particle i here, named by the filter's index.
-  Status NoMemory(size_t i, const char* what) const {
-    return ResourceExhaustedError(
-        fmt::format("out of memory for particle {}'s {}", first_ + i, what));
+  // The landmark updates of particle i's scan from its pose now.
+  Status UpdateMap(const ScanStep& scan, size_t i, int slot) {
+    if (association_.active()) {
+      return association_.ApplyPending(steps_, &trie_, &maps_[i], scan, i, poses_.pose(i), slot);
+    }
+    double unused = 0;
+    return UpdateLandmarks(scan, i, slot, &unused);
   }
-  Status ParticleError(size_t i, const LandmarkObservation& z, const Status& s) const {
-    return Status(s.code(),
-                  fmt::format("particle {}, landmark {}: {}", first_ + i, z.id, s.message()));
-  }
-  Status ParticleStatus(size_t i, const Status& s) const {
-    return Status(s.code(), fmt::format("particle {}: {}", first_ + i, s.message()));
+
+  // The update of each observed landmark from particle i's pose (new ones initialised);
+  // *log_w gets the sum of the known ones' log-likelihoods.
+  Status UpdateLandmarks(const ScanStep& scan, size_t i, int slot, double* log_w) {
+    const VehiclePose pose = poses_.pose(i);
+    for (const LandmarkObservation& z : scan.observations) {
+      const RangeBearing rb{z.range_m, z.bearing_rad};
+      Status s;
+      double ll = 0;
+      const bool ok = trie_.Update(&maps_[i], static_cast<uint64_t>(z.id), slot,
+                                   [&](Landmark& l, bool existed) {
+                                     if (!existed) {
+                                       l = steps_.NewLeaf(pose, rb);
+                                     } else {
+                                       s = steps_.UpdateLeaf(pose, rb, &l, &ll);
+                                     }
+                                   });
+      if (!ok) return NoMemoryError(first_ + i, "map");
+      if (!s.ok()) return ParticleError(first_ + i, z, s);
+      *log_w += ll;
+    }
+    return Status::Ok();
   }
 
   const FastSlamConfig config_;
-  const FilterTraits traits_;
-  const VehicleGeometry geometry_;
-  const SensorNoise noise_;
-  const ControlNoise control_noise_;
-  const UnscentedRule rule_;
-  size_t n_;                 // particles here (more after an Import(), until the next Gather())
-  const uint64_t first_;     // the filter's index of particle 0 here
-  const uint64_t total_;     // the filter's particles
-  Collective* const ranks_;  // null: this model holds every particle
-  size_t scan_size_ = 0;     // the last scan's detections (NoteScan())
-  Eigen::Matrix2d q_;
+  const FilterSteps steps_;
+  size_t n_;              // particles here (more after an Import(), until the next Gather())
+  const uint64_t first_;  // the filter's index of particle 0 here
+  const uint64_t total_;  // the filter's particles
   Trie trie_;
   SegmentHistory history_;
   VersionSet<Trie> maps_;
   VersionSet<SegmentHistory> paths_;
-  std::vector<VehiclePose> pose_;
-  std::vector<Unit> unit_;
-  std::vector<PoseCovariance> cov_;
-  // Each particle's proposal of the current scan, from Advance() to Complete() (the filters that
-  // draw after resampling).
-  std::vector<Eigen::Vector3d> proposal_mu_;
-  std::vector<PoseCovariance> proposal_sigma_;
-  // Differential evolution: each particle's fitness, the counts and the loops' batch statuses.
-  std::vector<double> fitness_;
-  EvolutionCounts evolution_;
-  std::vector<Status> batch_status_;
+  ParticlePoses poses_;
   bool segment_start_ = true;
-  // Unknown association.
-  const bool ml_;
-  const AssociationParams params_;
-  const double log_p0_;
-  double max_range_ = 0;                   // the longest detection range so far
-  std::vector<AssociationCounts> counts_;  // per particle, along its ancestry
-  // Each particle's matches of the current scan, from Advance() to Complete().
-  std::vector<ScanQuery> pending_;
-  std::vector<Scratch> scratch_;  // per worker slot
+  UnknownAssociation<Trie> association_;
+  DifferentialEvolution evolution_;
+  std::vector<Status> batch_status_;  // RunInBatches' scratch
 };
 
 }  // namespace grove::fastslam

@@ -59,7 +59,7 @@ class Evolution {
   std::vector<double> Fitness() const {
     std::vector<double> f;
     for (size_t i = 0; i < model_.size(); ++i)
-      f.push_back(model_.Fitness(second(), i, model_.pose(i)));
+      f.push_back(model_.Fitness(second(), i, model_.pose(i), /*slot=*/0));
     return f;
   }
 
