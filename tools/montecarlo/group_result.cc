@@ -71,7 +71,9 @@ void GroupResult::CountNeesInside() {
     if (!scan[r] || nees_count[r] == 0) continue;
     auto it = intervals.find(nees_count[r]);
     if (it == intervals.end()) {
-      it = intervals.emplace(nees_count[r], AverageNeesInterval(kPoseDof, nees_count[r], kMonteCarloLevel))
+      it = intervals
+               .emplace(nees_count[r],
+                        AverageNeesInterval(kPoseDof, nees_count[r], kMonteCarloLevel))
                .first;
     }
     const double mean = nees_sum[r] / static_cast<double>(nees_count[r]);

@@ -35,12 +35,11 @@ struct JobOutcome {
   std::vector<StampedPose> trajectory;  // the weighted-mean pose after each step
   std::vector<ScanSample> scans;
   double cpu_s = std::numeric_limits<double>::quiet_NaN();  // the filter's thread CPU time
-  int64_t steps = 0;                                         // filter steps
+  int64_t steps = 0;                                        // filter steps
 };
 
 // "DIR/runs/<group>/run_<run>.<ext>".
-std::string RunPath(const std::string& dir, const MonteCarloGroup& g, int64_t run,
-                    const char* ext);
+std::string RunPath(const std::string& dir, const MonteCarloGroup& g, int64_t run, const char* ext);
 
 // Writes the job's CSV, then its JSON (which says the job is complete). Returns the status of
 // the writes.
@@ -51,8 +50,7 @@ Status WriteJobRecord(const std::string& dir, const MonteCarloScenario& scenario
 // The job's JSON, when it exists, parses and belongs to this job under this scenario and
 // configuration, and its CSV has the recorded size and hash; otherwise an error saying why.
 // `csv_text` (may be null) gets the CSV.
-StatusOr<nlohmann::json> ReadFinishedJob(const std::string& dir,
-                                         const MonteCarloScenario& scenario,
+StatusOr<nlohmann::json> ReadFinishedJob(const std::string& dir, const MonteCarloScenario& scenario,
                                          const MonteCarloGroup& group, const MonteCarloJob& job,
                                          std::string* csv_text = nullptr);
 

@@ -14,7 +14,8 @@ using nlohmann::json;
 
 StatusOr<MonteCarloScenarioSpec> ParseMonteCarloScenario(const std::string& name, int64_t loops) {
   if (loops != 0 && (loops < 1 || loops > kMonteCarloMaxLoops)) {
-    return InvalidArgumentError(fmt::format("--loops = {}: must be in 1..{}", loops, kMonteCarloMaxLoops));
+    return InvalidArgumentError(
+        fmt::format("--loops = {}: must be in 1..{}", loops, kMonteCarloMaxLoops));
   }
   MonteCarloScenarioSpec spec;
   if (name == "sim1" || name == "sim2" || name == "sim3") {

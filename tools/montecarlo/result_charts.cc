@@ -46,9 +46,8 @@ ChartSeries NeesSeries(const std::string& label, const GroupResult& r, double dt
     }
     last_scan_t = r.t[row];
     ns.x.push_back(r.t[row]);
-    ns.y.push_back(r.nees_count[row] == 0
-                       ? kNaN
-                       : r.nees_sum[row] / static_cast<double>(r.nees_count[row]));
+    ns.y.push_back(
+        r.nees_count[row] == 0 ? kNaN : r.nees_sum[row] / static_cast<double>(r.nees_count[row]));
     if (r.nees_count[row] == 0) continue;
     *t_first = std::min(*t_first, r.t[row]);
     *t_last = std::max(*t_last, r.t[row]);
@@ -69,10 +68,9 @@ std::vector<Chart> GroupCharts(const MonteCarloChartData& d) {
       .title = fmt::format("{}: heading MSE over {} (seed Fig. 3b / 6b)", name, runs_text),
       .x_label = "time (s)",
       .y_label = "mean squared heading error (rad²)"};
-  Chart boxes{
-      .title = fmt::format("{}: position MSE of each run, by filter and particles (seed Fig. 4)",
-                           name),
-      .y_label = "run's mean squared position error (m²)"};
+  Chart boxes{.title = fmt::format(
+                  "{}: position MSE of each run, by filter and particles (seed Fig. 4)", name),
+              .y_label = "run's mean squared position error (m²)"};
   Chart nees{.title = fmt::format("{}: pose NEES averaged over {} (seed Fig. 8)", name, runs_text),
              .x_label = "time (s)",
              .y_label = "average NEES (log scale)",

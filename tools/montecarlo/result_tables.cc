@@ -107,15 +107,19 @@ std::vector<std::string> CsvRow(const MonteCarloGroup& g, const GroupResult& r,
 std::vector<std::string> MdRow(const MonteCarloGroup& g, const GroupResult& r,
                                const GroupFigures& f) {
   const PaperRow* paper = g.paper;
-  return {FastSlamFilterName(g.filter), std::to_string(g.particles),
+  return {FastSlamFilterName(g.filter),
+          std::to_string(g.particles),
           r.runs_failed == 0 ? std::to_string(r.runs_ok)
                              : fmt::format("{} ({} failed)", r.runs_ok, r.runs_failed),
-          MdInterval(f.mse), MdInterval(f.var), MdInterval(f.heading),
+          MdInterval(f.mse),
+          MdInterval(f.var),
+          MdInterval(f.heading),
           r.nees_undefined == 0 ? MdNumber(f.nees)
                                 : fmt::format("{} ({} of {} scans undefined)", MdNumber(f.nees),
                                               r.nees_undefined, r.nees_scans),
           r.nees_points > 0 ? fmt::format("{:.0f} %", 100 * f.inside) : "n/a",
-          MdNumber(f.cpu, "{:.3g}"), MdNumber(f.ns, "{:.0f}"),
+          MdNumber(f.cpu, "{:.3g}"),
+          MdNumber(f.ns, "{:.0f}"),
           paper ? fmt::format("{} / {} / {} ({})", paper->position_mse_mean,
                               paper->position_mse_variance, paper->heading_mse, paper->table)
                 : ""};
