@@ -32,10 +32,7 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   Status Open() {
     StepReaderOptions reader_options;
     reader_options.max_step_m = options_.max_step_m;
-    StatusOr<StepReader> reader =
-        options_.steps_path.empty()
-            ? StepReader::OpenText(EmbeddedWalkName(), EmbeddedWalkSteps(), reader_options)
-            : StepReader::Open(options_.steps_path, reader_options);
+    StatusOr<StepReader> reader = OpenSteps(reader_options);
     if (!reader.ok()) return reader.status();
     reader_ = std::make_unique<StepReader>(std::move(reader).value());
     if (!options_.prior_map_path.empty()) {
@@ -48,6 +45,7 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
                                                       : CountRegularFileLines(options_.steps_path);
     // Lines after the header (comments and blank lines make it an estimate).
     records_ = std::max<int64_t>(lines - 1 - (reader_->positions_form() ? 1 : 0), 0);
+    if (records_ > 0) steps_ = CountSteps(reader_options);
     return Status::Ok();
   }
 
@@ -80,6 +78,7 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   std::string InputName() const override { return steps_name_; }
   const char* RecordsName() const override { return "steps"; }
   int64_t ExpectedRecords() const override { return records_; }
+  int64_t ExpectedSteps() const override { return steps_; }
   int64_t PredictPeakBytes(int64_t records) const override {
     FootSlamConfig share = config_;  // across ranks, this rank's particles
     share.particles = static_cast<int64_t>(
@@ -159,10 +158,33 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   }
 
  private:
+  // The step file, or the walk bundled in the binary.
+  StatusOr<StepReader> OpenSteps(const StepReaderOptions& reader_options) const {
+    return options_.steps_path.empty()
+               ? StepReader::OpenText(EmbeddedWalkName(), EmbeddedWalkSteps(), reader_options)
+               : StepReader::Open(options_.steps_path, reader_options);
+  }
+
+  // The steps a second reader reads from a file (not from a stream, which is read once), or 0
+  // when it fails before the end: the run reports that error when it comes to it.
+  int64_t CountSteps(const StepReaderOptions& reader_options) const {
+    StatusOr<StepReader> reader = OpenSteps(reader_options);
+    if (!reader.ok()) return 0;
+    StepRecord step;
+    int64_t steps = 0;
+    for (;;) {
+      StatusOr<bool> more = reader->Next(&step);
+      if (!more.ok()) return 0;
+      if (!*more) return steps;
+      ++steps;
+    }
+  }
+
   FootSlamRunOptions options_;
   std::string steps_name_;
   std::unique_ptr<StepReader> reader_;
-  int64_t records_ = 0;
+  int64_t records_ = 0;  // input lines after the header
+  int64_t steps_ = 0;    // the steps Read() returns
   std::vector<HexCounts> prior_;
   StepRecord step_;
   OdometryPath odometry_;

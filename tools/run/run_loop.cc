@@ -442,7 +442,7 @@ class RunLoop {
   // Reads and steps every input record, with progress and checkpoints.
   int StepThroughInput() {
     const bool terminal = isatty(fileno(stderr)) != 0;
-    ProgressReporter progress(job_->ExpectedRecords(), job_->particles(), stderr, terminal);
+    ProgressReporter progress(job_->ExpectedSteps(), job_->particles(), stderr, terminal);
     const bool show_progress = options_.progress && lead_;
     std::string digest_bytes;
     while (true) {

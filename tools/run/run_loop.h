@@ -102,8 +102,11 @@ class RunJob {
   // in messages ("steps").
   virtual std::string InputName() const = 0;
   virtual const char* RecordsName() const = 0;
-  // Input records in the whole input, or 0 when not known (a stream): progress and memory.
+  // Input records in the whole input, or 0 when not known (a stream): memory.
   virtual int64_t ExpectedRecords() const = 0;
+  // The records Read() will return, as far as it is known before the run (0: not known): the
+  // progress line's total, which must reach it when the run ends.
+  virtual int64_t ExpectedSteps() const { return ExpectedRecords(); }
   virtual int64_t particles() const = 0;
   // Predicted peak memory of the whole run, bytes, for `records` input records.
   virtual int64_t PredictPeakBytes(int64_t records) const = 0;
