@@ -319,6 +319,12 @@ int WritePaperReport(const PaperBenchOptions& options, const std::vector<StepRec
 
 }  // namespace
 
+std::vector<std::string> PaperBenchConfigurations() {
+  std::vector<std::string> names;
+  for (const PaperConfig& pc : kPaperConfigs) names.push_back(pc.name);
+  return names;
+}
+
 int PaperBenchCommand(const PaperBenchOptions& options) {
   if (!options.only.empty()) {
     std::string known;

@@ -1,0 +1,27 @@
+// A `run` command under mpirun: one filter across the ranks.
+#ifndef GROVE_TOOLS_CLI_ACROSS_RANKS_H_
+#define GROVE_TOOLS_CLI_ACROSS_RANKS_H_
+
+#include "grove/status.h"
+#include "tools/cli/mpi_world.h"
+#include "tools/run/run_loop.h"
+
+namespace grove::tools {
+
+// With more than one rank: checks the configuration for them (exit 2, one error line from rank
+// 0, when it cannot run across that many), takes the threads per rank from the rank's CPU set
+// unless given and points the run at the ranks. Returns -1 to go on, or the exit code.
+template <typename Facade, typename Config>
+int AcrossRanks(MpiWorld& world, Config* config, RunOptions* run) {
+  if (!world.active() || world.size() == 1) return -1;
+  if (Status s = Facade::CheckAcrossRanks(*config, world.size()); !s.ok()) {
+    return world.rank() == 0 ? Fail(kExitUsage, s.message()) : kExitUsage;
+  }
+  if (config->threads == 0) config->threads = UsableCpus();
+  run->ranks = &world;
+  return -1;
+}
+
+}  // namespace grove::tools
+
+#endif  // GROVE_TOOLS_CLI_ACROSS_RANKS_H_
