@@ -22,6 +22,17 @@ int AcrossRanks(MpiWorld& world, Config* config, RunOptions* run) {
   return -1;
 }
 
+// The end of a model's `run` command: `run_command` (RunFootSlamCommand, RunFastSlamCommand)
+// with `config` and `options`, across the ranks under mpirun.
+template <typename Facade, typename Config, typename Options>
+int RunOnRanks(Config config, Options& options, int (*run_command)(const Config&, const Options&)) {
+  MpiWorld world;  // one rank unless started by mpirun
+  if (const int refused = AcrossRanks<Facade>(world, &config, &options.run); refused >= 0) {
+    return refused;
+  }
+  return run_command(config, options);
+}
+
 }  // namespace grove::tools
 
 #endif  // GROVE_TOOLS_CLI_ACROSS_RANKS_H_

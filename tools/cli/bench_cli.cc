@@ -42,8 +42,9 @@ class PaperCli : public BenchCli<PaperBenchOptions, PaperBenchCommand> {
     typed_.Integer("--threads", &options_.threads, 0, 256, "Worker threads; 0: all cores");
     typed_.Real("--naive-limit", &options_.naive_limit_s, Interval::Above(0),
                 "Stop the naive run after this many seconds");
-    typed_.Choice("--only", &options_.only, PaperBenchConfigurations(),
-                  "Run one configuration, e.g. 'htree s=16 T=5'")
+    typed_
+        .Choice("--only", &options_.only, PaperBenchConfigurations(),
+                "Run one configuration, e.g. 'htree s=16 T=5'")
         ->default_str("every configuration");
     typed_.Integer("--repeat", &options_.repeat, 1, 1000,
                    "Runs per configuration (median reported)");
@@ -97,8 +98,8 @@ class VictoriaParkBenchCli : public BenchCli<VictoriaParkBenchOptions, VictoriaP
     typed_.Integer("--max-one-thread-particles", &options_.max_one_thread_particles, 0,
                    std::numeric_limits<int64_t>::max(),
                    "Larger counts run on every hardware thread only");
-    typed_.Real("--until", &options_.until_s, Interval::AtLeast(0),
-                "Data up to this time, seconds")
+    typed_
+        .Real("--until", &options_.until_s, Interval::AtLeast(0), "Data up to this time, seconds")
         ->default_str("the whole run");
   }
 };
@@ -111,8 +112,7 @@ std::vector<Command> AddBenchCommands(CLI::App* grove) {
   bench->require_subcommand(1);
   return {
       AddCommand<PaperCli>(
-          bench, "paper",
-          "Run time and memory against walk time (paper Figs. 9, 10) for each map"),
+          bench, "paper", "Run time and memory against walk time (paper Figs. 9, 10) for each map"),
       AddCommand<ScalingCli>(bench, "scaling", "Throughput against threads and particle counts"),
       AddCommand<FastSlamAccuracyCli>(
           bench, "fastslam-accuracy",

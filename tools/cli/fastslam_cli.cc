@@ -44,11 +44,7 @@ class FastSlamRunCli {
                                      {truth_, "--truth"},
                                      {landmarks_truth_, "--landmarks-truth"}});
     if (code >= 0) return code;
-    MpiWorld world;  // one rank unless started by mpirun
-    if (const int refused = AcrossRanks<FastSlam>(world, &config, &options_.run); refused >= 0) {
-      return refused;
-    }
-    return RunFastSlamCommand(config, options_);
+    return RunOnRanks<FastSlam>(config, options_, RunFastSlamCommand);
   }
 
  private:
@@ -67,8 +63,9 @@ class VictoriaParkCli {
                       "Directory holding inputs.dat, measurements.dat and gps.dat (or .gz)",
                       BundledVictoriaParkDir())),
         typed_(app),
-        until_(typed_.Real("--until", &options_.until_s, Interval::AtLeast(0),
-                           "Use the records up to this time, seconds")
+        until_(typed_
+                   .Real("--until", &options_.until_s, Interval::AtLeast(0),
+                         "Use the records up to this time, seconds")
                    ->default_str("the whole run")),
         flags_(app, FastSlamConfigFields(), VictoriaParkConfig()) {
     options_.victoria_park_dir = BundledVictoriaParkDir();
@@ -79,11 +76,7 @@ class VictoriaParkCli {
     FastSlamConfig config = VictoriaParkConfig();
     const int code = flags_.Prepare(&config, &options_.run, {{data_, "--data"}});
     if (code >= 0) return code;
-    MpiWorld world;  // one rank unless started by mpirun
-    if (const int refused = AcrossRanks<FastSlam>(world, &config, &options_.run); refused >= 0) {
-      return refused;
-    }
-    return RunFastSlamCommand(config, options_);
+    return RunOnRanks<FastSlam>(config, options_, RunFastSlamCommand);
   }
 
  private:
@@ -115,11 +108,11 @@ class FastSlamSimulateCli {
  public:
   explicit FastSlamSimulateCli(CLI::App* app) : typed_(app) {
     AddPath(app, "--map", &map_, "Bailey's map file (blocks lm and wp)", "the bundled webmap");
-    typed_.Choice("--preset", &preset_,
-                  std::vector<std::string>(std::begin(kBaileyPresetNames),
-                                           std::end(kBaileyPresetNames)),
-                  "Bailey's simulator settings: his webmap's or one of the seed paper's "
-                  "Simulations I-III");
+    typed_.Choice(
+        "--preset", &preset_,
+        std::vector<std::string>(std::begin(kBaileyPresetNames), std::end(kBaileyPresetNames)),
+        "Bailey's simulator settings: his webmap's or one of the seed paper's "
+        "Simulations I-III");
     typed_.Unsigned("--seed", &seed_, "Seed");
     AddPath(app, "--out", &out_, "Output directory")->required();
   }
@@ -149,29 +142,32 @@ class MonteCarloCli {
     Document(app->add_option("--filters", options_.filters, "Comma list of filters"),
              {"LIST", "", Choices("filter"), ""})
         ->required();
-    typed_.Integer("--runs", &options_.runs, 1, kMonteCarloMaxRuns,
-                   "Monte Carlo runs per filter and particle count")
+    typed_
+        .Integer("--runs", &options_.runs, 1, kMonteCarloMaxRuns,
+                 "Monte Carlo runs per filter and particle count")
         ->required()
         ->default_str("");
     AddPath(app, "--out", &options_.out_dir,
             "Output directory: runs/<filter>_p<particles>/run_<r>.csv|json, table.md, "
             "table.csv, summary.json and the charts")
         ->required();
-    particles_ = Document(
-        app->add_option("--particles", options_.particles,
-                        "Comma list of particle counts; every filter runs at each"),
-        {"LIST", fmt::format("each 1..{}", kMonteCarloMaxParticles), {},
-         "the seed's per scenario and filter: sim2 30, de_srcd 3; sim3 100, de_srcd 10; "
-         "sim1 100"});
-    Document(app->add_option("--seed", options_.seed,
-                             "S: run r uses seed S + r for the simulator and the filter"),
-             {"INT", fmt::format("0..{}", std::numeric_limits<uint64_t>::max()), {},
-              options_.seed});
+    particles_ =
+        Document(app->add_option("--particles", options_.particles,
+                                 "Comma list of particle counts; every filter runs at each"),
+                 {"LIST",
+                  fmt::format("each 1..{}", kMonteCarloMaxParticles),
+                  {},
+                  "the seed's per scenario and filter: sim2 30, de_srcd 3; sim3 100, de_srcd 10; "
+                  "sim1 100"});
+    Document(
+        app->add_option("--seed", options_.seed,
+                        "S: run r uses seed S + r for the simulator and the filter"),
+        {"INT", fmt::format("0..{}", std::numeric_limits<uint64_t>::max()), {}, options_.seed});
     typed_.Integer("--threads", &options_.threads, 0, kMonteCarloMaxThreads,
                    "Jobs run in parallel on this many threads, each filter on one (0: every "
                    "hardware thread); results do not depend on it");
-    typed_.Integer("--loops", &options_.loops, 1, kMonteCarloMaxLoops,
-                   "Loops through the waypoints")
+    typed_
+        .Integer("--loops", &options_.loops, 1, kMonteCarloMaxLoops, "Loops through the waypoints")
         ->default_str("the scenario's");
     app->add_flag("--no-progress", no_progress_, "No progress output");
   }
@@ -210,13 +206,14 @@ std::vector<Command> AddFastSlamCommands(CLI::App* grove) {
   fastslam->require_subcommand(1);
   return {
       AddCommand<FastSlamRunCli>(fastslam, "run",
-                              "Run FastSLAM 1.0 or 2.0 on controls.csv and observations.csv"),
+                                 "Run FastSLAM 1.0 or 2.0 on controls.csv and observations.csv"),
       AddCommand<VictoriaParkCli>(fastslam, "victoria-park",
-                               "Run FastSLAM on the bundled Victoria Park dataset (unknown "
-                               "association) and score it against GPS"),
-      AddCommand<FastSlamEvaluateCli>(fastslam, "evaluate", "Pose and landmark errors against the truth"),
+                                  "Run FastSLAM on the bundled Victoria Park dataset (unknown "
+                                  "association) and score it against GPS"),
+      AddCommand<FastSlamEvaluateCli>(fastslam, "evaluate",
+                                      "Pose and landmark errors against the truth"),
       AddCommand<FastSlamSimulateCli>(fastslam, "simulate",
-                            "Bailey's FastSLAM simulator: controls, observations, truth"),
+                                      "Bailey's FastSLAM simulator: controls, observations, truth"),
       AddCommand<MonteCarloCli>(
           fastslam, "montecarlo",
           "Monte Carlo runs of the filters on the seed paper's Simulations I-III: MSE tables "

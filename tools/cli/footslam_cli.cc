@@ -35,14 +35,10 @@ class FootSlamRunCli {
   int Run() {
     if (Status s = typed_.Apply(); !s.ok()) return Fail(kExitUsage, s.message());
     FootSlamConfig config;
-    const int code = flags_.Prepare(&config, &options_.run,
-                                    {{steps_, "--steps"}, {prior_, "--prior-map"}});
+    const int code =
+        flags_.Prepare(&config, &options_.run, {{steps_, "--steps"}, {prior_, "--prior-map"}});
     if (code >= 0) return code;
-    MpiWorld world;  // one rank unless started by mpirun
-    if (const int refused = AcrossRanks<FootSlam>(world, &config, &options_.run); refused >= 0) {
-      return refused;
-    }
-    return RunFootSlamCommand(config, options_);
+    return RunOnRanks<FootSlam>(config, options_, RunFootSlamCommand);
   }
 
  private:
@@ -101,8 +97,7 @@ class FootSlamBatchCli {
 class FootSlamSimulateCli {
  public:
   explicit FootSlamSimulateCli(CLI::App* app) : typed_(app) {
-    AddPath(app, "--out", &options_.out_dir, "Output directory (steps.csv, truth.csv)")
-        ->required();
+    AddPath(app, "--out", &options_.out_dir, "Output directory (steps.csv, truth.csv)")->required();
     typed_.Real("--minutes", &options_.minutes, WalkMinutesRange(), "Walk duration in minutes");
     typed_.Unsigned("--seed", &options_.seed, "Seed");
     typed_.Choice("--scenario", &options_.scenario, {"building", "open", "campus"},

@@ -39,7 +39,8 @@ std::vector<std::string> OptionNames(const CLI::App& app) {
 
 std::vector<std::string> CommandNames(CLI::App& app) {
   std::vector<std::string> names;
-  for (const CLI::App* sub : app.get_subcommands([](CLI::App* a) { return !a->get_name().empty(); })) {
+  for (const CLI::App* sub :
+       app.get_subcommands([](CLI::App* a) { return !a->get_name().empty(); })) {
     names.push_back(sub->get_name());
   }
   return names;

@@ -136,11 +136,12 @@ CLI::Option* TypedFlags::Choice(const std::string& flag, std::string* target,
 
 CLI::Option* TypedFlags::IntegerList(const std::string& flag, std::vector<int64_t>* target,
                                      int64_t min, int64_t max, const std::string& help) {
-  Entry& e = NewEntry(flag, FieldInfo{"", "", FieldType::kInteger, kChangesResults, min, max, {}, {}},
-                      [target](const std::vector<FieldValue>& values) {
-                        target->clear();
-                        for (const FieldValue& v : values) target->push_back(std::get<int64_t>(v));
-                      });
+  Entry& e =
+      NewEntry(flag, FieldInfo{"", "", FieldType::kInteger, kChangesResults, min, max, {}, {}},
+               [target](const std::vector<FieldValue>& values) {
+                 target->clear();
+                 for (const FieldValue& v : values) target->push_back(std::get<int64_t>(v));
+               });
   e.list = true;
   e.option = app_->add_option(flag, e.texts, help);
   std::string defaults;

@@ -212,19 +212,6 @@ std::string GpsErrorCsv(const GpsErrors& e) {
   return out;
 }
 
-// The events `source` yields (the filter's steps), or 0 when it fails before the end: the run
-// reports that error when it comes to it.
-int64_t CountEvents(FastSlamEventSource* source) {
-  FastSlamEvent event;
-  int64_t events = 0;
-  for (;;) {
-    StatusOr<bool> more = source->Next(&event);
-    if (!more.ok()) return 0;
-    if (!*more) return events;
-    ++events;
-  }
-}
-
 // A filter's name for a chart's title.
 const char* FilterTitle(FastSlamFilter filter) {
   switch (filter) {
@@ -265,7 +252,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
       source_.reset(park_events_);
       records_ = static_cast<int64_t>(park_->controls.size() + park_->observations.size());
       VictoriaParkEvents events(park_.get());
-      steps_ = CountEvents(&events);
+      steps_ = CountRecords<FastSlamEvent>(events);
       return Status::Ok();
     }
     StatusOr<FastSlamInputReader> reader =
@@ -285,7 +272,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
       // Regular files: read them once more to count the scans among the rows.
       StatusOr<FastSlamInputReader> events =
           FastSlamInputReader::Open(options_.controls_path, options_.observations_path);
-      if (events.ok()) steps_ = CountEvents(&*events);
+      if (events.ok()) steps_ = CountRecords<FastSlamEvent>(*events);
     }
     if (!options_.truth_path.empty()) {
       StatusOr<std::map<double, Pose2>> truth = ReadPoses(options_.truth_path);

@@ -45,7 +45,12 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
                                                       : CountRegularFileLines(options_.steps_path);
     // Lines after the header (comments and blank lines make it an estimate).
     records_ = std::max<int64_t>(lines - 1 - (reader_->positions_form() ? 1 : 0), 0);
-    if (records_ > 0) steps_ = CountSteps(reader_options);
+    // A file (not a stream, which is read once) is read again to count its steps; an error
+    // there is reported when the run comes to it.
+    if (records_ > 0) {
+      StatusOr<StepReader> again = OpenSteps(reader_options);
+      if (again.ok()) steps_ = CountRecords<StepRecord>(*again);
+    }
     return Status::Ok();
   }
 
@@ -163,21 +168,6 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
     return options_.steps_path.empty()
                ? StepReader::OpenText(EmbeddedWalkName(), EmbeddedWalkSteps(), reader_options)
                : StepReader::Open(options_.steps_path, reader_options);
-  }
-
-  // The steps a second reader reads from a file (not from a stream, which is read once), or 0
-  // when it fails before the end: the run reports that error when it comes to it.
-  int64_t CountSteps(const StepReaderOptions& reader_options) const {
-    StatusOr<StepReader> reader = OpenSteps(reader_options);
-    if (!reader.ok()) return 0;
-    StepRecord step;
-    int64_t steps = 0;
-    for (;;) {
-      StatusOr<bool> more = reader->Next(&step);
-      if (!more.ok()) return 0;
-      if (!*more) return steps;
-      ++steps;
-    }
   }
 
   FootSlamRunOptions options_;

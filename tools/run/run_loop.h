@@ -173,6 +173,20 @@ class FacadeRunJob : public RunJob {
   std::unique_ptr<Facade> engine_;
 };
 
+// The records `reader` (with StatusOr<bool> Next(Record*)) yields before its end, or 0 when it
+// fails before then: what ExpectedSteps() counts with a second reader of a file.
+template <typename Record, typename Reader>
+int64_t CountRecords(Reader& reader) {
+  Record record;
+  int64_t records = 0;
+  for (;;) {
+    StatusOr<bool> more = reader.Next(&record);
+    if (!more.ok()) return 0;
+    if (!*more) return records;
+    ++records;
+  }
+}
+
 // Newlines in `text`, and in a regular file (0 for anything else: a pipe must be read once, by
 // the run): the record counts behind progress and memory predictions.
 int64_t CountLines(std::string_view text);
