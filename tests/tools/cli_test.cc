@@ -1053,6 +1053,10 @@ TEST_F(CliTest, ParseErrorsAreOneGroveLineWithExitCode2) {
        "grove: error: footslam evaluate: --trajectory is "
        "required\n"},
       {"footslam run extra", "grove: error: footslam run: unexpected argument \"extra\"\n"},
+      {"footslam run --particles 1 --particles 2",
+       "grove: error: footslam run: --particles is given more than once\n"},
+      {"footslam run --print-config=abc",
+       "grove: error: footslam run: --print-config = \"abc\": a flag takes no value\n"},
       {"bench scaling --steps 1.5 --out " + (dir_ / "b").string(),
        "grove: error: --steps = \"1.5\": must be an integer\n"},
       {"bench paper --grid round --out " + (dir_ / "b").string(),

@@ -107,11 +107,28 @@ int ReportParseError(CLI::App& app, const CLI::ParseError& e) {
     return Fail(kExitUsage,
                 fmt::format("{}a command is required: {}", prefix, OneOf(CommandNames(last))));
   }
+  // CLI11's "--x: 1 required TEXT missing", "--x: At Most 1 required but received 2" and
+  // "Could not convert: --flag = text" (a flag given a value).
   const std::string what = e.what();
-  if (name == "ArgumentMismatch" && what.find("required") != std::string::npos &&
-      what.find(':') != std::string::npos) {
-    return Fail(kExitUsage,
-                fmt::format("{}{} needs a value", prefix, what.substr(0, what.find(':'))));
+  const size_t colon = what.find(": ");
+  if (name == "ArgumentMismatch" && colon != std::string::npos) {
+    const std::string option = what.substr(0, colon);
+    if (what.find("missing") != std::string::npos) {
+      return Fail(kExitUsage, fmt::format("{}{} needs a value", prefix, option));
+    }
+    if (what.find("At Most 1") != std::string::npos) {
+      return Fail(kExitUsage, fmt::format("{}{} is given more than once", prefix, option));
+    }
+  }
+  const std::string unconverted = "Could not convert: ";
+  if (name == "ConversionError" && what.rfind(unconverted, 0) == 0) {
+    const std::string rest = what.substr(unconverted.size());
+    const size_t equals = rest.find(" = ");
+    if (equals != std::string::npos) {
+      return Fail(kExitUsage,
+                  fmt::format("{}{} = {}: a flag takes no value", prefix, rest.substr(0, equals),
+                              QuoteForMessage(rest.substr(equals + 3))));
+    }
   }
   return Fail(kExitUsage, fmt::format("{}{}", prefix, Cli11Message(e)));
 }
