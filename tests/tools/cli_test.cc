@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <sstream>
 #include <string>
 
@@ -655,8 +656,10 @@ TEST_F(CliTest, OutOfRangeValuesAreRefusedNamingTheOption) {
       {"footslam run --start-x-m 1e10" + out, "start_x_m = 10000000000: must be within", 2},
       {"footslam run --max-step 0" + out, "--max-step = 0: must be > 0", 2},
       {"footslam run --particles abc" + out, "--particles = \"abc\": must be an integer", 2},
-      {"footslam simulate --heading-drift -5 --out " + (dir_ / "s").string(), "heading_drift", 2},
-      {"footslam simulate --scale-error -1 --out " + (dir_ / "s").string(), "scale_error", 2},
+      {"footslam simulate --heading-drift -5 --out " + (dir_ / "s").string(),
+       "--heading-drift = -5: must be in [0, 0.5]", 2},
+      {"footslam simulate --scale-error -1 --out " + (dir_ / "s").string(),
+       "--scale-error = -1: must be in (-0.5, 0.5)", 2},
       {"footslam simulate --seed -1 --out " + (dir_ / "s").string(), "--seed = \"-1\"", 2},
       {"footslam simulate --minutes 1e-9 --out " + (dir_ / "s").string(), "shorter than one step",
        2},
@@ -1025,6 +1028,160 @@ TEST_F(CliTest, FastSlamMonteCarloHelpAndBadOptions) {
   EXPECT_EQ(o.exit_code, 2) << o.err;
   EXPECT_NE(o.err.find("--particles = \"0\""), std::string::npos) << o.err;
   EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(CliTest, AMistypedOptionOrCommandGetsTheNearestSuggested) {
+  Outcome o = Grove("footslam run --particels 10");
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_EQ(o.err,
+            "grove: error: footslam run: unknown option \"--particels\" (did you mean "
+            "--particles?)\n");
+  o = Grove("footslam rn");
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_EQ(o.err, "grove: error: footslam: unknown command \"rn\" (did you mean run?)\n");
+  o = Grove("fastslam montecarlo --scenario sim3 --filters srcd --runs 1 --loop 2 --out " +
+            (dir_ / "mc").string());
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_NE(o.err.find("(did you mean --loops?)"), std::string::npos) << o.err;
+  o = Grove("bench scalng --out " + (dir_ / "b").string());
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_NE(o.err.find("(did you mean scaling?)"), std::string::npos) << o.err;
+  o = Grove("footslam");
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_EQ(o.err,
+            "grove: error: footslam: a command is required: run, batch, simulate, evaluate or "
+            "render\n");
+  EXPECT_FALSE(fs::exists(dir_ / "mc"));
+  EXPECT_FALSE(fs::exists(dir_ / "b"));
+}
+
+// CLI11's errors in grove's form: one short line naming the flag, the value and the rule.
+TEST_F(CliTest, ParseErrorsAreOneGroveLineWithExitCode2) {
+  const std::string park = "fastslam victoria-park --out " + (dir_ / "v").string() + " --until ";
+  struct Case {
+    std::string args, err;
+  };
+  const Case cases[] = {
+      {park + "abc", "grove: error: --until = \"abc\": must be a number\n"},
+      {park + "-1", "grove: error: --until = -1: must be >= 0\n"},
+      {park + "inf", "grove: error: --until = inf: must be finite\n"},
+      {park + "nan", "grove: error: --until = nan: must be finite\n"},
+      {park + "''", "grove: error: --until = \"\": must be a number\n"},
+      {"footslam run --particles", "grove: error: footslam run: --particles needs a value\n"},
+      {"footslam evaluate --truth t.csv",
+       "grove: error: footslam evaluate: --trajectory is "
+       "required\n"},
+      {"footslam run extra", "grove: error: footslam run: unexpected argument \"extra\"\n"},
+      {"footslam run --particles 1 --particles 2",
+       "grove: error: footslam run: --particles is given more than once\n"},
+      {"footslam run --print-config=abc",
+       "grove: error: footslam run: --print-config = \"abc\": a flag takes no value\n"},
+      {"bench scaling --steps 1.5 --out " + (dir_ / "b").string(),
+       "grove: error: --steps = \"1.5\": must be an integer\n"},
+      {"bench paper --grid round --out " + (dir_ / "b").string(),
+       "grove: error: --grid = \"round\": must be one of \"fixed\", \"growing\"\n"},
+  };
+  for (const Case& c : cases) {
+    Outcome o = Grove(c.args);
+    EXPECT_EQ(o.exit_code, 2) << c.args;
+    EXPECT_EQ(o.err, c.err) << c.args;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "v"));
+  EXPECT_FALSE(fs::exists(dir_ / "b"));
+}
+
+TEST_F(CliTest, HelpShowsTypesRangesChoicesAndDefaults) {
+  Outcome o = Grove("fastslam run --help");
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  for (const char* text :
+       {"Usage: grove fastslam run [OPTIONS]", "--controls PATH REQUIRED",
+        "--particles INT             Number of particles. Range: 1..2147483648. Default: 100",
+        "--resampling CHOICE         Resampling scheme. One of: systematic, stratified, "
+        "residual,\n                              multinomial. Default: systematic",
+        "--resample-threshold FLOAT", "Range: (0, 1]. Default: 0.75", "--seed INT",
+        "Range: 0..18446744073709551615", "--memory-budget SIZE", "Default: the memory available",
+        "--checkpoint-every INT"}) {
+    EXPECT_NE(o.out.find(text), std::string::npos) << text << "\n" << o.out;
+  }
+  EXPECT_EQ(o.out.find(" TEXT"), std::string::npos) << o.out;
+  std::istringstream lines(o.out);
+  for (std::string line; std::getline(lines, line);) EXPECT_LE(line.size(), 100u) << line;
+  // Victoria Park's defaults are its own.
+  o = Grove("fastslam victoria-park --help");
+  EXPECT_NE(o.out.find("--vehicle CHOICE            The vehicle model: bailey or guivant_nebot. "
+                       "One of: bailey,\n                              guivant_nebot. Default: "
+                       "guivant_nebot"),
+            std::string::npos)
+      << o.out;
+  EXPECT_NE(o.out.find("--until FLOAT"), std::string::npos) << o.out;
+  o = Grove("fastslam montecarlo --help");
+  for (const char* text : {"--filters LIST REQUIRED", "Each one of: fastslam1, fastslam2",
+                           "--runs INT REQUIRED", "Range: 1..100000",
+                           "--loops INT                 Loops through the waypoints. Range: "
+                           "1..1000. Default: the scenario's"}) {
+    EXPECT_NE(o.out.find(text), std::string::npos) << text << "\n" << o.out;
+  }
+  o = Grove("footslam simulate --help");
+  EXPECT_NE(o.out.find("--minutes FLOAT             Walk duration in minutes. Range: (0, 1440]. "
+                       "Default: 8"),
+            std::string::npos)
+      << o.out;
+  EXPECT_NE(o.out.find("--scenario CHOICE"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("One of: building,\n                              open, campus. Default: "
+                       "building"),
+            std::string::npos)
+      << o.out;
+}
+
+// Values that used to mean "the scenario's" or "the seed's" are refused, as is a seed that
+// would wrap past 2^64 - 1 for a later run.
+TEST_F(CliTest, MonteCarloRefusesLoopsZeroAnEmptyListAndAWrappingSeed) {
+  const std::string mc =
+      "fastslam montecarlo --scenario sim3 --filters srcd --out " + (dir_ / "mc").string() + " ";
+  struct Case {
+    std::string args, err;
+  };
+  const Case cases[] = {
+      {"--runs 2 --loops 0", "grove: error: --loops = 0: must be in 1..1000\n"},
+      {"--runs 2 --particles ''",
+       "grove: error: --particles = \"\": must be a comma list of particle counts, each in "
+       "1..2147483648\n"},
+      {"--runs 2 --seed 18446744073709551615",
+       "grove: error: --seed = 18446744073709551615 with --runs = 2: run r uses seed + r, so "
+       "seed + runs - 1 must be at most 18446744073709551615\n"},
+      {"--runs 100001", "grove: error: --runs = 100001: must be in 1..100000\n"},
+      {"--runs 2 --threads -1", "grove: error: --threads = -1: must be in 0..256\n"},
+  };
+  for (const Case& c : cases) {
+    Outcome o = Grove(mc + c.args);
+    EXPECT_EQ(o.exit_code, 2) << c.args;
+    EXPECT_EQ(o.err, c.err) << c.args;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "mc"));
+  // The largest seed that does not wrap runs.
+  Outcome o = Grove(mc + "--runs 1 --particles 5 --loops 1 --seed 18446744073709551615");
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+}
+
+// The last progress line reaches its total: the data read up to --until, the scans of a CSV
+// run (not its observation rows).
+TEST_F(CliTest, ProgressReachesOneHundredPercent) {
+  const std::regex done(R"(done: step (\d+)/(\d+) \((\d+)%\))");
+  auto expect_done = [&](const std::string& args) {
+    Outcome o = Grove(args);
+    ASSERT_EQ(o.exit_code, 0) << args << ": " << o.err;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(o.err, m, done)) << args << ": " << o.err;
+    EXPECT_EQ(m[1], m[2]) << args << ": " << o.err;
+    EXPECT_EQ(m[3], "100") << args << ": " << o.err;
+  };
+  expect_done("fastslam victoria-park --particles 5 --until 60 --out " + (dir_ / "v").string());
+  ASSERT_EQ(Grove("fastslam simulate --out " + (dir_ / "sim").string()).exit_code, 0);
+  expect_done("fastslam run --particles 5 --controls " + (dir_ / "sim/controls.csv").string() +
+              " --observations " + (dir_ / "sim/observations.csv").string() + " --out " +
+              (dir_ / "f").string());
+  const std::string steps = Write("steps.csv", "t,dx,dy\n# a comment\n1,0.7,0\n\n2,0.7,0\n");
+  expect_done("footslam run --particles 5 --steps " + steps + " --out " + (dir_ / "s").string());
 }
 
 }  // namespace

@@ -178,6 +178,11 @@ TEST_F(FastSlamMonteCarloTest, BadOptionsGiveTheirExitCodes) {
   EXPECT_EQ(code([](MonteCarloOptions& o) { o.seed = "-1"; }), 2);
   EXPECT_EQ(code([](MonteCarloOptions& o) { o.threads = 257; }), 2);
   EXPECT_EQ(code([](MonteCarloOptions& o) { o.loops = 1001; }), 2);
+  EXPECT_EQ(code([](MonteCarloOptions& o) {
+              o.seed = "18446744073709551615";
+              o.runs = 2;
+            }),
+            2);
   EXPECT_EQ(code([](MonteCarloOptions& o) { o.out_dir = ""; }), 2);
   // A scenario file that does not exist is a bad input file.
   EXPECT_EQ(code([&](MonteCarloOptions& o) { o.scenario = (dir_ / "missing.json").string(); }), 3);

@@ -105,7 +105,225 @@ std::vector<Sample> ParseSamples(const std::string& text) {
   return out;
 }
 
+// One configuration's run of the walk (the median of its repetitions).
+struct PaperResult {
+  const PaperConfig* config = nullptr;
+  std::vector<Sample> samples;
+  int64_t steps = 0;
+  double run_s = 0;
+  double cpu_s = 0;
+  double peak_rss_mib = 0;
+  bool stopped = false;
+  std::vector<double> all_run_s;  // every repetition's, in order
+};
+
+// The body of the child process that runs `pc` on `walk`: writes a sample every 5 s of walk
+// to `series_path`, then "# steps N peak_rss_mib M". Returns the child's exit code.
+int RunPaperSeries(const PaperBenchOptions& options, const PaperConfig& pc,
+                   const std::vector<StepRecord>& walk, const std::string& series_path) {
+  const double walk_start = 0;
+  FootSlamConfig config;
+  config.particles = options.particles;
+  config.threads = options.threads;
+  config.map = pc.map;
+  config.degree = pc.degree;
+  config.grid_size = pc.grid;
+  config.grid = options.grid == "growing" ? FootSlamGrid::kGrowing : FootSlamGrid::kFixed;
+  config.alphabet = pc.alphabet;
+  auto slam = FootSlam::Create(config);
+  if (!slam.ok()) return 10;
+  std::string out;
+  auto start = Clock::now();
+  double next_sample = 0;
+  int64_t done = 0;
+  for (const StepRecord& step : walk) {
+    if (!(*slam)->Step(step.t_s, step.dx_m, step.dy_m).ok()) return 11;
+    ++done;
+    double run_s = std::chrono::duration<double>(Clock::now() - start).count();
+    if (step.t_s >= next_sample || done == static_cast<int64_t>(walk.size())) {
+      next_sample = step.t_s + 5;
+      out +=
+          fmt::format("{} {} {} {}\n", step.t_s - walk_start, run_s, CurrentRssBytes() / 1048576.0,
+                      (*slam)->Summary().map_memory.live_bytes / 1048576.0);
+    }
+    if (pc.map == FootSlamMapKind::kNaive && run_s > options.naive_limit_s) break;
+  }
+  out += fmt::format("# steps {} peak_rss_mib {}\n", done, PeakRssBytes() / 1048576.0);
+  return WriteFileAtomically(series_path, out).ok() ? 0 : 12;
+}
+
+// One repetition of `pc`, in a child process so that its peak RSS is its own.
+StatusOr<PaperResult> RunPaperRepetition(const PaperBenchOptions& options, const PaperConfig& pc,
+                                         const std::vector<StepRecord>& walk) {
+  double cpu_s = 0;
+  std::string series_path = fmt::format("{}/.series-{}", options.out_dir, getpid());
+  int code = InChild([&] { return RunPaperSeries(options, pc, walk, series_path); }, &cpu_s);
+  if (code != 0) {
+    return FailedPreconditionError(fmt::format("{}: the run failed (code {})", pc.name, code));
+  }
+  StatusOr<std::string> series = ReadWholeFile(series_path);
+  if (!series.ok()) return series.status();
+  const std::string& text = *series;
+  std::remove(series_path.c_str());
+  PaperResult r;
+  r.config = &pc;
+  r.samples = ParseSamples(text.substr(0, text.find('#')));
+  size_t tail = text.find("# steps");
+  if (tail != std::string::npos) {
+    std::sscanf(text.c_str() + tail, "# steps %ld peak_rss_mib %lf", &r.steps, &r.peak_rss_mib);
+  }
+  r.run_s = r.samples.empty() ? 0 : r.samples.back().run_s;
+  r.cpu_s = cpu_s;
+  r.stopped = r.steps < static_cast<int64_t>(walk.size());
+  std::fprintf(stderr, "%-16s %5ld steps in %7.2f s (CPU %.2f s), peak RSS %7.1f MiB%s\n", pc.name,
+               r.steps, r.run_s, r.cpu_s, r.peak_rss_mib,
+               r.stopped ? " (stopped: time limit)" : "");
+  return r;
+}
+
+// The repetitions run one after another; the median run (by run time) is reported.
+StatusOr<PaperResult> RunPaperConfig(const PaperBenchOptions& options, const PaperConfig& pc,
+                                     const std::vector<StepRecord>& walk) {
+  std::vector<PaperResult> runs;
+  for (int rep = 0; rep < options.repeat; ++rep) {
+    StatusOr<PaperResult> r = RunPaperRepetition(options, pc, walk);
+    if (!r.ok()) return r.status();
+    runs.push_back(std::move(*r));
+  }
+  std::vector<double> all;
+  for (const PaperResult& r : runs) all.push_back(r.run_s);
+  const auto middle = runs.begin() + static_cast<std::ptrdiff_t>(runs.size() / 2);
+  std::nth_element(runs.begin(), middle, runs.end(),
+                   [](const PaperResult& a, const PaperResult& b) { return a.run_s < b.run_s; });
+  PaperResult median = std::move(*middle);
+  median.all_run_s = std::move(all);
+  return median;
+}
+
+// The row of paper.md for one configuration.
+std::vector<std::string> PaperTableRow(const PaperBenchOptions& options, const PaperResult& r) {
+  // Time per step in the first and the last minute of what was run: flat means linear time.
+  double first_minute = 0, last_minute = 0;
+  int64_t first_n = 0, last_n = 0;
+  for (size_t k = 1; k < r.samples.size(); ++k) {
+    double dt = r.samples[k].run_s - r.samples[k - 1].run_s;
+    double dw = r.samples[k].walk_s - r.samples[k - 1].walk_s;
+    if (r.samples[k].walk_s <= 60) {
+      first_minute += dt;
+      first_n += static_cast<int64_t>(dw);
+    }
+    if (r.samples[k].walk_s > r.samples.back().walk_s - 60) {
+      last_minute += dt;
+      last_n += static_cast<int64_t>(dw);
+    }
+  }
+  double ratio = first_n > 0 && last_n > 0 && first_minute > 0
+                     ? (last_minute / last_n) / (first_minute / first_n)
+                     : 0;
+  double ns = r.steps > 0 ? r.run_s * 1e9 / (static_cast<double>(r.steps) * options.particles) : 0;
+  double walked = r.samples.empty() ? 0 : r.samples.back().walk_s;
+  double peak_map = 0;
+  for (const Sample& s : r.samples) peak_map = std::max(peak_map, s.map_mib);
+  const auto [lo, hi] = std::minmax_element(r.all_run_s.begin(), r.all_run_s.end());
+  return {r.config->name,
+          fmt::format("{}{}", r.steps, r.stopped ? " (stopped)" : ""),
+          fmt::format("{:.0f}", walked),
+          fmt::format("{:.2f}", r.run_s),
+          fmt::format("{:.2f}-{:.2f}", *lo, *hi),
+          fmt::format("{:.2f}", r.cpu_s),
+          fmt::format("{:.3f}", walked > 0 ? r.run_s / walked : 0),
+          fmt::format("{:.0f}", ns),
+          fmt::format("{:.2f}", ratio),
+          fmt::format("{:.0f}", r.peak_rss_mib),
+          fmt::format("{:.1f}", peak_map)};
+}
+
+// The charts of `bench paper` and the rows of paper.csv.
+struct PaperCharts {
+  // Log scale: grove runs orders of magnitude below the real-time line.
+  Chart runtime{.title = "Run time against walk time (Fig. 9)",
+                .x_label = "walk time (s)",
+                .y_label = "cumulative run time (s, log scale)",
+                .log_y = true};
+  Chart memory{.title = "Resident memory against walk time (Fig. 10)",
+               .x_label = "walk time (s)",
+               .y_label = "RSS (MiB)"};
+  Chart map_memory{.title = "Live map memory against walk time",
+                   .x_label = "walk time (s)",
+                   .y_label = "live map nodes (MiB)"};
+  std::vector<std::vector<std::string>> csv_rows;
+
+  PaperCharts(const std::vector<PaperResult>& results, double walk_end) {
+    ChartSeries real_time{.label = "real time", .style = ChartStyle::kDashed};
+    for (double t = 1; t < walk_end + 5; t += 5) {
+      real_time.x.push_back(std::min(t, walk_end));
+      real_time.y.push_back(std::min(t, walk_end));
+    }
+    runtime.series.push_back(real_time);
+    for (const PaperResult& r : results) {
+      // A sample every 5 s of walk: too dense for markers.
+      ChartSeries time_series{.label = r.config->name, .style = ChartStyle::kLine};
+      ChartSeries rss_series = time_series;
+      ChartSeries map_series = time_series;
+      for (const Sample& s : r.samples) {
+        csv_rows.push_back({r.config->name, fmt::format("{:.2f}", s.walk_s),
+                            fmt::format("{:.3f}", s.run_s), fmt::format("{:.1f}", s.rss_mib),
+                            fmt::format("{:.2f}", s.map_mib)});
+        time_series.x.push_back(s.walk_s);
+        time_series.y.push_back(s.run_s);
+        rss_series.x.push_back(s.walk_s);
+        rss_series.y.push_back(s.rss_mib);
+        map_series.x.push_back(s.walk_s);
+        map_series.y.push_back(s.map_mib);
+      }
+      runtime.series.push_back(time_series);
+      memory.series.push_back(rss_series);
+      map_memory.series.push_back(map_series);
+    }
+  }
+};
+
+// paper.csv, paper.md (also to stdout) and the charts.
+int WritePaperReport(const PaperBenchOptions& options, const std::vector<StepRecord>& walk,
+                     const std::vector<PaperResult>& results) {
+  const PaperCharts charts(results, walk.back().t_s);
+  std::vector<std::vector<std::string>> table;
+  for (const PaperResult& r : results) table.push_back(PaperTableRow(options, r));
+  std::string md = fmt::format(
+      "# grove bench paper\n\nMachine: {}\n\nWalk: simulated open area, {} minutes ({} steps), "
+      "{} particles, {} threads; each configuration run {} times, the median run (by run time) "
+      "reported, its CPU time (user + system, all threads) beside it.\n\n",
+      MachineDescription(), options.minutes, walk.size(), options.particles,
+      options.threads == 0 ? std::thread::hardware_concurrency() : options.threads, options.repeat);
+  md += MarkdownTable({"configuration", "steps run", "walk s", "run s", "run s, all runs", "CPU s",
+                       "run / walk time", "ns per particle-step", "last/first minute time per step",
+                       "peak RSS MiB", "peak live map MiB"},
+                      table);
+  const std::string& dir = options.out_dir;
+  Status s = WriteFileAtomically(
+      dir + "/paper.csv",
+      CsvTable({"configuration", "walk_s", "run_s", "rss_mib", "live_map_mib"}, charts.csv_rows));
+  // The tables before the charts: without gnuplot the numbers are still kept.
+  if (s.ok()) s = WriteFileAtomically(dir + "/paper.md", md);
+  if (s.ok()) {
+    s = WriteChart(charts.runtime, dir + "/paper_runtime.png", dir + "/paper_runtime.svg");
+  }
+  if (s.ok()) s = WriteChart(charts.memory, dir + "/paper_memory.png", dir + "/paper_memory.svg");
+  if (s.ok()) {
+    s = WriteChart(charts.map_memory, dir + "/paper_map_memory.png", dir + "/paper_map_memory.svg");
+  }
+  if (!s.ok()) return Fail(kExitOutput, s.message());
+  std::printf("%s", md.c_str());
+  return kExitOk;
+}
+
 }  // namespace
+
+std::vector<std::string> PaperBenchConfigurations() {
+  std::vector<std::string> names;
+  for (const PaperConfig& pc : kPaperConfigs) names.push_back(pc.name);
+  return names;
+}
 
 int PaperBenchCommand(const PaperBenchOptions& options) {
   if (!options.only.empty()) {
@@ -124,183 +342,14 @@ int PaperBenchCommand(const PaperBenchOptions& options) {
   if (!walk.ok()) return Fail(kExitUsage, walk.status().message());
   Status s = EnsureDirectory(options.out_dir);
   if (!s.ok()) return Fail(kExitOutput, s.message());
-  const double walk_start = 0;
-  struct Result {
-    const PaperConfig* config;
-    std::vector<Sample> samples;
-    int64_t steps = 0;
-    double run_s = 0;
-    double cpu_s = 0;
-    double peak_rss_mib = 0;
-    bool stopped = false;
-    std::vector<double> all_run_s;  // every repetition's, in order
-  };
-  std::vector<Result> results;
+  std::vector<PaperResult> results;
   for (const PaperConfig& pc : kPaperConfigs) {
     if (!options.only.empty() && options.only != pc.name) continue;
-    // The repetitions run one after another; the median run (by run time) is reported.
-    std::vector<Result> runs;
-    for (int rep = 0; rep < options.repeat; ++rep) {
-      double cpu_s = 0;
-      std::string series_path = fmt::format("{}/.series-{}", options.out_dir, getpid());
-      int code = InChild(
-          [&]() -> int {
-            FootSlamConfig config;
-            config.particles = options.particles;
-            config.threads = options.threads;
-            config.map = pc.map;
-            config.degree = pc.degree;
-            config.grid_size = pc.grid;
-            config.grid = options.grid == "growing" ? FootSlamGrid::kGrowing : FootSlamGrid::kFixed;
-            config.alphabet = pc.alphabet;
-            auto slam = FootSlam::Create(config);
-            if (!slam.ok()) return 10;
-            std::string out;
-            auto start = Clock::now();
-            double next_sample = 0;
-            int64_t done = 0;
-            for (const StepRecord& step : *walk) {
-              if (!(*slam)->Step(step.t_s, step.dx_m, step.dy_m).ok()) return 11;
-              ++done;
-              double run_s = std::chrono::duration<double>(Clock::now() - start).count();
-              if (step.t_s >= next_sample || done == static_cast<int64_t>(walk->size())) {
-                next_sample = step.t_s + 5;
-                out += fmt::format("{} {} {} {}\n", step.t_s - walk_start, run_s,
-                                   CurrentRssBytes() / 1048576.0,
-                                   (*slam)->Summary().map_memory.live_bytes / 1048576.0);
-              }
-              if (pc.map == FootSlamMapKind::kNaive && run_s > options.naive_limit_s) break;
-            }
-            out += fmt::format("# steps {} peak_rss_mib {}\n", done, PeakRssBytes() / 1048576.0);
-            return WriteFileAtomically(series_path, out).ok() ? 0 : 12;
-          },
-          &cpu_s);
-      if (code != 0)
-        return Fail(kExitRun, fmt::format("{}: the run failed (code {})", pc.name, code));
-      StatusOr<std::string> series = ReadWholeFile(series_path);
-      if (!series.ok()) return Fail(kExitRun, series.status().message());
-      const std::string& text = *series;
-      std::remove(series_path.c_str());
-      Result r;
-      r.config = &pc;
-      r.samples = ParseSamples(text.substr(0, text.find('#')));
-      size_t tail = text.find("# steps");
-      if (tail != std::string::npos) {
-        std::sscanf(text.c_str() + tail, "# steps %ld peak_rss_mib %lf", &r.steps, &r.peak_rss_mib);
-      }
-      r.run_s = r.samples.empty() ? 0 : r.samples.back().run_s;
-      r.cpu_s = cpu_s;
-      r.stopped = r.steps < static_cast<int64_t>(walk->size());
-      std::fprintf(stderr, "%-16s %5ld steps in %7.2f s (CPU %.2f s), peak RSS %7.1f MiB%s\n",
-                   pc.name, r.steps, r.run_s, r.cpu_s, r.peak_rss_mib,
-                   r.stopped ? " (stopped: time limit)" : "");
-      runs.push_back(std::move(r));
-    }
-    std::vector<double> all;
-    for (const Result& r : runs) all.push_back(r.run_s);
-    const auto middle = runs.begin() + static_cast<std::ptrdiff_t>(runs.size() / 2);
-    std::nth_element(runs.begin(), middle, runs.end(),
-                     [](const Result& a, const Result& b) { return a.run_s < b.run_s; });
-    Result median = std::move(*middle);
-    median.all_run_s = std::move(all);
-    results.push_back(std::move(median));
+    StatusOr<PaperResult> median = RunPaperConfig(options, pc, *walk);
+    if (!median.ok()) return Fail(kExitRun, median.status().message());
+    results.push_back(std::move(*median));
   }
-
-  // CSV, charts and a markdown table.
-  std::vector<std::vector<std::string>> rows;
-  // Log scale: grove runs orders of magnitude below the real-time line.
-  Chart runtime{.title = "Run time against walk time (Fig. 9)",
-                .x_label = "walk time (s)",
-                .y_label = "cumulative run time (s, log scale)",
-                .log_y = true};
-  Chart memory{.title = "Resident memory against walk time (Fig. 10)",
-               .x_label = "walk time (s)",
-               .y_label = "RSS (MiB)"};
-  Chart map_memory{.title = "Live map memory against walk time",
-                   .x_label = "walk time (s)",
-                   .y_label = "live map nodes (MiB)"};
-  double walk_end = walk->back().t_s;
-  ChartSeries real_time{.label = "real time", .style = ChartStyle::kDashed};
-  for (double t = 1; t < walk_end + 5; t += 5) {
-    real_time.x.push_back(std::min(t, walk_end));
-    real_time.y.push_back(std::min(t, walk_end));
-  }
-  runtime.series.push_back(real_time);
-  std::vector<std::vector<std::string>> table;
-  for (const Result& r : results) {
-    // A sample every 5 s of walk: too dense for markers.
-    ChartSeries time_series{.label = r.config->name, .style = ChartStyle::kLine};
-    ChartSeries rss_series = time_series;
-    ChartSeries map_series = time_series;
-    for (const Sample& s : r.samples) {
-      rows.push_back({r.config->name, fmt::format("{:.2f}", s.walk_s),
-                      fmt::format("{:.3f}", s.run_s), fmt::format("{:.1f}", s.rss_mib),
-                      fmt::format("{:.2f}", s.map_mib)});
-      time_series.x.push_back(s.walk_s);
-      time_series.y.push_back(s.run_s);
-      rss_series.x.push_back(s.walk_s);
-      rss_series.y.push_back(s.rss_mib);
-      map_series.x.push_back(s.walk_s);
-      map_series.y.push_back(s.map_mib);
-    }
-    runtime.series.push_back(time_series);
-    memory.series.push_back(rss_series);
-    map_memory.series.push_back(map_series);
-    // Time per step in the first and the last minute of what was run: flat means linear time.
-    double first_minute = 0, last_minute = 0;
-    int64_t first_n = 0, last_n = 0;
-    for (size_t k = 1; k < r.samples.size(); ++k) {
-      double dt = r.samples[k].run_s - r.samples[k - 1].run_s;
-      double dw = r.samples[k].walk_s - r.samples[k - 1].walk_s;
-      if (r.samples[k].walk_s <= 60) {
-        first_minute += dt;
-        first_n += static_cast<int64_t>(dw);
-      }
-      if (r.samples[k].walk_s > r.samples.back().walk_s - 60) {
-        last_minute += dt;
-        last_n += static_cast<int64_t>(dw);
-      }
-    }
-    double ratio = first_n > 0 && last_n > 0 && first_minute > 0
-                       ? (last_minute / last_n) / (first_minute / first_n)
-                       : 0;
-    double ns =
-        r.steps > 0 ? r.run_s * 1e9 / (static_cast<double>(r.steps) * options.particles) : 0;
-    double walked = r.samples.empty() ? 0 : r.samples.back().walk_s;
-    double peak_map = 0;
-    for (const Sample& s : r.samples) peak_map = std::max(peak_map, s.map_mib);
-    const auto [lo, hi] = std::minmax_element(r.all_run_s.begin(), r.all_run_s.end());
-    table.push_back({r.config->name, fmt::format("{}{}", r.steps, r.stopped ? " (stopped)" : ""),
-                     fmt::format("{:.0f}", walked), fmt::format("{:.2f}", r.run_s),
-                     fmt::format("{:.2f}-{:.2f}", *lo, *hi), fmt::format("{:.2f}", r.cpu_s),
-                     fmt::format("{:.3f}", walked > 0 ? r.run_s / walked : 0),
-                     fmt::format("{:.0f}", ns), fmt::format("{:.2f}", ratio),
-                     fmt::format("{:.0f}", r.peak_rss_mib), fmt::format("{:.1f}", peak_map)});
-  }
-  std::string md = fmt::format(
-      "# grove bench paper\n\nMachine: {}\n\nWalk: simulated open area, {} minutes ({} steps), "
-      "{} particles, {} threads; each configuration run {} times, the median run (by run time) "
-      "reported, its CPU time (user + system, all threads) beside it.\n\n",
-      MachineDescription(), options.minutes, walk->size(), options.particles,
-      options.threads == 0 ? std::thread::hardware_concurrency() : options.threads, options.repeat);
-  md += MarkdownTable({"configuration", "steps run", "walk s", "run s", "run s, all runs", "CPU s",
-                       "run / walk time", "ns per particle-step", "last/first minute time per step",
-                       "peak RSS MiB", "peak live map MiB"},
-                      table);
-  const std::string& dir = options.out_dir;
-  s = WriteFileAtomically(
-      dir + "/paper.csv",
-      CsvTable({"configuration", "walk_s", "run_s", "rss_mib", "live_map_mib"}, rows));
-  // The tables before the charts: without gnuplot the numbers are still kept.
-  if (s.ok()) s = WriteFileAtomically(dir + "/paper.md", md);
-  if (s.ok()) s = WriteChart(runtime, dir + "/paper_runtime.png", dir + "/paper_runtime.svg");
-  if (s.ok()) s = WriteChart(memory, dir + "/paper_memory.png", dir + "/paper_memory.svg");
-  if (s.ok()) {
-    s = WriteChart(map_memory, dir + "/paper_map_memory.png", dir + "/paper_map_memory.svg");
-  }
-  if (!s.ok()) return Fail(kExitOutput, s.message());
-  std::printf("%s", md.c_str());
-  return kExitOk;
+  return WritePaperReport(options, *walk, results);
 }
 
 int ScalingBenchCommand(const ScalingBenchOptions& options) {

@@ -20,6 +20,8 @@ struct PaperBenchOptions {
   std::string grid = "fixed";  // "fixed" (the paper's) or "growing": what growth costs
 };
 int PaperBenchCommand(const PaperBenchOptions& options);
+// The names of the configurations `bench paper` runs (what --only takes).
+std::vector<std::string> PaperBenchConfigurations();
 
 struct ScalingBenchOptions {
   std::string out_dir;

@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "grove/config_fields.h"
 #include "grove/config_json.h"
 #include "tools/cli/config_flags.h"
+#include "tools/cli/typed_flags.h"
 #include "tools/run/run_loop.h"
 
 namespace grove::tools {
@@ -23,22 +25,24 @@ namespace grove::tools {
 template <typename Config>
 class RunFlags {
  public:
-  RunFlags(CLI::App* app, const std::vector<ConfigField<Config>>& fields)
-      : fields_(fields), config_flags_(app, fields) {
-    app->add_option("--out", options_.out_dir, "Output directory");
-    config_option_ = app->add_option("--config", config_path_, "JSON file setting any parameter");
-    app->add_option("--memory-budget", memory_budget_,
-                    "Refuse runs predicted to need more memory, e.g. 512M or 8G (default: the "
-                    "memory available)");
-    app->add_option("--checkpoint-every", options_.checkpoint_every,
-                    "Write a checkpoint every N steps (0: only when stopped by SIGINT or SIGTERM)")
-        ->check(CLI::NonNegativeNumber);
-    checkpoint_option_ = app->add_option("--checkpoint", options_.checkpoint_path,
-                                         "Checkpoint file (default: OUT/checkpoint.grove)");
-    resume_option_ = app->add_option(
-        "--resume", options_.resume_path,
-        "Continue from this checkpoint; give the same inputs and configuration as the "
-        "interrupted run (threads may differ)");
+  // `defaults`: the configuration the help page gives the defaults of.
+  RunFlags(CLI::App* app, const std::vector<ConfigField<Config>>& fields,
+           const Config& defaults = Config())
+      : fields_(fields), config_flags_(app, fields, defaults), run_flags_(app) {
+    AddPath(app, "--out", &options_.out_dir, "Output directory");
+    config_option_ = AddPath(app, "--config", &config_path_, "JSON file setting any parameter");
+    Document(app->add_option("--memory-budget", memory_budget_,
+                             "Refuse runs predicted to need more memory, e.g. 512M or 8G"),
+             {"SIZE", "", {}, "the memory available"});
+    run_flags_.Integer("--checkpoint-every", &options_.checkpoint_every, 0,
+                       std::numeric_limits<int64_t>::max(),
+                       "Write a checkpoint every N steps (0: only when stopped by SIGINT or "
+                       "SIGTERM)");
+    checkpoint_option_ = AddPath(app, "--checkpoint", &options_.checkpoint_path, "Checkpoint file",
+                                 "OUT/checkpoint.grove");
+    resume_option_ = AddPath(app, "--resume", &options_.resume_path,
+                             "Continue from this checkpoint; give the same inputs and "
+                             "configuration as the interrupted run (threads may differ)");
     app->add_flag("--print-config", print_config_, "Print the effective configuration and exit");
     app->add_flag("--no-progress", no_progress_, "No progress output");
   }
@@ -68,6 +72,7 @@ class RunFlags {
       }
     }
     if (Status s = config_flags_.Apply(config); !s.ok()) return Fail(kExitUsage, s.message());
+    if (Status s = run_flags_.Apply(); !s.ok()) return Fail(kExitUsage, s.message());
     if (print_config_) {
       std::printf("%s\n", ConfigToJson(fields_, *config, 2).c_str());
       return kExitOk;
@@ -86,6 +91,7 @@ class RunFlags {
  private:
   const std::vector<ConfigField<Config>>& fields_;
   ConfigFlags<Config> config_flags_;
+  TypedFlags run_flags_;
   RunOptions options_;
   std::string config_path_;
   std::string memory_budget_;

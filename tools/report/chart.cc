@@ -179,21 +179,18 @@ Status CheckOutputDirectory(const std::string& path) {
   return Status::Ok();
 }
 
-// The gnuplot script: data as inline datablocks, then the settings, then one plot per terminal.
-std::string Script(const Chart& chart, const ChartOptions& options, const std::string& png_path,
-                   const std::string& svg_path) {
-  const bool log_x = chart.log_x, log_y = chart.log_y;
+size_t LineType(size_t i) { return i % kPalette.size() + 1; }
+
+// The inline datablocks and the plot elements of a chart, and the range of its usable values
+// on each axis.
+struct PlotData {
   std::string data;
   std::vector<std::string> elements;
   bool any_data = false;
-  // The range of the usable values on each axis.
   double min_x = std::numeric_limits<double>::infinity(), min_y = min_x;
   double max_x = -min_x, max_y = -min_x;
-  auto line_type = [](size_t i) { return i % kPalette.size() + 1; };
 
-  // Bands first, so that everything else is drawn over them.
-  for (size_t i = 0; i < chart.bands.size(); ++i) {
-    const ChartBand& b = chart.bands[i];
+  void AddBand(size_t i, const ChartBand& b, bool log_x, bool log_y) {
     std::string rows;
     bool usable = false;
     for (size_t k = 0; k < b.x.size(); ++k) {
@@ -209,7 +206,7 @@ std::string Script(const Chart& chart, const ChartOptions& options, const std::s
       }
     }
     std::string look = fmt::format("with filledcurves lt {} fs transparent solid 0.25 noborder {}",
-                                   line_type(i), Legend(b.label));
+                                   LineType(i), Legend(b.label));
     if (usable) {
       data += fmt::format("$band{} << EOD\n{}EOD\n", i, rows);
       elements.push_back(fmt::format("$band{} using 1:2:3 {}", i, look));
@@ -219,24 +216,23 @@ std::string Script(const Chart& chart, const ChartOptions& options, const std::s
     any_data |= usable;
   }
 
-  for (size_t i = 0; i < chart.boxes.size(); ++i) {
+  void AddBox(size_t i, const ChartBox& box, bool log_y) {
     std::string rows;
-    for (double v : chart.boxes[i].values) {
+    for (double v : box.values) {
       if (!Usable(v, log_y)) continue;
       rows += fmt::format("{}\n", v);
       min_y = std::min(min_y, v);
       max_y = std::max(max_y, v);
     }
-    if (rows.empty()) continue;  // the category keeps its place on the axis
+    if (rows.empty()) return;  // the category keeps its place on the axis
     data += fmt::format("$box{} << EOD\n{}EOD\n", i, rows);
     elements.push_back(fmt::format(
         "$box{} using ({}):1:(0.5) with boxplot lt {} fs transparent solid 0.3 border notitle", i,
-        i + 1, line_type(i)));
+        i + 1, LineType(i)));
     any_data = true;
   }
 
-  for (size_t i = 0; i < chart.series.size(); ++i) {
-    const ChartSeries& s = chart.series[i];
+  void AddSeries(size_t i, const ChartSeries& s, bool log_x, bool log_y) {
     std::string rows;
     bool usable = false;
     for (size_t k = 0; k < s.x.size(); ++k) {
@@ -251,22 +247,8 @@ std::string Script(const Chart& chart, const ChartOptions& options, const std::s
         rows += "NaN NaN\n";  // undefined: gnuplot breaks the line here
       }
     }
-    std::string with;
-    switch (s.style) {
-      case ChartStyle::kLine:
-        with = "lines";
-        break;
-      case ChartStyle::kLinePoints:
-        with = "linespoints";
-        break;
-      case ChartStyle::kPoints:
-        with = "points";
-        break;
-      case ChartStyle::kDashed:
-        with = "lines dt 2";
-        break;
-    }
-    std::string look = fmt::format("with {} lt {} {}", with, line_type(i), Legend(s.label));
+    std::string look =
+        fmt::format("with {} lt {} {}", SeriesStyle(s.style), LineType(i), Legend(s.label));
     if (usable) {
       data += fmt::format("$series{} << EOD\n{}EOD\n", i, rows);
       elements.push_back(fmt::format("$series{} using 1:2 {}", i, look));
@@ -276,30 +258,39 @@ std::string Script(const Chart& chart, const ChartOptions& options, const std::s
     any_data |= usable;
   }
 
-  // Sizes are tuned for 1200 x 800 and scale with the smaller ratio.
-  const double scale = std::min(options.width_px / 1200.0, options.height_px / 800.0);
-  const int font_pt = std::max(8, static_cast<int>(std::lround(14 * scale)));
-  const double line_width = std::max(1.0, 1.5 * scale);
-  const std::string terminal_options =
-      fmt::format("noenhanced size {},{} font \"sans,{}\" linewidth {:.2f} background \"#ffffff\"",
-                  options.width_px, options.height_px, font_pt, line_width);
+  static const char* SeriesStyle(ChartStyle style) {
+    switch (style) {
+      case ChartStyle::kLine:
+        return "lines";
+      case ChartStyle::kLinePoints:
+        return "linespoints";
+      case ChartStyle::kPoints:
+        return "points";
+      case ChartStyle::kDashed:
+        return "lines dt 2";
+    }
+    return "lines";
+  }
+};
 
-  std::string s = "set encoding utf8\n" + data;
-  s += fmt::format("set title {} font \",{}\"\n", Quote(chart.title), font_pt + 2);
+// The settings after the data: title, labels, log axes, grid, key, line types and the boxes'
+// tics. Sizes are tuned for 1200 x 800 and scale with `scale`.
+std::string Settings(const Chart& chart, const PlotData& p, double scale, int font_pt) {
+  std::string s = fmt::format("set title {} font \",{}\"\n", Quote(chart.title), font_pt + 2);
   s += fmt::format("set xlabel {}\nset ylabel {}\n", Quote(chart.x_label), Quote(chart.y_label));
   // Log axes span whole decades; from 1 up they read better as 1, 10, 100, 1k, 1M than with
   // gnuplot's 1e+06.
-  if (log_x) {
+  if (chart.log_x) {
     s += "set logscale x 10\n";
-    if (min_x >= 1) s += "set format x \"%.0s%c\"\n";
-    if (min_x <= max_x && chart.boxes.empty()) {
-      s += fmt::format("set xrange {}\n", DecadeRange(min_x, max_x));
+    if (p.min_x >= 1) s += "set format x \"%.0s%c\"\n";
+    if (p.min_x <= p.max_x && chart.boxes.empty()) {
+      s += fmt::format("set xrange {}\n", DecadeRange(p.min_x, p.max_x));
     }
   }
-  if (log_y) {
+  if (chart.log_y) {
     s += "set logscale y 10\n";
-    if (min_y >= 1) s += "set format y \"%.0s%c\"\n";
-    if (min_y <= max_y) s += fmt::format("set yrange {}\n", DecadeRange(min_y, max_y));
+    if (p.min_y >= 1) s += "set format y \"%.0s%c\"\n";
+    if (p.min_y <= p.max_y) s += fmt::format("set yrange {}\n", DecadeRange(p.min_y, p.max_y));
   }
   s += "set border 3 lc rgb \"#404040\"\nset tics nomirror\n";
   s += fmt::format(
@@ -318,14 +309,41 @@ std::string Script(const Chart& chart, const ChartOptions& options, const std::s
     }
     s += fmt::format("set xtics ({})\nset xrange [0.5:{}.5]\n", tics, chart.boxes.size());
   }
-  if (!any_data) {
+  return s;
+}
+
+// The gnuplot script: data as inline datablocks, then the settings, then one plot per terminal.
+std::string Script(const Chart& chart, const ChartOptions& options, const std::string& png_path,
+                   const std::string& svg_path) {
+  PlotData p;
+  // Bands first, so that everything else is drawn over them.
+  for (size_t i = 0; i < chart.bands.size(); ++i) {
+    p.AddBand(i, chart.bands[i], chart.log_x, chart.log_y);
+  }
+  for (size_t i = 0; i < chart.boxes.size(); ++i) p.AddBox(i, chart.boxes[i], chart.log_y);
+  for (size_t i = 0; i < chart.series.size(); ++i) {
+    p.AddSeries(i, chart.series[i], chart.log_x, chart.log_y);
+  }
+
+  // Sizes are tuned for 1200 x 800 and scale with the smaller ratio.
+  const double scale = std::min(options.width_px / 1200.0, options.height_px / 800.0);
+  const int font_pt = std::max(8, static_cast<int>(std::lround(14 * scale)));
+  const double line_width = std::max(1.0, 1.5 * scale);
+  const std::string terminal_options =
+      fmt::format("noenhanced size {},{} font \"sans,{}\" linewidth {:.2f} background \"#ffffff\"",
+                  options.width_px, options.height_px, font_pt, line_width);
+
+  std::string s = "set encoding utf8\n" + p.data + Settings(chart, p, scale, font_pt);
+  if (!p.any_data) {
     // gnuplot cannot autoscale nothing: fixed unit ranges and one undefined function.
-    if (chart.boxes.empty()) s += log_x ? "set xrange [1:10]\n" : "set xrange [0:1]\n";
-    s += log_y ? "set yrange [1:10]\n" : "set yrange [0:1]\n";
-    elements.insert(elements.begin(), "NaN notitle");
+    if (chart.boxes.empty()) s += chart.log_x ? "set xrange [1:10]\n" : "set xrange [0:1]\n";
+    s += chart.log_y ? "set yrange [1:10]\n" : "set yrange [0:1]\n";
+    p.elements.insert(p.elements.begin(), "NaN notitle");
   }
   std::string plot = "plot ";
-  for (size_t i = 0; i < elements.size(); ++i) plot += (i > 0 ? ", \\\n     " : "") + elements[i];
+  for (size_t i = 0; i < p.elements.size(); ++i) {
+    plot += (i > 0 ? ", \\\n     " : "") + p.elements[i];
+  }
   s += fmt::format("set terminal pngcairo {}\nset output {}\n{}\n", terminal_options,
                    Quote(png_path), plot);
   if (!svg_path.empty()) {

@@ -251,6 +251,8 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
       park_events_ = new VictoriaParkEvents(park_.get());
       source_.reset(park_events_);
       records_ = static_cast<int64_t>(park_->controls.size() + park_->observations.size());
+      VictoriaParkEvents events(park_.get());
+      steps_ = CountRecords<FastSlamEvent>(events);
       return Status::Ok();
     }
     StatusOr<FastSlamInputReader> reader =
@@ -266,6 +268,12 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
     source_ = std::make_unique<FastSlamInputReader>(std::move(reader).value());
     records_ = CountRegularFileLines(options_.controls_path) +
                CountRegularFileLines(options_.observations_path);
+    if (records_ > 0) {
+      // Regular files: read them once more to count the scans among the rows.
+      StatusOr<FastSlamInputReader> events =
+          FastSlamInputReader::Open(options_.controls_path, options_.observations_path);
+      if (events.ok()) steps_ = CountRecords<FastSlamEvent>(*events);
+    }
     if (!options_.truth_path.empty()) {
       StatusOr<std::map<double, Pose2>> truth = ReadPoses(options_.truth_path);
       if (!truth.ok()) return truth.status();
@@ -300,6 +308,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
   }
   const char* RecordsName() const override { return "input rows"; }
   int64_t ExpectedRecords() const override { return records_; }
+  int64_t ExpectedSteps() const override { return steps_; }
   // A rough bound, not a calibrated model: 64 MiB fixed, 4 KiB per particle (state, its own map
   // paths in two generations, path segments) and 256 bytes per input row (the step log, times
   // and poses of the driver, the outputs built in memory).
@@ -425,7 +434,8 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
   std::unique_ptr<FastSlamEventSource> source_;
   std::unique_ptr<VictoriaParkData> park_;
   VictoriaParkEvents* park_events_ = nullptr;  // source_, for Victoria Park
-  int64_t records_ = 0;
+  int64_t records_ = 0;                        // input rows
+  int64_t steps_ = 0;                          // controls and scans: the events Read() returns
   FastSlamEvent event_;
   std::map<double, Pose2> truth_;
   std::map<int64_t, TruthLandmark> landmarks_truth_;

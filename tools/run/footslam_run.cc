@@ -32,10 +32,7 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   Status Open() {
     StepReaderOptions reader_options;
     reader_options.max_step_m = options_.max_step_m;
-    StatusOr<StepReader> reader =
-        options_.steps_path.empty()
-            ? StepReader::OpenText(EmbeddedWalkName(), EmbeddedWalkSteps(), reader_options)
-            : StepReader::Open(options_.steps_path, reader_options);
+    StatusOr<StepReader> reader = OpenSteps(reader_options);
     if (!reader.ok()) return reader.status();
     reader_ = std::make_unique<StepReader>(std::move(reader).value());
     if (!options_.prior_map_path.empty()) {
@@ -48,6 +45,12 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
                                                       : CountRegularFileLines(options_.steps_path);
     // Lines after the header (comments and blank lines make it an estimate).
     records_ = std::max<int64_t>(lines - 1 - (reader_->positions_form() ? 1 : 0), 0);
+    // A file (not a stream, which is read once) is read again to count its steps; an error
+    // there is reported when the run comes to it.
+    if (records_ > 0) {
+      StatusOr<StepReader> again = OpenSteps(reader_options);
+      if (again.ok()) steps_ = CountRecords<StepRecord>(*again);
+    }
     return Status::Ok();
   }
 
@@ -80,6 +83,7 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   std::string InputName() const override { return steps_name_; }
   const char* RecordsName() const override { return "steps"; }
   int64_t ExpectedRecords() const override { return records_; }
+  int64_t ExpectedSteps() const override { return steps_; }
   int64_t PredictPeakBytes(int64_t records) const override {
     FootSlamConfig share = config_;  // across ranks, this rank's particles
     share.particles =
@@ -159,10 +163,18 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   }
 
  private:
+  // The step file, or the walk bundled in the binary.
+  StatusOr<StepReader> OpenSteps(const StepReaderOptions& reader_options) const {
+    return options_.steps_path.empty()
+               ? StepReader::OpenText(EmbeddedWalkName(), EmbeddedWalkSteps(), reader_options)
+               : StepReader::Open(options_.steps_path, reader_options);
+  }
+
   FootSlamRunOptions options_;
   std::string steps_name_;
   std::unique_ptr<StepReader> reader_;
-  int64_t records_ = 0;
+  int64_t records_ = 0;  // input lines after the header
+  int64_t steps_ = 0;    // the steps Read() returns
   std::vector<HexCounts> prior_;
   StepRecord step_;
   OdometryPath odometry_;

@@ -368,231 +368,294 @@ std::string RankCheckpointPath(const std::string& path, int rank) {
   return rank == 0 ? path : fmt::format("{}.rank{}", path, rank);
 }
 
-int RunCommand(RunJob* job, const RunOptions& options, const std::string& config_json) {
-  auto wall_start = std::chrono::steady_clock::now();
-  // Across ranks rank 0 (the lead) checks and writes the outputs and reports; every rank takes
-  // the same steps, agrees on every error, and exits with the same code.
-  Collective* ranks = options.ranks;
-  const bool lead = ranks == nullptr || ranks->rank() == 0;
-  auto agree = [&](const Status& s) { return ranks == nullptr ? s : AgreeStatus(*ranks, s); };
-  auto fail = [&](int code, std::string_view message) { return lead ? Fail(code, message) : code; };
-  std::optional<SignalHandlers> signals;
-  if (options.handle_signals) signals.emplace();
-  const std::string checkpoint_path = options.checkpoint_path.empty()
-                                          ? options.out_dir + "/checkpoint.grove"
-                                          : options.checkpoint_path;
-  // Across ranks each rank writes and reads its own share's file.
-  const int rank = ranks == nullptr ? 0 : ranks->rank();
-  const std::string my_checkpoint_path = RankCheckpointPath(checkpoint_path, rank);
-  const std::string my_resume_path =
-      options.resume_path.empty() ? "" : RankCheckpointPath(options.resume_path, rank);
+namespace {
+
+// One run of a RunJob, stage by stage. Across ranks rank 0 (the lead) checks and writes the
+// outputs and reports; every rank takes the same steps, agrees on every error, and exits with
+// the same code. Each stage returns -1 to go on, or the exit code after printing any error.
+class RunLoop {
+ public:
+  RunLoop(RunJob* job, const RunOptions& options)
+      : job_(job),
+        options_(options),
+        ranks_(options.ranks),
+        lead_(ranks_ == nullptr || ranks_->rank() == 0),
+        checkpoint_path_(options.checkpoint_path.empty() ? options.out_dir + "/checkpoint.grove"
+                                                         : options.checkpoint_path),
+        // Across ranks each rank writes and reads its own share's file.
+        my_checkpoint_path_(RankCheckpointPath(checkpoint_path_, rank())),
+        my_resume_path_(
+            options.resume_path.empty() ? "" : RankCheckpointPath(options.resume_path, rank())) {
+    position_.input_name = job->InputName();
+  }
 
   // Every output path is checked, and the output directory locked, before any work.
-  std::optional<OutputDirectory> out_dir;
-  Status paths_ok;
-  if (lead) {
-    StatusOr<OutputDirectory> opened = OutputDirectory::Open(options.out_dir);
-    if (opened.ok()) {
-      out_dir.emplace(std::move(opened).value());
-      paths_ok = CheckOutputPaths(*job, options.out_dir, checkpoint_path);
-    } else {
-      paths_ok = opened.status();
+  int OpenOutputs() {
+    Status paths_ok;
+    if (lead_) {
+      StatusOr<OutputDirectory> opened = OutputDirectory::Open(options_.out_dir);
+      if (opened.ok()) {
+        out_dir_.emplace(std::move(opened).value());
+        paths_ok = CheckOutputPaths(*job_, options_.out_dir, checkpoint_path_);
+      } else {
+        paths_ok = opened.status();
+      }
     }
-  }
-  if (Status s = agree(paths_ok); !s.ok()) {
-    return fail(s.code() == StatusCode::kInvalidArgument ? kExitUsage : kExitOutput, s.message());
+    if (Status s = Agree(paths_ok); !s.ok()) {
+      return Fail(s.code() == StatusCode::kInvalidArgument ? kExitUsage : kExitOutput, s.message());
+    }
+    return -1;
   }
 
-  // Refuse a run that would not fit before building anything.
-  const int64_t records = job->ExpectedRecords();
-  std::string budget_source = "--memory-budget";
-  const int64_t budget = options.memory_budget_bytes > 0 ? options.memory_budget_bytes
-                                                         : AvailableMemoryBytes(&budget_source);
-  const int64_t predicted = job->PredictPeakBytes(records);
-  Status fits;
-  if (budget > 0 && predicted > budget) {
-    fits = ResourceExhaustedError(
-        fmt::format("the run is predicted to need {:.1f} MiB ({}), more than the {} of "
-                    "{:.1f} MiB; use fewer particles or raise --memory-budget",
-                    predicted / 1048576.0, job->DescribePrediction(records), budget_source,
-                    budget / 1048576.0));
+  // Refuses a run that would not fit, before building anything.
+  int CheckMemory() {
+    const int64_t records = job_->ExpectedRecords();
+    budget_ = options_.memory_budget_bytes > 0 ? options_.memory_budget_bytes
+                                               : AvailableMemoryBytes(&budget_source_);
+    predicted_ = job_->PredictPeakBytes(records);
+    Status fits;
+    if (budget_ > 0 && predicted_ > budget_) {
+      fits = ResourceExhaustedError(
+          fmt::format("the run is predicted to need {:.1f} MiB ({}), more than the {} of "
+                      "{:.1f} MiB; use fewer particles or raise --memory-budget",
+                      predicted_ / 1048576.0, job_->DescribePrediction(records), budget_source_,
+                      budget_ / 1048576.0));
+    }
+    if (Status s = Agree(fits); !s.ok()) return Fail(kExitMemory, s.message());
+    return -1;
   }
-  if (Status s = agree(fits); !s.ok()) return fail(kExitMemory, s.message());
 
   // A new engine, or one continuing from a checkpoint.
-  InputPosition resumed_at;
-  if (options.resume_path.empty()) {
-    if (Status s = agree(job->Create()); !s.ok()) {
-      return fail(s.code() == StatusCode::kResourceExhausted ? kExitMemory : ExitCodeOf(s),
-                  s.message());
+  int CreateOrResume() {
+    if (options_.resume_path.empty()) {
+      if (Status s = Agree(job_->Create()); !s.ok()) {
+        return Fail(s.code() == StatusCode::kResourceExhausted ? kExitMemory : ExitCodeOf(s),
+                    s.message());
+      }
+      return -1;
     }
-  } else {
-    StatusOr<std::string> bytes = ReadCheckpointFile(my_resume_path);
-    if (!bytes.ok() && rank > 0) {
+    StatusOr<std::string> bytes = ReadCheckpointFile(my_resume_path_);
+    if (!bytes.ok() && rank() > 0) {
       bytes = Status(bytes.status().code(),
                      bytes.status().message() +
                          " (across ranks, rank q resumes from the file --resume names plus "
                          "\".rank<q>\": resume on as many ranks as wrote the checkpoint)");
     }
-    if (Status s = agree(bytes.status()); !s.ok()) return fail(kExitInput, s.message());
+    if (Status s = Agree(bytes.status()); !s.ok()) return Fail(kExitInput, s.message());
     std::string user;
     // Collective across ranks: every rank's error reaches every rank.
-    Status s = job->Resume(*bytes, my_resume_path, &user);
+    Status s = job_->Resume(*bytes, my_resume_path_, &user);
     if (!s.ok()) {
       // Another configuration or format is a usage error; a corrupt file a bad input.
-      return fail(s.code() == StatusCode::kFailedPrecondition  ? kExitUsage
+      return Fail(s.code() == StatusCode::kFailedPrecondition  ? kExitUsage
                   : s.code() == StatusCode::kResourceExhausted ? kExitMemory
                                                                : kExitInput,
                   s.message());
     }
-    StatusOr<InputPosition> at = InputPosition::FromJson(user, my_resume_path);
-    if (Status s = agree(at.status()); !s.ok()) return fail(kExitInput, s.message());
-    resumed_at = *at;
+    StatusOr<InputPosition> at = InputPosition::FromJson(user, my_resume_path_);
+    if (Status s = Agree(at.status()); !s.ok()) return Fail(kExitInput, s.message());
+    resumed_at_ = *at;
+    return -1;
   }
 
-  InputPosition position;
-  position.input_name = job->InputName();
-  int64_t checkpoints_written = 0, checkpoint_bytes = 0;
-  double checkpoint_s = 0;
-  // Across ranks every rank writes its own file and the ranks agree on the outcome; a crash
-  // between two ranks' renames leaves files of two steps, which a resume refuses.
-  auto write_checkpoint = [&]() -> Status {
-    auto t0 = std::chrono::steady_clock::now();
-    StatusOr<std::string> bytes = job->Checkpoint(position.ToJson());
-    Status s = bytes.status();
-    if (s.ok()) s = WriteFileAtomically(my_checkpoint_path, *bytes);
-    GROVE_RETURN_IF_ERROR(agree(s));
-    if (out_dir) out_dir->Keep();  // it holds a checkpoint now (the default path)
-    ++checkpoints_written;
-    checkpoint_bytes = static_cast<int64_t>(bytes->size());
-    checkpoint_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return Status::Ok();
-  };
-  // Across ranks every rank comes here together (the signal is agreed).
-  auto stop_with_checkpoint = [&](int signal) {
-    if (position.records < resumed_at.records) {  // still re-reading: nothing new to save
-      if (lead) {
-        std::fprintf(stderr, "\ngrove: stopped by %s before any new step; %s is unchanged\n",
-                     strsignal(signal), options.resume_path.c_str());
+  // Reads and steps every input record, with progress and checkpoints.
+  int StepThroughInput() {
+    const bool terminal = isatty(fileno(stderr)) != 0;
+    ProgressReporter progress(job_->ExpectedSteps(), job_->particles(), stderr, terminal);
+    const bool show_progress = options_.progress && lead_;
+    std::string digest_bytes;
+    while (true) {
+      if (ranks_ == nullptr) {
+        if (int signal = StopSignal(); signal != 0) return StopWithCheckpoint(signal);
       }
-      return kExitSignalBase + signal;
-    }
-    Status s = write_checkpoint();
-    if (!s.ok()) return fail(kExitOutput, s.message());
-    if (lead) {
-      std::fprintf(stderr,
-                   "\ngrove: stopped by %s after step %lld: wrote %s%s; continue with the same "
-                   "command and --resume %s\n",
-                   strsignal(signal), static_cast<long long>(job->steps()), checkpoint_path.c_str(),
-                   ranks == nullptr ? "" : " (and one file per further rank beside it)",
-                   checkpoint_path.c_str());
-    }
-    return kExitSignalBase + signal;
-  };
-
-  const bool terminal = isatty(fileno(stderr)) != 0;
-  ProgressReporter progress(records, job->particles(), stderr, terminal);
-  const bool show_progress = options.progress && lead;
-  std::string digest_bytes;
-  while (true) {
-    if (ranks == nullptr) {
-      if (int signal = StopSignal(); signal != 0) return stop_with_checkpoint(signal);
-    }
-    digest_bytes.clear();
-    StatusOr<bool> more = job->Read(&digest_bytes);
-    if (ranks != nullptr) {
-      // Every rank reads the input itself: the ranks agree on a stop signal, on the read's
-      // outcome and on the record's bytes before any of them steps.
-      StatusOr<int> signal = AgreeOnRecord(*ranks, more, digest_bytes, position.records + 1,
-                                           job->InputName(), job->RecordsName());
-      if (!signal.ok()) return fail(kExitInput, signal.status().message());
-      if (*signal != 0) return stop_with_checkpoint(*signal);
-    }
-    if (!more.ok()) return fail(kExitInput, more.status().message());
-    if (!*more) break;
-    // The records a resumed run has taken already: re-read to check them, not stepped again.
-    const bool replay = position.records < resumed_at.records;
-    position.Add(digest_bytes);
-    if (replay) {
-      Status same;
-      if (position.records == resumed_at.records && position.digest != resumed_at.digest) {
-        same = InvalidArgumentError(
-            fmt::format("{}: the first {} {} differ from those of {} (made from {}): resume with "
-                        "the same input",
-                        job->InputName(), resumed_at.records, job->RecordsName(), my_resume_path,
-                        QuoteForMessage(resumed_at.input_name, 200)));
+      digest_bytes.clear();
+      StatusOr<bool> more = job_->Read(&digest_bytes);
+      if (ranks_ != nullptr) {
+        // Every rank reads the input itself: the ranks agree on a stop signal, on the read's
+        // outcome and on the record's bytes before any of them steps.
+        StatusOr<int> signal = AgreeOnRecord(*ranks_, more, digest_bytes, position_.records + 1,
+                                             job_->InputName(), job_->RecordsName());
+        if (!signal.ok()) return Fail(kExitInput, signal.status().message());
+        if (*signal != 0) return StopWithCheckpoint(*signal);
       }
-      if (ranks != nullptr && position.records == resumed_at.records) same = agree(same);
-      if (!same.ok()) return fail(kExitInput, same.message());
-      job->Replay();
-      continue;
+      if (!more.ok()) return Fail(kExitInput, more.status().message());
+      if (!*more) break;
+      // The records a resumed run has taken already: re-read to check them, not stepped again.
+      const bool replay = position_.records < resumed_at_.records;
+      position_.Add(digest_bytes);
+      if (replay) {
+        if (const int code = ReplayRecord(); code >= 0) return code;
+        continue;
+      }
+      if (Status s = job_->Step(); !s.ok()) {
+        // Out of memory in a step is the memory's fault, not the disk's.
+        return Fail(s.code() == StatusCode::kResourceExhausted ? kExitMemory : ExitCodeOf(s),
+                    s.message());
+      }
+      if (show_progress && !HangupSeen()) progress.Update(position_.records);
+      if (options_.checkpoint_every > 0 && job_->steps() % options_.checkpoint_every == 0) {
+        if (Status s = WriteCheckpoint(); !s.ok()) return Fail(ExitCodeOf(s), s.message());
+      }
     }
-    if (Status s = job->Step(); !s.ok()) {
-      // Out of memory in a step is the memory's fault, not the disk's.
-      return fail(s.code() == StatusCode::kResourceExhausted ? kExitMemory : ExitCodeOf(s),
-                  s.message());
+    Status long_enough;
+    if (position_.records < resumed_at_.records) {
+      long_enough = InvalidArgumentError(fmt::format(
+          "{}: has {} {}, but {} was made after {}: resume with the same input", job_->InputName(),
+          position_.records, job_->RecordsName(), my_resume_path_, resumed_at_.records));
     }
-    if (show_progress && !HangupSeen()) progress.Update(position.records);
-    if (options.checkpoint_every > 0 && job->steps() % options.checkpoint_every == 0) {
-      if (Status s = write_checkpoint(); !s.ok()) return fail(ExitCodeOf(s), s.message());
-    }
+    if (Status s = Agree(long_enough); !s.ok()) return Fail(kExitInput, s.message());
+    if (job_->steps() == 0) return Fail(kExitInput, fmt::format("{}: no steps", job_->InputName()));
+    if (show_progress && !HangupSeen()) progress.Finish();
+    return -1;
   }
-  Status long_enough;
-  if (position.records < resumed_at.records) {
-    long_enough = InvalidArgumentError(fmt::format(
-        "{}: has {} {}, but {} was made after {}: resume with the same input", job->InputName(),
-        position.records, job->RecordsName(), my_resume_path, resumed_at.records));
-  }
-  if (Status s = agree(long_enough); !s.ok()) return fail(kExitInput, s.message());
-  if (job->steps() == 0) return fail(kExitInput, fmt::format("{}: no steps", job->InputName()));
-  if (show_progress && !HangupSeen()) progress.Finish();
 
   // The outputs as a set: staged, then renamed into place, summary.json last. Across ranks
   // every rank computes them (the read-outs are collective); the lead writes them.
-  std::optional<OutputSet> out;
-  Status staged;
-  if (lead) {
-    StatusOr<OutputSet> begun = OutputSet::Begin(options.out_dir);
-    if (begun.ok()) {
-      out.emplace(std::move(begun).value());
-    } else {
-      staged = begun.status();
+  int WriteOutputs(const std::string& config_json, std::chrono::steady_clock::time_point start) {
+    std::optional<OutputSet> out;
+    Status staged;
+    if (lead_) {
+      StatusOr<OutputSet> begun = OutputSet::Begin(options_.out_dir);
+      if (begun.ok()) {
+        out.emplace(std::move(begun).value());
+      } else {
+        staged = begun.status();
+      }
     }
+    if (Status s = Agree(staged); !s.ok()) return Fail(kExitOutput, s.message());
+    nlohmann::json summary = {{"config", nlohmann::json::parse(config_json)}};
+    if (Status s = Agree(job_->WriteOutputs(out ? &*out : nullptr, &summary)); !s.ok()) {
+      return Fail(ExitCodeOf(s), s.message());
+    }
+    if (ranks_ != nullptr) {
+      StatusOr<int> signal = AgreeOnSignal(*ranks_);
+      if (!signal.ok()) return Fail(kExitInternal, signal.status().message());
+      if (*signal != 0) return StopWithCheckpoint(*signal);
+    } else if (int signal = StopSignal(); signal != 0) {
+      return StopWithCheckpoint(signal);
+    }
+    AddRunFigures(start, &summary);
+    if (Status s = Agree(lead_ ? out->Commit(summary) : Status::Ok()); !s.ok()) {
+      return Fail(kExitOutput, s.message());
+    }
+    const std::string brief = job_->BriefReport();  // collective across ranks: every rank
+    if (!lead_) return kExitOk;
+    out_dir_->Keep();
+    std::string names;
+    for (const std::string& n : out->names()) names += n + ", ";
+    std::fprintf(stderr, "%s\nwrote %s/{%ssummary.json}\n", brief.c_str(), options_.out_dir.c_str(),
+                 names.c_str());
+    return kExitOk;
   }
-  if (Status s = agree(staged); !s.ok()) return fail(kExitOutput, s.message());
-  nlohmann::json summary = {{"config", nlohmann::json::parse(config_json)}};
-  if (Status s = agree(job->WriteOutputs(out ? &*out : nullptr, &summary)); !s.ok()) {
-    return fail(ExitCodeOf(s), s.message());
+
+ private:
+  int rank() const { return ranks_ == nullptr ? 0 : ranks_->rank(); }
+  Status Agree(const Status& s) const { return ranks_ == nullptr ? s : AgreeStatus(*ranks_, s); }
+  // Prints on the lead only.
+  int Fail(int code, std::string_view message) const {
+    return lead_ ? tools::Fail(code, message) : code;
   }
-  if (ranks != nullptr) {
-    StatusOr<int> signal = AgreeOnSignal(*ranks);
-    if (!signal.ok()) return fail(kExitInternal, signal.status().message());
-    if (*signal != 0) return stop_with_checkpoint(*signal);
-  } else if (int signal = StopSignal(); signal != 0) {
-    return stop_with_checkpoint(signal);
+
+  // A record a resumed run re-read: at the checkpoint's position the records so far must be
+  // those the checkpoint was made after.
+  int ReplayRecord() {
+    Status same;
+    if (position_.records == resumed_at_.records && position_.digest != resumed_at_.digest) {
+      same = InvalidArgumentError(
+          fmt::format("{}: the first {} {} differ from those of {} (made from {}): resume with "
+                      "the same input",
+                      job_->InputName(), resumed_at_.records, job_->RecordsName(), my_resume_path_,
+                      QuoteForMessage(resumed_at_.input_name, 200)));
+    }
+    if (ranks_ != nullptr && position_.records == resumed_at_.records) same = Agree(same);
+    if (!same.ok()) return Fail(kExitInput, same.message());
+    job_->Replay();
+    return -1;
   }
-  summary["wall_time_s"] =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  summary["peak_rss_bytes"] = PeakRssBytes();
-  summary["predicted_peak_bytes"] = predicted;
-  summary["memory_budget"] = {{"bytes", budget}, {"source", budget_source}};
-  summary["checkpoints"] = {{"written", checkpoints_written},
-                            {"seconds", checkpoint_s},
-                            {"last_bytes", checkpoint_bytes},
-                            {"resumed_from", options.resume_path},
-                            {"resumed_at_record", resumed_at.records}};
-  if (ranks != nullptr) summary["ranks"] = ranks->size();
-  if (Status s = agree(lead ? out->Commit(summary) : Status::Ok()); !s.ok()) {
-    return fail(kExitOutput, s.message());
+
+  // Across ranks every rank writes its own file and the ranks agree on the outcome; a crash
+  // between two ranks' renames leaves files of two steps, which a resume refuses.
+  Status WriteCheckpoint() {
+    auto t0 = std::chrono::steady_clock::now();
+    StatusOr<std::string> bytes = job_->Checkpoint(position_.ToJson());
+    Status s = bytes.status();
+    if (s.ok()) s = WriteFileAtomically(my_checkpoint_path_, *bytes);
+    GROVE_RETURN_IF_ERROR(Agree(s));
+    if (out_dir_) out_dir_->Keep();  // it holds a checkpoint now (the default path)
+    ++checkpoints_written_;
+    checkpoint_bytes_ = static_cast<int64_t>(bytes->size());
+    checkpoint_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return Status::Ok();
   }
-  const std::string brief = job->BriefReport();  // collective across ranks: every rank
-  if (!lead) return kExitOk;
-  out_dir->Keep();
-  std::string names;
-  for (const std::string& n : out->names()) names += n + ", ";
-  std::fprintf(stderr, "%s\nwrote %s/{%ssummary.json}\n", brief.c_str(), options.out_dir.c_str(),
-               names.c_str());
-  return kExitOk;
+
+  // Across ranks every rank comes here together (the signal is agreed).
+  int StopWithCheckpoint(int signal) {
+    if (position_.records < resumed_at_.records) {  // still re-reading: nothing new to save
+      if (lead_) {
+        std::fprintf(stderr, "\ngrove: stopped by %s before any new step; %s is unchanged\n",
+                     strsignal(signal), options_.resume_path.c_str());
+      }
+      return kExitSignalBase + signal;
+    }
+    Status s = WriteCheckpoint();
+    if (!s.ok()) return Fail(kExitOutput, s.message());
+    if (lead_) {
+      std::fprintf(stderr,
+                   "\ngrove: stopped by %s after step %lld: wrote %s%s; continue with the same "
+                   "command and --resume %s\n",
+                   strsignal(signal), static_cast<long long>(job_->steps()),
+                   checkpoint_path_.c_str(),
+                   ranks_ == nullptr ? "" : " (and one file per further rank beside it)",
+                   checkpoint_path_.c_str());
+    }
+    return kExitSignalBase + signal;
+  }
+
+  // What the run cost, for summary.json.
+  void AddRunFigures(std::chrono::steady_clock::time_point start, nlohmann::json* summary) const {
+    nlohmann::json& s = *summary;
+    s["wall_time_s"] =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    s["peak_rss_bytes"] = PeakRssBytes();
+    s["predicted_peak_bytes"] = predicted_;
+    s["memory_budget"] = {{"bytes", budget_}, {"source", budget_source_}};
+    s["checkpoints"] = {{"written", checkpoints_written_},
+                        {"seconds", checkpoint_s_},
+                        {"last_bytes", checkpoint_bytes_},
+                        {"resumed_from", options_.resume_path},
+                        {"resumed_at_record", resumed_at_.records}};
+    if (ranks_ != nullptr) s["ranks"] = ranks_->size();
+  }
+
+  RunJob* const job_;
+  const RunOptions& options_;
+  Collective* const ranks_;
+  const bool lead_;
+  const std::string checkpoint_path_;
+  const std::string my_checkpoint_path_;
+  const std::string my_resume_path_;
+  std::optional<OutputDirectory> out_dir_;
+  std::string budget_source_ = "--memory-budget";
+  int64_t budget_ = 0;
+  int64_t predicted_ = 0;
+  InputPosition resumed_at_;
+  InputPosition position_;
+  int64_t checkpoints_written_ = 0, checkpoint_bytes_ = 0;
+  double checkpoint_s_ = 0;
+};
+
+}  // namespace
+
+int RunCommand(RunJob* job, const RunOptions& options, const std::string& config_json) {
+  auto wall_start = std::chrono::steady_clock::now();
+  std::optional<SignalHandlers> signals;
+  if (options.handle_signals) signals.emplace();
+  RunLoop loop(job, options);
+  if (const int code = loop.OpenOutputs(); code >= 0) return code;
+  if (const int code = loop.CheckMemory(); code >= 0) return code;
+  if (const int code = loop.CreateOrResume(); code >= 0) return code;
+  if (const int code = loop.StepThroughInput(); code >= 0) return code;
+  return loop.WriteOutputs(config_json, wall_start);
 }
 
 int64_t CountLines(std::string_view text) {

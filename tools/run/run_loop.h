@@ -102,8 +102,11 @@ class RunJob {
   // in messages ("steps").
   virtual std::string InputName() const = 0;
   virtual const char* RecordsName() const = 0;
-  // Input records in the whole input, or 0 when not known (a stream): progress and memory.
+  // Input records in the whole input, or 0 when not known (a stream): memory.
   virtual int64_t ExpectedRecords() const = 0;
+  // The records Read() will return, as far as it is known before the run (0: not known): the
+  // progress line's total, which must reach it when the run ends.
+  virtual int64_t ExpectedSteps() const { return ExpectedRecords(); }
   virtual int64_t particles() const = 0;
   // Predicted peak memory of the whole run, bytes, for `records` input records.
   virtual int64_t PredictPeakBytes(int64_t records) const = 0;
@@ -169,6 +172,20 @@ class FacadeRunJob : public RunJob {
   Collective* ranks_;
   std::unique_ptr<Facade> engine_;
 };
+
+// The records `reader` (with StatusOr<bool> Next(Record*)) yields before its end, or 0 when it
+// fails before then: what ExpectedSteps() counts with a second reader of a file.
+template <typename Record, typename Reader>
+int64_t CountRecords(Reader& reader) {
+  Record record;
+  int64_t records = 0;
+  for (;;) {
+    StatusOr<bool> more = reader.Next(&record);
+    if (!more.ok()) return 0;
+    if (!*more) return records;
+    ++records;
+  }
+}
 
 // Newlines in `text`, and in a regular file (0 for anything else: a pipe must be read once, by
 // the run): the record counts behind progress and memory predictions.

@@ -226,20 +226,24 @@ Status CheckRange(const char* name, double value, double low, bool low_open, dou
                                           low_open ? '(' : '[', low, high, high_open ? ')' : ']'));
 }
 
+Status CheckRange(const char* name, double value, const Interval& in) {
+  return CheckRange(name, value, in.min, in.min_open, in.max, in.max_open);
+}
+
 Status Validate(const SimulatorOptions& o) {
   if (o.scenario != Scenario::kBuilding && o.scenario != Scenario::kOpen &&
       o.scenario != Scenario::kCampus) {
     return InvalidArgumentError(fmt::format("scenario = {}: must be kBuilding, kOpen or kCampus",
                                             static_cast<int>(o.scenario)));
   }
-  GROVE_RETURN_IF_ERROR(CheckRange("minutes", o.minutes, 0, true, 1440, false));
+  GROVE_RETURN_IF_ERROR(CheckRange("minutes", o.minutes, WalkMinutesRange()));
   GROVE_RETURN_IF_ERROR(CheckRange("step_length_m", o.step_length_m, 0.1, false, 2, false));
   GROVE_RETURN_IF_ERROR(CheckRange("step_period_s", o.step_period_s, 0.1, false, 5, false));
   GROVE_RETURN_IF_ERROR(
       CheckRange("straight_probability", o.straight_probability, 0, false, 1, false));
   GROVE_RETURN_IF_ERROR(CheckRange("heading_drift_rad_per_sqrt_step",
-                                   o.heading_drift_rad_per_sqrt_step, 0, false, 0.5, false));
-  GROVE_RETURN_IF_ERROR(CheckRange("scale_error", o.scale_error, -0.5, true, 0.5, true));
+                                   o.heading_drift_rad_per_sqrt_step, HeadingDriftRange()));
+  GROVE_RETURN_IF_ERROR(CheckRange("scale_error", o.scale_error, ScaleErrorRange()));
   GROVE_RETURN_IF_ERROR(
       CheckRange("step_length_noise_m", o.step_length_noise_m, 0, false, 0.5, false));
   GROVE_RETURN_IF_ERROR(CheckRange("heading_noise_rad", o.heading_noise_rad, 0, false, 1, false));
@@ -249,6 +253,10 @@ Status Validate(const SimulatorOptions& o) {
 }
 
 }  // namespace
+
+Interval WalkMinutesRange() { return Interval::LeftOpen(0, 1440); }
+Interval HeadingDriftRange() { return Interval::Closed(0, 0.5); }
+Interval ScaleErrorRange() { return Interval::Open(-0.5, 0.5); }
 
 Area ScenarioArea(Scenario scenario) {
   // The waypoints' extent plus the largest aim jitter and the sway of a step.

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "grove/config_fields.h"
 #include "grove/status.h"
 #include "tools/io/step_reader.h"
 
@@ -91,6 +92,12 @@ struct SimulatedWalk {
   // Odometry steps in the deltas form and the odometry frame; steps[k].t_s == truth[k + 1].t_s.
   std::vector<StepRecord> steps;
 };
+
+// The ranges SimulateWalk checks of the options the command line sets: minutes, the heading
+// drift and the scale error.
+Interval WalkMinutesRange();
+Interval HeadingDriftRange();
+Interval ScaleErrorRange();
 
 // Simulates a walk of floor(minutes * 60 / step_period_s) steps. The same options give the same
 // walk: draws come from std::mt19937_64 through our own uniform and Box-Muller transforms, never
