@@ -6,17 +6,44 @@
 #define GROVE_ENGINE_PERSISTENT_PERSISTENT_TRIE_BLOCKS_H_
 
 #include <algorithm>
-#include <bit>
-#include <cstdint>
-#include <cstring>
-#include <span>
-#include <unordered_map>
-#include <vector>
 
-#include "alloc/check.h"
 #include "engine/persistent/persistent_trie.h"
 
 namespace grove {
+
+template <typename Leaf, int kLog2Degree, int kLog2BottomDegree>
+inline auto PersistentTrie<Leaf, kLog2Degree, kLog2BottomDegree>::Locate(int bits,
+                                                                         uint64_t prefix) const
+    -> BlockAt {
+  GROVE_CHECK(bits >= 0 && bits < SpanBits(height_) &&
+              (bits < kLog2BottomDegree || (bits - kLog2BottomDegree) % kLog2Degree == 0));
+  if (bits >= kLog2BottomDegree) {
+    return {(bits - kLog2BottomDegree) / kLog2Degree, prefix, bits, 0};
+  }
+  const int shift = kLog2BottomDegree - bits;
+  return {0, prefix >> shift, bits, static_cast<int>(prefix & ((uint64_t{1} << shift) - 1))};
+}
+
+template <typename Leaf, int kLog2Degree, int kLog2BottomDegree>
+inline bool PersistentTrie<Leaf, kLog2Degree, kLog2BottomDegree>::HoldsSubtree(
+    const Node* root, int level, uint64_t prefix) const {
+  const int shift = SpanBits(level + 1);
+  if (shift >= 64) return false;
+  const uint64_t low = prefix << shift;
+  return (low >> shift) == prefix && HeightFor(low, fill_) <= Height(root);
+}
+
+template <typename Leaf, int kLog2Degree, int kLog2BottomDegree>
+inline auto PersistentTrie<Leaf, kLog2Degree, kLog2BottomDegree>::SubtreeOf(Node* root, int level,
+                                                                            uint64_t prefix) const
+    -> Node* {
+  if (root == nullptr || !HoldsSubtree(root, level, prefix)) return nullptr;
+  Node* cur = root;
+  for (int l = root->level; cur != nullptr && l > level; --l) {
+    cur = static_cast<Inner*>(cur)->child[PrefixDigit(prefix, l - level - 1)];
+  }
+  return cur;
+}
 
 template <typename Leaf, int kLog2Degree, int kLog2BottomDegree>
 template <typename W, typename F>
@@ -100,6 +127,21 @@ inline std::vector<uint64_t> PersistentTrie<Leaf, kLog2Degree, kLog2BottomDegree
 }
 
 template <typename Leaf, int kLog2Degree, int kLog2BottomDegree>
+inline bool PersistentTrie<Leaf, kLog2Degree, kLog2BottomDegree>::InsertPointer(
+    std::vector<const Node*>* set, const Node* n) {
+  const size_t mask = set->size() - 1;
+  size_t i = ((reinterpret_cast<uintptr_t>(n) >> 6) * 0x9E3779B97F4A7C15ull >> 20) & mask;
+  for (;; i = (i + 1) & mask) {
+    const Node*& slot = (*set)[i];
+    if (slot == n) return false;
+    if (slot == nullptr) {
+      slot = n;
+      return true;
+    }
+  }
+}
+
+template <typename Leaf, int kLog2Degree, int kLog2BottomDegree>
 inline bool PersistentTrie<Leaf, kLog2Degree, kLog2BottomDegree>::DropSubtree(
     std::span<Node*> roots, int bits, uint64_t prefix, int slot) {
   const BlockAt block = Locate(bits, prefix);
@@ -123,55 +165,6 @@ inline bool PersistentTrie<Leaf, kLog2Degree, kLog2BottomDegree>::DropSubtree(
     roots[i] = next[i];
   }
   return true;
-}
-
-template <typename Leaf, int kLog2Degree, int kLog2BottomDegree>
-inline bool PersistentTrie<Leaf, kLog2Degree, kLog2BottomDegree>::InsertPointer(
-    std::vector<const Node*>* set, const Node* n) {
-  const size_t mask = set->size() - 1;
-  size_t i = ((reinterpret_cast<uintptr_t>(n) >> 6) * 0x9E3779B97F4A7C15ull >> 20) & mask;
-  for (;; i = (i + 1) & mask) {
-    const Node*& slot = (*set)[i];
-    if (slot == n) return false;
-    if (slot == nullptr) {
-      slot = n;
-      return true;
-    }
-  }
-}
-
-template <typename Leaf, int kLog2Degree, int kLog2BottomDegree>
-inline auto PersistentTrie<Leaf, kLog2Degree, kLog2BottomDegree>::Locate(int bits,
-                                                                         uint64_t prefix) const
-    -> BlockAt {
-  GROVE_CHECK(bits >= 0 && bits < SpanBits(height_) &&
-              (bits < kLog2BottomDegree || (bits - kLog2BottomDegree) % kLog2Degree == 0));
-  if (bits >= kLog2BottomDegree) {
-    return {(bits - kLog2BottomDegree) / kLog2Degree, prefix, bits, 0};
-  }
-  const int shift = kLog2BottomDegree - bits;
-  return {0, prefix >> shift, bits, static_cast<int>(prefix & ((uint64_t{1} << shift) - 1))};
-}
-
-template <typename Leaf, int kLog2Degree, int kLog2BottomDegree>
-inline bool PersistentTrie<Leaf, kLog2Degree, kLog2BottomDegree>::HoldsSubtree(
-    const Node* root, int level, uint64_t prefix) const {
-  const int shift = SpanBits(level + 1);
-  if (shift >= 64) return false;
-  const uint64_t low = prefix << shift;
-  return (low >> shift) == prefix && HeightFor(low, fill_) <= Height(root);
-}
-
-template <typename Leaf, int kLog2Degree, int kLog2BottomDegree>
-inline auto PersistentTrie<Leaf, kLog2Degree, kLog2BottomDegree>::SubtreeOf(Node* root, int level,
-                                                                            uint64_t prefix) const
-    -> Node* {
-  if (root == nullptr || !HoldsSubtree(root, level, prefix)) return nullptr;
-  Node* cur = root;
-  for (int l = root->level; cur != nullptr && l > level; --l) {
-    cur = static_cast<Inner*>(cur)->child[PrefixDigit(prefix, l - level - 1)];
-  }
-  return cur;
 }
 
 template <typename Leaf, int kLog2Degree, int kLog2BottomDegree>

@@ -5,16 +5,9 @@
 #define GROVE_ENGINE_PERSISTENT_PERSISTENT_TRIE_CHECKPOINT_H_
 
 #include <algorithm>
-#include <cstdint>
-#include <cstring>
-#include <span>
 #include <string>
-#include <unordered_map>
-#include <vector>
 
-#include "engine/io/checkpoint_io.h"
 #include "engine/persistent/persistent_trie.h"
-#include "grove/status.h"
 
 namespace grove {
 

@@ -6,15 +6,9 @@
 #define GROVE_ENGINE_PERSISTENT_PERSISTENT_TRIE_DISTINCT_H_
 
 #include <algorithm>
-#include <cstdint>
-#include <span>
 #include <string>
-#include <unordered_map>
-#include <vector>
 
-#include "alloc/check.h"
 #include "engine/persistent/persistent_trie.h"
-#include "grove/status.h"
 
 namespace grove {
 

@@ -3,10 +3,6 @@
 #ifndef GROVE_ENGINE_PERSISTENT_PERSISTENT_TRIE_LOOKUP_H_
 #define GROVE_ENGINE_PERSISTENT_PERSISTENT_TRIE_LOOKUP_H_
 
-#include <array>
-#include <cstdint>
-#include <vector>
-
 #include "engine/persistent/persistent_trie.h"
 
 namespace grove {

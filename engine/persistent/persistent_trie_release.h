@@ -4,12 +4,6 @@
 #ifndef GROVE_ENGINE_PERSISTENT_PERSISTENT_TRIE_RELEASE_H_
 #define GROVE_ENGINE_PERSISTENT_PERSISTENT_TRIE_RELEASE_H_
 
-#include <array>
-#include <cstdint>
-#include <new>
-#include <span>
-#include <vector>
-
 #include "engine/persistent/persistent_trie.h"
 
 namespace grove {

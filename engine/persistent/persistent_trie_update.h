@@ -5,10 +5,6 @@
 #define GROVE_ENGINE_PERSISTENT_PERSISTENT_TRIE_UPDATE_H_
 
 #include <algorithm>
-#include <array>
-#include <atomic>
-#include <cstdint>
-#include <cstring>
 
 #include "engine/persistent/persistent_trie.h"
 
