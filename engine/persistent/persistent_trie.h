@@ -389,8 +389,10 @@ class PersistentTrie {
     return n;
   }
   // A new bottom node of size class c (its leaves zeroed unless kPacked: a packed node reads
-  // only the leaves it holds).
-  Bottom* NewBottom(int slot, int c) {
+  // only the leaves it holds). Always inlined: Update() copies a bottom node on most crossings,
+  // and GCC otherwise inlines it or not by the size of the file that includes the trie (its
+  // inline-unit-growth limit).
+  [[gnu::always_inline]] Bottom* NewBottom(int slot, int c) {
     void* p = bottom_pools_[c]->Allocate(slot);
     if (p == nullptr) return nullptr;
     Bottom* b = new (p) Bottom;
