@@ -32,10 +32,11 @@
 #include "concurrency/sin_cos.h"
 #include "concurrency/worker_pool.h"
 #include "engine/filter/generation.h"
+#include "engine/footslam/footslam_map.h"
 #include "engine/footslam/hex_grid.h"
-#include "engine/footslam/hex_table.h"
 #include "engine/footslam/htc.h"
 #include "engine/footslam/htree_layout.h"
+#include "engine/footslam/prior_map.h"
 #include "engine/io/checkpoint_io.h"
 #include "engine/persistent/ancestry.h"
 #include "engine/persistent/version_set.h"
@@ -61,16 +62,7 @@ inline bool FinitePathPose(const PathPose& p) {
   return std::isfinite(p.dx_m) && std::isfinite(p.dy_m) && std::isfinite(p.heading_rad);
 }
 
-// A hexagon of a prior map (a cumulative map of an earlier walk): its counters times the
-// configured confidence, added to the prior count a of the weighting. Read-only during steps,
-// one table shared by every particle.
-struct PriorHex {
-  double edge[6];
-  double total;  // edge[0] + ... + edge[5]
-};
-using PriorMap = HexTable<PriorHex>;
-
-template <typename Map>
+template <FootSlamMap Map>
 class FootSlamModel {
  public:
   // REQUIRES: config.Validate() is ok. Call Init() before the first step. `share`: the
