@@ -17,6 +17,7 @@
 #include <limits>
 #include <map>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "engine/footslam/fixed_weights.h"
