@@ -3,8 +3,7 @@
 // summary's counters and the generic part of a checkpoint body. A model's facade owns one (with
 // its model and worker pool) and adds only what is its own: inputs, maps and read-outs.
 //
-// The model provides, besides the FilterModel concept: x(i), y(i), cos_heading(i) and
-// sin_heading(i) of particle i after a step, for the mean pose.
+// The model is a PosedModel: a FilterModel with the pose of each particle after a step.
 //
 // Errors: a step with a bad time returns InvalidArgument and changes nothing; a step the model
 // or the filter fails (its message prefixed with "step K (t = T s): "), and any exception or
@@ -31,6 +30,8 @@
 
 #include "alloc/check.h"
 #include "concurrency/worker_pool.h"
+#include "engine/filter/filter_model.h"
+#include "engine/filter/filter_options.h"
 #include "engine/filter/particle_filter.h"
 #include "engine/filter/resampler.h"
 #include "engine/io/checkpoint_io.h"
@@ -54,32 +55,6 @@ auto NoThrow(F&& f) noexcept -> decltype(f()) {
   }
 }
 
-// The loop's options from a model's configuration, whose fields carry the same names.
-template <typename Config>
-FilterOptions FilterOptionsOf(const Config& c) {
-  FilterOptions o;
-  o.resampling = c.resampling;
-  o.resample_threshold = c.resample_threshold;
-  o.batch = static_cast<size_t>(c.batch);
-  o.seed = c.seed;
-  if constexpr (requires { c.islands; }) {
-    o.islands = c.islands;
-    o.exchange_steps = static_cast<uint64_t>(c.island_exchange_steps);
-    o.exchange_fraction = c.island_exchange_fraction;
-  }
-  return o;
-}
-
-// The options of one rank's share of a filter of c.particles across `ranks` (null: one
-// process, as FilterOptionsOf(c)).
-template <typename Config>
-FilterOptions FilterOptionsOf(const Config& c, Collective* ranks) {
-  FilterOptions o = FilterOptionsOf(c);
-  o.collective = ranks;
-  o.total_particles = static_cast<uint64_t>(c.particles);
-  return o;
-}
-
 // A facade's Resume() across ranks (collective): resume_share(ranks) on every rank, whose
 // errors then reach every rank, and the ranks' files must be of one step (CheckCheckpointSteps).
 // Without ranks, or with one, resume_share(nullptr).
@@ -97,7 +72,7 @@ enum class TimeOrder {
   kNonDecreasing,  // a step may share the time of the one before (an update after a prediction)
 };
 
-template <typename Model>
+template <PosedModel Model>
 class FilterDriver {
  public:
   FilterDriver(Model* model, WorkerPool* workers, const FilterOptions& options,

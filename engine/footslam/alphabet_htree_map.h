@@ -15,6 +15,7 @@
 
 #include "concurrency/worker_pool.h"
 #include "engine/footslam/alphabet.h"
+#include "engine/footslam/footslam_map.h"
 #include "engine/footslam/htc.h"
 #include "engine/footslam/htree_layout.h"
 #include "engine/persistent/persistent_trie.h"
@@ -47,7 +48,7 @@ class AlphabetHTreeMap {
 
   // Returns false when out of memory; the engine is then stopped, and the two trees may
   // disagree on the hexagon (its symbol escaped, its counters not yet moved). `owners` > 1:
-  // that many particles share particle i's map and will all take its result (see htc.h).
+  // that many particles share particle i's map and will all take its result (see footslam_map.h).
   bool Cross(size_t i, uint64_t key, int edge, int slot, EdgeCounts* out, uint32_t owners = 1) {
     EdgeCounts before{0, 0};
     bool escaped = false;
@@ -254,6 +255,9 @@ class AlphabetHTreeMap {
   VersionSet<SymbolTrie> symbol_roots_;
   VersionSet<FullTrie> full_roots_;
 };
+
+static_assert(BlockStoringMap<AlphabetHTreeMap<2>> && BlockStoringMap<AlphabetHTreeMap<4>> &&
+              BlockStoringMap<AlphabetHTreeMap<6>> && BlockStoringMap<AlphabetHTreeMap<8>>);
 
 }  // namespace grove::footslam
 

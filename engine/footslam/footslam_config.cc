@@ -3,12 +3,16 @@
 
 #include <cmath>
 
+#include "engine/filter/filter_options.h"
 #include "engine/filter/resampler.h"
 #include "engine/footslam/htree_layout.h"
 #include "engine/ranks/collective.h"
 #include "grove/footslam.h"
 
 namespace grove {
+
+// FootSlam takes its filter's options, island mode's among them, from its configuration.
+static_assert(IslandConfig<FootSlamConfig>);
 
 const std::vector<ConfigField<FootSlamConfig>>& FootSlamConfigFields() {
   using C = FootSlamConfig;

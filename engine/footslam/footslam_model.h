@@ -32,10 +32,11 @@
 #include "concurrency/sin_cos.h"
 #include "concurrency/worker_pool.h"
 #include "engine/filter/generation.h"
+#include "engine/footslam/footslam_map.h"
 #include "engine/footslam/hex_grid.h"
-#include "engine/footslam/hex_table.h"
 #include "engine/footslam/htc.h"
 #include "engine/footslam/htree_layout.h"
+#include "engine/footslam/prior_map.h"
 #include "engine/io/checkpoint_io.h"
 #include "engine/persistent/ancestry.h"
 #include "engine/persistent/version_set.h"
@@ -61,16 +62,7 @@ inline bool FinitePathPose(const PathPose& p) {
   return std::isfinite(p.dx_m) && std::isfinite(p.dy_m) && std::isfinite(p.heading_rad);
 }
 
-// A hexagon of a prior map (a cumulative map of an earlier walk): its counters times the
-// configured confidence, added to the prior count a of the weighting. Read-only during steps,
-// one table shared by every particle.
-struct PriorHex {
-  double edge[6];
-  double total;  // edge[0] + ... + edge[5]
-};
-using PriorMap = HexTable<PriorHex>;
-
-template <typename Map>
+template <FootSlamMap Map>
 class FootSlamModel {
  public:
   // REQUIRES: config.Validate() is ok. Call Init() before the first step. `share`: the
@@ -135,129 +127,50 @@ class FootSlamModel {
   // the steps.
   void set_prior(const PriorMap* prior) { prior_ = prior; }
 
+  // The hot loop: one step of particles [begin, end), in the stages the file comment lists.
   Status Advance(const StepInput& in, uint64_t step, size_t begin, size_t end, int slot,
                  double* log_w) {
-    const double odo_length = std::hypot(in.dx_m, in.dy_m);
-    const double odo_heading = std::atan2(in.dy_m, in.dx_m) + config_.start_heading_rad;
-    // Particles are independent: start the cache misses of later ones while this one runs. A
-    // particle's first crossing (if any) leaves its current hexagon, so its map path is known
-    // before its motion is drawn: particle i + kPathGap * (levels - depth) has the node at
-    // `depth` of that path loaded, one level deeper every kPathGap particles.
+    MotionBlock motion;
+    motion.odo_length = std::hypot(in.dx_m, in.dy_m);
+    motion.odo_heading = std::atan2(in.dy_m, in.dx_m) + config_.start_heading_rad;
     int levels = map_->height();
     if (levels > kMaxPathLevels) levels = kMaxPathLevels;
-    double noise_block[kMaxBatchNormals][kNoiseBlock];
-    double* noise[kMaxBatchNormals];
-    for (int k = 0; k < kMaxBatchNormals; ++k) noise[k] = noise_block[k];
-    double block_length[kNoiseBlock], block_heading[kNoiseBlock];
-    double block_sin[kNoiseBlock], block_cos[kNoiseBlock];
-    // The previous particle's map at the start of the step, its crossings (count -1: not to be
-    // followed) and its weight.
+    // The previous particle's map at the start of the step, and the group it belongs to.
     typename Map::Version prev_version{};
-    Crossed prev_crossed[kMaxHeldCrossings], crossed[kMaxHeldCrossings];
-    int prev_count = -1;
-    double prev_lw = 0;
-    // Counts crossing c in particle p's map (held by `owners` particles that all take the
-    // result) and adds its weight to *lw.
-    auto count_crossing = [&](size_t p, Crossed c, uint32_t owners, double* lw) {
-      EdgeCounts before;
-      if (!map_->Cross(p, c.key, c.edge, slot, &before, owners)) return false;
-      const PriorHex* prior = prior_ == nullptr ? nullptr : prior_->Find(c.key);
-      if (prior == nullptr) {
-        *lw += LogEdge(before.edge) - LogTotal(before.total);
-      } else {
-        // The counts first, then a, as LogEdge() and LogTotal() add them: with a prior that
-        // holds whole counts this is bit for bit the weight of a map holding their sum.
-        *lw += std::log(before.edge + prior->edge[c.edge] + config_.prior_count) + log_edge_bias_ -
-               std::log(before.total + prior->total + 6 * config_.prior_count);
-      }
-      return true;
-    };
-    // A group: particles from `leader` on whose maps are one at the start of the step. While
-    // `pending`, the leader's crossings (prev_crossed) wait and every member so far repeats
-    // them; resolve(upto) counts them once for the members [leader, upto), in place when these
-    // hold every reference to the map, and gives every member the new map and the weight.
-    size_t leader = 0;
-    bool pending = false;
-    auto resolve = [&](size_t upto) {
-      pending = false;
-      double group_lw = 0;
-      const auto owners = static_cast<uint32_t>(upto - leader);
-      for (int k = 0; k < prev_count; ++k) {
-        if (!count_crossing(leader, prev_crossed[k], owners, &group_lw)) return false;
-      }
-      for (size_t j = leader + 1; j < upto; ++j) {
-        if (map_->version(j) != map_->version(leader)) map_->Share(j, leader, slot);
-      }
-      for (size_t j = leader; j < upto; ++j) log_w[j] += group_lw;
-      prev_lw = group_lw;
-      return true;
-    };
+    Group group;
+    Crossed crossed[kMaxHeldCrossings];
     for (size_t i = begin; i < end; ++i) {
-      if (i + kPrefetchAhead < end) {
-        if (levels == 0) map_->Prefetch(i + kPrefetchAhead);
-        __builtin_prefetch(history_roots_[i + kPrefetchAhead]);
-      }
-      for (int depth = 0; depth < levels; ++depth) {
-        const size_t j = i + kPathGap * static_cast<size_t>(levels - depth);
-        if (j < end) map_->PrefetchPath(j, key_[j], depth);
-      }
-      // The motion, kNoiseBlock particles at a time: the deviates (the first motion_draws_ of
-      // each particle's stream for this step), the error states, lengths and headings, then
-      // the headings' sines and cosines.
+      PrefetchAhead(i, end, levels);
       const size_t at = (i - begin) % kNoiseBlock;
-      if (at == 0) {
-        const size_t block_end = std::min(end, i + kNoiseBlock);
-        if (motion_draws_ > 0) {
-          DrawNormals(config_.seed, step + 1, StreamPurpose::kMotion,
-                      static_cast<uint32_t>(first_ + i), static_cast<uint32_t>(first_ + block_end),
-                      std::span<double* const>(noise, static_cast<size_t>(motion_draws_)));
-        }
-        for (size_t k = i; k < block_end; ++k) {
-          const size_t b = k - i;
-          int draw = 0;
-          auto normal = [&] { return noise[draw++][b]; };
-          if (config_.heading_drift_sigma_rad > 0) {
-            heading_error_[k] += config_.heading_drift_sigma_rad * normal();
-          }
-          if (config_.scale_drift_sigma > 0) scale_[k] += config_.scale_drift_sigma * normal();
-          double length = odo_length * scale_[k];
-          if (config_.step_length_sigma_m > 0) length += config_.step_length_sigma_m * normal();
-          double heading = odo_heading + heading_error_[k];
-          if (config_.heading_sigma_rad > 0) heading += config_.heading_sigma_rad * normal();
-          block_length[b] = length;
-          block_heading[b] = heading;
-        }
-        SinCos(block_heading, block_end - i, block_sin, block_cos);
-      }
-      const double heading = block_heading[at];
-      const double cos_heading = block_cos[at];
-      const double sin_heading = block_sin[at];
-      double nx = x_[i] + block_length[at] * cos_heading;
-      double ny = y_[i] + block_length[at] * sin_heading;
+      if (at == 0) DrawMotion(step, i, std::min(end, i + kNoiseBlock), &motion);
+      const double heading = motion.heading[at];
+      const double cos_heading = motion.cos[at];
+      const double sin_heading = motion.sin[at];
+      double nx = x_[i] + motion.length[at] * cos_heading;
+      double ny = y_[i] + motion.length[at] * sin_heading;
       if (config_.position_sigma_m > 0) {  // the last two deviates
-        nx += config_.position_sigma_m * noise[motion_draws_ - 2][at];
-        ny += config_.position_sigma_m * noise[motion_draws_ - 1][at];
+        nx += config_.position_sigma_m * motion.noise[motion_draws_ - 2][at];
+        ny += config_.position_sigma_m * motion.noise[motion_draws_ - 1][at];
       }
       if (!std::isfinite(nx) || !std::isfinite(ny) || !std::isfinite(heading)) {
-        return FailedPreconditionError(fmt::format(
-            "particle {}'s pose ({}, {}, {}) is not finite: the motion noise is too large",
-            first_ + i, nx, ny, heading));
+        return PoseNotFinite(i, nx, ny, heading);
       }
       double lw = 0;
       bool outside = false, too_long = false, no_memory = false;
       // Counts a crossing in particle i's map and weights it.
       auto cross = [&](Crossed c) {
-        if (count_crossing(i, c, 1, &lw)) return true;
+        if (WeighCrossing(i, c, 1, slot, &lw)) return true;
         no_memory = true;
         return false;
       };
       const typename Map::Version version = map_->version(i);
-      if (pending && version != prev_version && !resolve(i))
-        return NoMemory(first_ + leader, "map");
+      if (group.pending && version != prev_version && !Resolve(&group, i, slot, log_w)) {
+        return NoMemory(first_ + group.leader, "map");
+      }
       // While `holding`, the crossings so far repeat the previous particle's and are not yet
       // counted; at the first that differs they are counted, in order (and a pending group
       // parts there). While `deferring`, i leads a group: the next particle's map is its.
-      bool holding = prev_count >= 0 && version == prev_version;
+      bool holding = group.count >= 0 && version == prev_version;
       bool deferring = !holding && i + 1 < end && map_->version(i + 1) == version;
       int count = 0;  // crossings recorded in `crossed`; -1 past kMaxHeldCrossings
       // A particle that leaves the grid, or a step that crosses more hexagons than a straight
@@ -276,12 +189,12 @@ class FootSlamModel {
         }
         const Crossed now{key, c.edge};
         if (holding) {
-          if (count < prev_count && now == prev_crossed[count]) {
+          if (count < group.count && now == group.crossed[count]) {
             crossed[count++] = now;
             return true;
           }
           holding = false;
-          if (pending && !resolve(i)) {
+          if (group.pending && !Resolve(&group, i, slot, log_w)) {
             no_memory = true;
             return false;
           }
@@ -307,37 +220,24 @@ class FootSlamModel {
       });
       bool waits = false;  // i's weight comes when its group is resolved
       if (holding && !outside && !too_long) {
-        if (count == prev_count && pending) {  // one more member of the group
+        if (count == group.count && group.pending) {  // one more member of the group
           waits = true;
-        } else if (count == prev_count) {  // the same crossings: the same new map and weight
+        } else if (count == group.count) {  // the same crossings: the same new map and weight
           if (count > 0) map_->Share(i, i - 1, slot);
-          lw = prev_lw;
+          lw = group.lw;
         } else {  // a prefix of them
-          if (pending && !resolve(i)) no_memory = true;
+          if (group.pending && !Resolve(&group, i, slot, log_w)) no_memory = true;
           for (int k = 0; k < count && !no_memory; ++k) cross(crossed[k]);
         }
       } else if (deferring && !outside && !too_long) {
-        pending = true;
-        leader = i;
+        group.pending = true;
+        group.leader = i;
         waits = true;
       }
       if (no_memory) return NoMemory(first_ + i, "map");
-      if (too_long) {
-        return OutOfRangeError(fmt::format(
-            "particle {}'s step from ({:.7g}, {:.7g}) to ({:.7g}, {:.7g}) m crosses more than {} "
-            "hexagons, 8 x grid_size: the odometry or the motion noise is wrong",
-            first_ + i, x_[i], y_[i], nx, ny, max_step_crossings_));
-      }
+      if (too_long) return StepTooLong(i, nx, ny);
       uint64_t end_key;
-      if (outside || !KeyOf(end_hex, &end_key)) {
-        const bool fixed = config_.grid == FootSlamGrid::kFixed;
-        return OutOfRangeError(fmt::format(
-            "particle {} at ({:.7g}, {:.7g}) m left the {} x {} hexagon grid {}; {}", first_ + i,
-            nx, ny, layout_->max_grid_size(), layout_->max_grid_size(),
-            fixed ? "centred on the start" : "around the start, the largest a grid grows to",
-            fixed ? "raise grid_size or let the grid grow (grid = growing)"
-                  : "the motion noise is too large or the odometry wrong"));
-      }
+      if (outside || !KeyOf(end_hex, &end_key)) return LeftGrid(i, nx, ny);
       PoseHistory::Node* pose = history_.Append(history_roots_[i], static_cast<uint32_t>(step + 1),
                                                 PathPoseOf(nx, ny, heading), slot);
       if (pose == nullptr) return NoMemory(first_ + i, "path");
@@ -350,11 +250,13 @@ class FootSlamModel {
       hex_[i] = end_hex;
       key_[i] = end_key;
       prev_version = version;
-      std::copy(crossed, crossed + std::max(count, 0), prev_crossed);
-      prev_count = count;
-      prev_lw = lw;
+      std::copy(crossed, crossed + std::max(count, 0), group.crossed);
+      group.count = count;
+      group.lw = lw;
     }
-    if (pending && !resolve(end)) return NoMemory(first_ + leader, "map");
+    if (group.pending && !Resolve(&group, end, slot, log_w)) {
+      return NoMemory(first_ + group.leader, "map");
+    }
     return Status::Ok();
   }
 
@@ -546,12 +448,141 @@ class FootSlamModel {
     return Status::Ok();
   }
 
+  static constexpr size_t kPrefetchAhead = 4;
+  static constexpr size_t kPathGap = 2;
+  static constexpr int kMaxPathLevels = 8;
+  static constexpr uint32_t kLogTable = 256;
+  static constexpr size_t kNoiseBlock = 256;
+  static constexpr int kMaxHeldCrossings = 8;  // a particle with more is not followed
+
   // A crossing as a follower compares it: the hexagon's key and the edge.
   struct Crossed {
     uint64_t key;
     int edge;
     bool operator==(const Crossed&) const = default;
   };
+
+  // The motion of kNoiseBlock particles at a time (Advance's first stage): the odometry step's
+  // length and heading, the normal deviates of each particle, then its step's length and
+  // heading and the heading's sine and cosine.
+  struct MotionBlock {
+    double odo_length, odo_heading;
+    double noise[kMaxBatchNormals][kNoiseBlock];
+    double length[kNoiseBlock], heading[kNoiseBlock], sin[kNoiseBlock], cos[kNoiseBlock];
+  };
+
+  // Particles following one another (Advance's second stage): the previous particle's
+  // crossings (count -1: not to be followed) and weight, and the group: particles from `leader`
+  // on whose maps are one at the start of the step. While `pending`, the leader's crossings
+  // wait and every member so far repeats them.
+  struct Group {
+    Crossed crossed[kMaxHeldCrossings];
+    int count = -1;
+    double lw = 0;
+    size_t leader = 0;
+    bool pending = false;
+  };
+
+  // Particles are independent: start the cache misses of later ones while this one runs. A
+  // particle's first crossing (if any) leaves its current hexagon, so its map path is known
+  // before its motion is drawn: particle i + kPathGap * (levels - depth) has the node at
+  // `depth` of that path loaded, one level deeper every kPathGap particles.
+  [[gnu::always_inline]] void PrefetchAhead(size_t i, size_t end, int levels) const {
+    if (i + kPrefetchAhead < end) {
+      if (levels == 0) map_->Prefetch(i + kPrefetchAhead);
+      __builtin_prefetch(history_roots_[i + kPrefetchAhead]);
+    }
+    for (int depth = 0; depth < levels; ++depth) {
+      const size_t j = i + kPathGap * static_cast<size_t>(levels - depth);
+      if (j < end) map_->PrefetchPath(j, key_[j], depth);
+    }
+  }
+
+  // The motion of particles [begin, end) at `step` into *m: the deviates (the first
+  // motion_draws_ of each particle's stream for this step), the error states, lengths and
+  // headings, then the headings' sines and cosines.
+  void DrawMotion(uint64_t step, size_t begin, size_t end, MotionBlock* m) {
+    if (motion_draws_ > 0) {
+      double* noise[kMaxBatchNormals];
+      for (int k = 0; k < kMaxBatchNormals; ++k) noise[k] = m->noise[k];
+      DrawNormals(config_.seed, step + 1, StreamPurpose::kMotion,
+                  static_cast<uint32_t>(first_ + begin), static_cast<uint32_t>(first_ + end),
+                  std::span<double* const>(noise, static_cast<size_t>(motion_draws_)));
+    }
+    for (size_t k = begin; k < end; ++k) {
+      const size_t b = k - begin;
+      int draw = 0;
+      auto normal = [&] { return m->noise[draw++][b]; };
+      if (config_.heading_drift_sigma_rad > 0) {
+        heading_error_[k] += config_.heading_drift_sigma_rad * normal();
+      }
+      if (config_.scale_drift_sigma > 0) scale_[k] += config_.scale_drift_sigma * normal();
+      double length = m->odo_length * scale_[k];
+      if (config_.step_length_sigma_m > 0) length += config_.step_length_sigma_m * normal();
+      double heading = m->odo_heading + heading_error_[k];
+      if (config_.heading_sigma_rad > 0) heading += config_.heading_sigma_rad * normal();
+      m->length[b] = length;
+      m->heading[b] = heading;
+    }
+    SinCos(m->heading, end - begin, m->sin, m->cos);
+  }
+
+  // Counts crossing c in particle p's map (held by `owners` particles that all take the result)
+  // and adds its weight to *lw; false when out of memory.
+  bool WeighCrossing(size_t p, Crossed c, uint32_t owners, int slot, double* lw) {
+    EdgeCounts before;
+    if (!map_->Cross(p, c.key, c.edge, slot, &before, owners)) return false;
+    const PriorHex* prior = prior_ == nullptr ? nullptr : prior_->Find(c.key);
+    if (prior == nullptr) {
+      *lw += LogEdge(before.edge) - LogTotal(before.total);
+    } else {
+      // The counts first, then a, as LogEdge() and LogTotal() add them: with a prior that
+      // holds whole counts this is bit for bit the weight of a map holding their sum.
+      *lw += std::log(before.edge + prior->edge[c.edge] + config_.prior_count) + log_edge_bias_ -
+             std::log(before.total + prior->total + 6 * config_.prior_count);
+    }
+    return true;
+  }
+
+  // Counts the group's crossings once for its members [g->leader, upto), in place when these
+  // hold every reference to the map, and gives every member the new map and the weight (adding
+  // it to log_w); false when out of memory.
+  bool Resolve(Group* g, size_t upto, int slot, double* log_w) {
+    g->pending = false;
+    double group_lw = 0;
+    const auto owners = static_cast<uint32_t>(upto - g->leader);
+    for (int k = 0; k < g->count; ++k) {
+      if (!WeighCrossing(g->leader, g->crossed[k], owners, slot, &group_lw)) return false;
+    }
+    for (size_t j = g->leader + 1; j < upto; ++j) {
+      if (map_->version(j) != map_->version(g->leader)) map_->Share(j, g->leader, slot);
+    }
+    for (size_t j = g->leader; j < upto; ++j) log_w[j] += group_lw;
+    g->lw = group_lw;
+    return true;
+  }
+
+  // The errors that end a step at particle i, whose step goes to (nx, ny).
+  [[gnu::cold]] Status PoseNotFinite(size_t i, double nx, double ny, double heading) const {
+    return FailedPreconditionError(
+        fmt::format("particle {}'s pose ({}, {}, {}) is not finite: the motion noise is too large",
+                    first_ + i, nx, ny, heading));
+  }
+  [[gnu::cold]] Status StepTooLong(size_t i, double nx, double ny) const {
+    return OutOfRangeError(fmt::format(
+        "particle {}'s step from ({:.7g}, {:.7g}) to ({:.7g}, {:.7g}) m crosses more than {} "
+        "hexagons, 8 x grid_size: the odometry or the motion noise is wrong",
+        first_ + i, x_[i], y_[i], nx, ny, max_step_crossings_));
+  }
+  [[gnu::cold]] Status LeftGrid(size_t i, double nx, double ny) const {
+    const bool fixed = config_.grid == FootSlamGrid::kFixed;
+    return OutOfRangeError(fmt::format(
+        "particle {} at ({:.7g}, {:.7g}) m left the {} x {} hexagon grid {}; {}", first_ + i, nx,
+        ny, layout_->max_grid_size(), layout_->max_grid_size(),
+        fixed ? "centred on the start" : "around the start, the largest a grid grows to",
+        fixed ? "raise grid_size or let the grid grow (grid = growing)"
+              : "the motion noise is too large or the odometry wrong"));
+  }
 
   static Status NoMemory(size_t i, const char* what) {
     return ResourceExhaustedError(fmt::format("out of memory for particle {}'s {}", i, what));
@@ -565,12 +596,6 @@ class FootSlamModel {
   PoseHistory history_;
   uint64_t first_;  // the filter's index of particle 0 here
   size_t n_;
-  static constexpr size_t kPrefetchAhead = 4;
-  static constexpr size_t kPathGap = 2;
-  static constexpr int kMaxPathLevels = 8;
-  static constexpr uint32_t kLogTable = 256;
-  static constexpr size_t kNoiseBlock = 256;
-  static constexpr int kMaxHeldCrossings = 8;  // a particle with more is not followed
   int motion_draws_ = 0;        // normal deviates per particle-step: one per noise term in use
   int64_t max_step_crossings_;  // 8 x grid_size: more than a straight line across the first grid
   double log_edge_bias_ = 0;

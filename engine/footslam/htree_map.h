@@ -10,6 +10,7 @@
 
 #include "concurrency/worker_pool.h"
 #include "engine/footslam/alphabet.h"
+#include "engine/footslam/footslam_map.h"
 #include "engine/footslam/htc.h"
 #include "engine/footslam/htree_layout.h"
 #include "engine/persistent/persistent_trie.h"
@@ -27,7 +28,7 @@ class HTreeMap {
         roots_(&trie_, particles) {}
 
   // Returns false when out of memory (the map is unchanged). `owners` > 1: that many particles
-  // share particle i's map and will all take its result (see htc.h).
+  // share particle i's map and will all take its result (see footslam_map.h).
   bool Cross(size_t i, uint64_t key, int edge, int slot, EdgeCounts* before, uint32_t owners = 1) {
     return trie_.Update(
         &roots_[i], key, slot,
@@ -127,6 +128,9 @@ class HTreeMap {
   Trie trie_;
   VersionSet<Trie> roots_;
 };
+
+static_assert(BlockStoringMap<HTreeMap<2>> && BlockStoringMap<HTreeMap<4>> &&
+              BlockStoringMap<HTreeMap<6>> && BlockStoringMap<HTreeMap<8>>);
 
 }  // namespace grove::footslam
 

@@ -13,6 +13,7 @@
 
 #include "concurrency/worker_pool.h"
 #include "engine/footslam/alphabet.h"
+#include "engine/footslam/footslam_map.h"
 #include "engine/footslam/hex_table.h"
 #include "engine/footslam/htc.h"
 #include "engine/footslam/htree_layout.h"
@@ -170,6 +171,9 @@ class NaiveMap {
   std::vector<HexTable<Htc>> tables_;
   std::vector<HexTable<Htc>> dead_;
 };
+
+// A NaiveMap stores no blocks: Validate() refuses storage of diversity with map = naive.
+static_assert(FootSlamMap<NaiveMap> && !BlockStoringMap<NaiveMap>);
 
 }  // namespace grove::footslam
 

@@ -35,12 +35,16 @@
 // Memory: nodes come from NodePools and allocation never throws. An Update() that cannot get a
 // node returns false and leaves a version with the same contents (the map is unchanged).
 //
+// This header declares the class and its node layout; the members are defined by concern in
+// persistent_trie_update.h (path copying), _lookup.h (reads of one version), _release.h,
+// _distinct.h (walks that visit each shared node once), _blocks.h (key-prefix blocks of every
+// version) and _checkpoint.h (Save and Load), which it includes.
+//
 // Thread safety: distinct versions may be updated, read and released concurrently from distinct
 // worker slots, even when they share nodes. One version must not be used by two threads at once.
 #ifndef GROVE_ENGINE_PERSISTENT_PERSISTENT_TRIE_H_
 #define GROVE_ENGINE_PERSISTENT_PERSISTENT_TRIE_H_
 
-#include <algorithm>
 #include <array>
 #include <atomic>
 #include <bit>
@@ -49,7 +53,6 @@
 #include <memory>
 #include <new>
 #include <span>
-#include <string>
 #include <type_traits>
 #include <unordered_map>
 #include <vector>
@@ -150,17 +153,7 @@ class PersistentTrie {
   }
 
   // Returns the leaf stored under `key`, or nullptr. The pointer is valid while the version is.
-  const Leaf* Find(const Node* root, uint64_t key) const {
-    if (root == nullptr || HeightFor(key, fill_) > Height(root)) return nullptr;
-    const Node* cur = root;
-    while (cur != nullptr && cur->level > 0) {
-      cur = static_cast<const Inner*>(cur)->child[Digit(key, cur->level)];
-    }
-    if (cur == nullptr) return nullptr;
-    const Bottom* b = static_cast<const Bottom*>(cur);
-    const int d = BottomDigit(key);
-    return Has(b, d) ? &Leaves(b)[SlotOf(b, d)] : nullptr;
-  }
+  const Leaf* Find(const Node* root, uint64_t key) const;
 
   // Starts loading the node at `depth` (0 = the root) on the path to `key`: its count and the
   // link or leaf Update() will read. The nodes above it should already be cached (an earlier
@@ -168,27 +161,7 @@ class PersistentTrie {
   // their misses; a depth below the version's bottom loads the bottom node again. A hint only:
   // reads links of the caller's own version. Always inlined: GCC deduces that a call to it has
   // no side effects (a prefetch does not count) and would delete the call.
-  [[gnu::always_inline]] void PrefetchPath(const Node* root, uint64_t key, int depth) const {
-    if (root == nullptr) return;
-    // Depth 0 must not read the root's header, the very miss this hint is meant to hide: it
-    // guesses the level (top_height(); a wrong guess only loads another line of the root).
-    // Deeper calls read it, cached by then, and the levels below follow from it.
-    int level = depth == 0 ? top_height() - 1 : root->level;
-    const Node* cur = root;
-    for (int k = 0; k < depth && level > 0; ++k, --level) {
-      cur = static_cast<const Inner*>(cur)->child[Digit(key, level)];
-      if (cur == nullptr) return;
-    }
-    __builtin_prefetch(cur);
-    if (level > 0) {
-      __builtin_prefetch(&static_cast<const Inner*>(cur)->child[Digit(key, level)]);
-    } else if constexpr (kPacked) {
-      // Where the leaf sits depends on the presence words not yet loaded: the second line.
-      __builtin_prefetch(reinterpret_cast<const char*>(cur) + 64);
-    } else {
-      __builtin_prefetch(&Leaves(static_cast<const Bottom*>(cur))[BottomDigit(key)]);
-    }
-  }
+  [[gnu::always_inline]] void PrefetchPath(const Node* root, uint64_t key, int depth) const;
 
   // The height of the highest version any Update() or Load() has made (at least min_height()):
   // how deep a path is, for PrefetchPath's callers. Relaxed: a hint.
@@ -208,139 +181,13 @@ class PersistentTrie {
   // versions hold this root and will all take this update's result (the caller gives it them);
   // when they are all its references, the root is changed in place as if unique.
   template <typename F>
-  [[nodiscard]] bool Update(Node** root, uint64_t key, int slot, F&& f, uint32_t holders = 1) {
-    const int need = std::max(height_, HeightFor(key, fill_));
-    const Node* owned = nullptr;
-    if (holders > 1 && *root != nullptr && Height(*root) >= need &&
-        (*root)->rc.count() == holders) {
-      // As RefCount::unique(): the other holders' last reads happen before our writes.
-      std::atomic_thread_fence(std::memory_order_acquire);
-      owned = *root;
-    }
-    if (*root == nullptr) {
-      // An empty version starts at the height the key needs.
-    } else {
-      while (Height(*root) < need) {  // grow: the old root is the fill digit's child of a new one
-        Inner* top = NewInner(slot, Height(*root));
-        if (top == nullptr) return false;
-        top->child[Digit(fill_, Height(*root))] = *root;
-        *root = top;
-      }
-      RaiseTopHeight(Height(*root));
-    }
-    if (*root == nullptr && need > height_) RaiseTopHeight(need);
-    Node* cur = *root;
-    Node** link = root;
-    // A copy counts every child but its path child: that one is copied next (what lies below a
-    // shared node is shared) and the copy links the new node instead. `held`, the first node
-    // copied, keeps the reference our link to it had until the whole path is copied: while it
-    // lives, every old node below it on the path lives and, shared by it, is changed in place by
-    // no other version.
-    Node* held = nullptr;
-    for (int level = cur == nullptr ? need - 1 : cur->level; level > 0; --level) {
-      int d = Digit(key, level);
-      Inner* n;
-      if (cur == nullptr) {
-        n = NewInner(slot, level);
-        if (n == nullptr) return Abandon(held, cur, slot);
-      } else if (held == nullptr && (cur == owned || cur->rc.unique())) {
-        n = static_cast<Inner*>(cur);
-      } else {
-        Inner* old = static_cast<Inner*>(cur);
-        n = NewInner(slot, level);
-        if (n == nullptr) return Abandon(held, cur, slot);
-        std::memcpy(n->child, old->child, sizeof(n->child));
-        for (int i = 0; i < kDegree; ++i) {
-          if (i != d && old->child[i] != nullptr) old->child[i]->rc.Acquire();
-        }
-        if (held == nullptr) held = old;
-      }
-      *link = n;
-      link = &n->child[d];
-      cur = n->child[d];
-    }
-    const int d = BottomDigit(key);
-    Bottom* b;
-    bool existed = false;
-    if (cur == nullptr) {
-      b = NewBottom(slot, 0);
-      if (b == nullptr) return Abandon(held, cur, slot);
-    } else {
-      Bottom* old = static_cast<Bottom*>(cur);
-      existed = Has(old, d);
-      const bool mine = held == nullptr && (cur == owned || cur->rc.unique());
-      const int count = kPacked ? old->leaves : kBottomDegree;
-      const int need = count + (kPacked && !existed ? 1 : 0);
-      if (mine && need <= kClasses.capacity[old->size_class]) {
-        b = old;
-      } else {
-        // A shared node is copied; a node of ours too small for a new leaf, moved to a larger
-        // class (our reference to it dropped: it is freed unless other holders take it).
-        b = NewBottom(slot, kPacked ? ClassFor(need) : 0);
-        if (b == nullptr) return Abandon(held, cur, slot);
-        std::memcpy(b->present, old->present, sizeof(b->present));
-        b->leaves = old->leaves;
-        std::memcpy(static_cast<void*>(Leaves(b)), Leaves(old), count * sizeof(Leaf));
-        if (mine) {
-          Release(old, slot);
-        } else if (held == nullptr) {
-          held = old;
-        }
-      }
-    }
-    Release(held, slot);
-    Leaf* leaf = Leaves(b);
-    const int at = SlotOf(b, d);
-    if (!existed) {
-      if constexpr (kPacked) {
-        std::memmove(static_cast<void*>(leaf + at + 1), leaf + at, (b->leaves - at) * sizeof(Leaf));
-      }
-      leaf[at] = Leaf{};
-      b->present[d >> 6] |= uint64_t{1} << (d & 63);
-      ++b->leaves;
-    }
-    f(leaf[at], existed);
-    *link = b;
-    return true;
-  }
+  [[nodiscard]] bool Update(Node** root, uint64_t key, int slot, F&& f, uint32_t holders = 1);
 
   // Removes the leaf under `key` from the version *root (nothing when it is absent), copying
   // the shared nodes on its path as Update() does and freeing the nodes left empty (the empty
   // map is nullptr; the version keeps its height otherwise). O(height). Returns false when a
   // node could not be allocated: *root then holds the same contents.
-  [[nodiscard]] bool Erase(Node** root, uint64_t key, int slot) {
-    if (Find(*root, key) == nullptr) return true;
-    if (!Update(root, key, slot, [](Leaf&, bool) {})) return false;  // the path is now ours
-    std::array<Node**, kMaxHeight> links;
-    int depth = 0;
-    Node** link = root;
-    while ((*link)->level > 0) {
-      links[depth++] = link;
-      link = &static_cast<Inner*>(*link)->child[Digit(key, (*link)->level)];
-    }
-    Bottom* b = static_cast<Bottom*>(*link);
-    const int d = BottomDigit(key);
-    if constexpr (kPacked) {
-      Leaf* leaf = Leaves(b);
-      const int at = SlotOf(b, d);
-      std::memmove(static_cast<void*>(leaf + at), leaf + at + 1,
-                   (b->leaves - at - 1) * sizeof(Leaf));
-    }
-    b->present[d >> 6] &= ~(uint64_t{1} << (d & 63));
-    if (--b->leaves != 0) return true;
-    FreeNode(b, slot);
-    *link = nullptr;
-    while (depth > 0) {  // free the inner nodes the removal emptied, bottom up
-      Node** up = links[--depth];
-      Inner* n = static_cast<Inner*>(*up);
-      for (Node* c : n->child) {
-        if (c != nullptr) return true;
-      }
-      FreeNode(n, slot);
-      *up = nullptr;
-    }
-    return true;
-  }
+  [[nodiscard]] bool Erase(Node** root, uint64_t key, int slot);
 
   // Drops one reference to a version, freeing every node no other version reaches. Iterative
   // with an explicit stack: a chain of any length cannot overflow the call stack.
@@ -357,120 +204,11 @@ class PersistentTrie {
   // drop moves the count's line between the cores. Frees the same nodes as Release() one by one;
   // only the order differs. If its queues cannot grow (out of memory) it finishes the work with
   // Release()'s stack.
-  void ReleaseMany(std::span<Node* const> roots, int slot) {
-    constexpr size_t kInFlight = 16;
-    constexpr int kTableBits = 8;
-    // FIFOs: drops of counts to apply, and dead inner nodes to expand and free.
-    std::vector<Drop>& drop = release_scratch_[slot].drop;
-    std::vector<Node*>& dead = release_scratch_[slot].dead;
-    drop.clear();
-    dead.clear();
-    std::array<Drop, size_t{1} << kTableBits> table{};
-    size_t drop_head = 0, dead_head = 0, next = 0, held = 0;
-    auto push = [&](Drop d) {
-      __builtin_prefetch(d.node, 1);
-      try {
-        drop.push_back(d);
-      } catch (const std::bad_alloc&) {
-        DropRefs(d, slot);
-      }
-    };
-    // One core has no lines to share: there the table costs more than the atomics it saves.
-    const bool coalesce = release_scratch_.size() > 1;
-    auto queue = [&](Node* n) {
-      if (!coalesce) {
-        push(Drop{n, 1});
-        return;
-      }
-      Drop& e = table[(reinterpret_cast<uintptr_t>(n) >> 6) & ((size_t{1} << kTableBits) - 1)];
-      if (e.node == n) {
-        ++e.count;
-        return;
-      }
-      if (e.node != nullptr) {
-        push(e);
-      } else {
-        ++held;
-      }
-      e = Drop{n, 1};
-    };
-    for (;;) {
-      while (drop.size() - drop_head < kInFlight && next < roots.size()) {
-        if (roots[next] != nullptr) push(Drop{roots[next], 1});
-        ++next;
-      }
-      if (drop_head < drop.size()) {
-        const Drop d = drop[drop_head++];
-        if (drop_head == drop.size()) {
-          drop.clear();
-          drop_head = 0;
-        }
-        if (d.node->rc.Release(d.count)) {
-          if (d.node->level > 0) {
-            const char* p = reinterpret_cast<const char*>(d.node);
-            for (size_t off = 0; off < sizeof(Inner); off += 64) __builtin_prefetch(p + off);
-            try {
-              dead.push_back(d.node);
-            } catch (const std::bad_alloc&) {
-              FreeDead(d.node, slot);
-            }
-          } else {
-            FreeNode(d.node, slot);
-          }
-        }
-      }
-      if (dead_head < dead.size() &&
-          (dead.size() - dead_head >= kInFlight || drop_head == drop.size())) {
-        Inner* n = static_cast<Inner*>(dead[dead_head++]);
-        if (dead_head == dead.size()) {
-          dead.clear();
-          dead_head = 0;
-        }
-        for (int i = 0; i < kDegree; ++i) {
-          if (n->child[i] != nullptr) queue(n->child[i]);
-        }
-        FreeNode(n, slot);
-      }
-      if (drop_head == drop.size() && dead_head == dead.size() && next == roots.size()) {
-        if (held == 0) break;
-        for (Drop& e : table) {  // the summed drops left in the table
-          if (e.node != nullptr) push(e);
-          e = Drop{};
-        }
-        held = 0;
-      }
-    }
-    inner_pool_.Flush(slot);
-    for (int c = 0; c < kClasses.count; ++c) bottom_pools_[c]->Flush(slot);
-  }
+  void ReleaseMany(std::span<Node* const> roots, int slot);
 
   // Calls f(key, const Leaf&) for every leaf of one version in increasing key order.
   template <typename F>
-  void ForEach(const Node* root, F&& f) const {
-    if (root == nullptr) return;
-    struct Item {
-      const Node* node;
-      uint64_t prefix;
-    };
-    std::vector<Item> stack;
-    stack.push_back({root, FillPrefix(Height(root))});
-    while (!stack.empty()) {
-      Item item = stack.back();
-      stack.pop_back();
-      if (item.node->level > 0) {
-        const Inner* n = static_cast<const Inner*>(item.node);
-        for (int i = kDegree - 1; i >= 0; --i) {  // pushed in reverse: popped in key order
-          if (n->child[i] != nullptr) {
-            stack.push_back({n->child[i], (item.prefix << kLog2Degree) | i});
-          }
-        }
-      } else {
-        ForEachLeaf(static_cast<const Bottom*>(item.node), [&](int d, const Leaf& leaf) {
-          f((item.prefix << kLog2BottomDegree) | d, leaf);
-        });
-      }
-    }
-  }
+  void ForEach(const Node* root, F&& f) const;
 
   // Calls f(key, const Leaf&) in increasing key order for the leaves of the bottom nodes of one
   // version that the filter admits: may_contain(lo, hi) is asked for the key range [lo, hi] of
@@ -478,40 +216,7 @@ class PersistentTrie {
   // it. A range query (a spatial one when keys encode positions) costs the nodes it admits, not
   // the size of the map.
   template <typename P, typename F>
-  void ForEachIf(const Node* root, P&& may_contain, F&& f) const {
-    if (root == nullptr) return;
-    struct Item {
-      const Node* node;
-      uint64_t prefix;
-    };
-    std::array<Item, (kDegree - 1) * kMaxHeight + 1> stack;
-    int top = 0;
-    auto admits = [&](uint64_t prefix, int height) {
-      const int shift = SpanBits(height);
-      const uint64_t lo = shift >= 64 ? 0 : prefix << shift;
-      const uint64_t span = shift >= 64 ? ~uint64_t{0} : (uint64_t{1} << shift) - 1;
-      return may_contain(lo, lo + span);
-    };
-    const uint64_t root_prefix = FillPrefix(Height(root));
-    if (!admits(root_prefix, Height(root))) return;
-    stack[top++] = {root, root_prefix};
-    while (top > 0) {
-      const Item item = stack[--top];
-      if (item.node->level > 0) {
-        const Inner* n = static_cast<const Inner*>(item.node);
-        for (int i = kDegree - 1; i >= 0; --i) {  // pushed in reverse: popped in key order
-          const uint64_t prefix = (item.prefix << kLog2Degree) | i;
-          if (n->child[i] != nullptr && admits(prefix, item.node->level)) {
-            stack[top++] = {n->child[i], prefix};
-          }
-        }
-      } else {
-        ForEachLeaf(static_cast<const Bottom*>(item.node), [&](int d, const Leaf& leaf) {
-          f((item.prefix << kLog2BottomDegree) | d, leaf);
-        });
-      }
-    }
-  }
+  void ForEachIf(const Node* root, P&& may_contain, F&& f) const;
 
   // Visits every distinct node reachable from `roots` once, with the summed weight of the roots
   // that reach it, and calls on_leaf(key, const Leaf&, W weight) for each leaf of each distinct
@@ -520,13 +225,7 @@ class PersistentTrie {
   // or updated in place), so for sums that are bit-identical at any thread count use an exact W
   // (an integer); the visit order is deterministic given the roots.
   template <typename W, typename F>
-  size_t VisitDistinct(std::span<Node* const> roots, std::span<const W> weights,
-                       F&& on_leaf) const {
-    GROVE_CHECK(roots.size() == weights.size());
-    std::vector<uint64_t> prefixes(roots.size());
-    for (size_t i = 0; i < roots.size(); ++i) prefixes[i] = FillPrefix(Height(roots[i]));
-    return VisitDistinctFrom<W>(roots, prefixes, weights, on_leaf);
-  }
+  size_t VisitDistinct(std::span<Node* const> roots, std::span<const W> weights, F&& on_leaf) const;
 
   // A block: the keys whose bits above the lowest `bits` are `prefix` (key >> bits == prefix),
   // in every version. REQUIRES of the block functions below: bits < SpanBits(min_height()) (the
@@ -536,83 +235,12 @@ class PersistentTrie {
   // VisitDistinct() of one block of every version. Versions without it count for nothing.
   template <typename W, typename F>
   size_t VisitSubtreeDistinct(std::span<Node* const> roots, std::span<const W> weights, int bits,
-                              uint64_t prefix, F&& on_leaf) const {
-    GROVE_CHECK(roots.size() == weights.size());
-    const BlockAt block = Locate(bits, prefix);
-    std::vector<Node*> nodes;
-    std::vector<uint64_t> prefixes;
-    std::vector<W> node_weights;
-    for (size_t i = 0; i < roots.size(); ++i) {
-      Node* node = SubtreeOf(roots[i], block.level, block.prefix);
-      if (node == nullptr) continue;
-      nodes.push_back(node);
-      prefixes.push_back(block.prefix);
-      node_weights.push_back(weights[i]);
-    }
-    if (bits >= kLog2BottomDegree) {
-      return VisitDistinctFrom<W>(nodes, prefixes, node_weights, on_leaf);
-    }
-    auto in_block = [&](uint64_t key, const Leaf& leaf, W w) {
-      if ((key >> bits) == prefix) on_leaf(key, leaf, w);
-    };
-    return VisitDistinctFrom<W>(nodes, prefixes, node_weights, in_block);
-  }
+                              uint64_t prefix, F&& on_leaf) const;
 
   // The prefixes of the blocks of `bits` that any version in `roots` holds, in increasing order,
   // each once. Cost: the distinct nodes above the blocks (and the bottom nodes, for blocks
   // within them).
-  std::vector<uint64_t> SubtreePrefixes(std::span<Node* const> roots, int bits) const {
-    const BlockAt block = Locate(bits, 0);
-    const bool within = bits < kLog2BottomDegree;
-    // The nodes visited: an open-addressing set (power-of-two capacity, at most half full), no
-    // allocation per node.
-    std::vector<const Node*> seen(64, nullptr);
-    size_t seen_count = 0;
-    auto first_visit = [&](const Node* n) {
-      if ((seen_count + 1) * 2 > seen.size()) {
-        std::vector<const Node*> bigger(2 * seen.size(), nullptr);
-        for (const Node* m : seen) {
-          if (m != nullptr) InsertPointer(&bigger, m);
-        }
-        seen.swap(bigger);
-      }
-      const bool added = InsertPointer(&seen, n);
-      seen_count += added ? 1 : 0;
-      return added;
-    };
-    struct Item {
-      const Inner* node;
-      uint64_t prefix;
-    };
-    std::vector<Item> stack;
-    std::vector<uint64_t> out;
-    // A node at the blocks' level (prefix: the digits above it) or above it.
-    auto reach = [&](const Node* n, uint64_t prefix) {
-      if (n->level > block.level) {
-        if (first_visit(n)) stack.push_back({static_cast<const Inner*>(n), prefix});
-      } else if (!within) {
-        out.push_back(prefix);
-      } else if (first_visit(n)) {
-        ForEachLeaf(static_cast<const Bottom*>(n), [&](int d, const Leaf&) {
-          out.push_back((prefix << (kLog2BottomDegree - bits)) | static_cast<uint64_t>(d >> bits));
-        });
-      }
-    };
-    for (const Node* root : roots) {
-      if (root != nullptr) reach(root, FillPrefix(Height(root)));
-    }
-    while (!stack.empty()) {
-      const Item item = stack.back();
-      stack.pop_back();
-      for (int i = 0; i < kDegree; ++i) {
-        const Node* child = item.node->child[i];
-        if (child != nullptr) reach(child, (item.prefix << kLog2Degree) | static_cast<uint64_t>(i));
-      }
-    }
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
-    return out;
-  }
+  std::vector<uint64_t> SubtreePrefixes(std::span<Node* const> roots, int bits) const;
 
   // Removes one block from every version in `roots`, replacing each root. Each distinct node on
   // the paths to it (and each bottom node it is part of) is copied once however many versions
@@ -621,47 +249,10 @@ class PersistentTrie {
   // remains. Cost: the distinct nodes on the paths, not versions x height. Returns false when a
   // node could not be allocated: every version is then unchanged. REQUIRES: no other thread
   // uses these versions.
-  [[nodiscard]] bool DropSubtree(std::span<Node*> roots, int bits, uint64_t prefix, int slot) {
-    const BlockAt block = Locate(bits, prefix);
-    std::unordered_map<const Node*, Node*> replaced;  // old node: its copy (itself if unchanged)
-    std::vector<Node*> next(roots.size(), nullptr);
-    bool ok = true;
-    for (size_t i = 0; i < roots.size() && ok; ++i) {
-      Node* root = roots[i];
-      if (root == nullptr || !HoldsSubtree(root, block.level, block.prefix)) {
-        next[i] = Share(root);
-      } else {
-        next[i] = Without(root, block, slot, &replaced, &ok);
-      }
-    }
-    if (!ok) {
-      for (Node* n : next) Release(n, slot);
-      return false;
-    }
-    for (size_t i = 0; i < roots.size(); ++i) {
-      Release(roots[i], slot);
-      roots[i] = next[i];
-    }
-    return true;
-  }
+  [[nodiscard]] bool DropSubtree(std::span<Node*> roots, int bits, uint64_t prefix, int slot);
 
   // Number of nodes of one version (shared ones included). For tests and statistics.
-  size_t CountNodes(const Node* root) const {
-    size_t count = 0;
-    if (root == nullptr) return 0;
-    std::vector<const Node*> stack{root};
-    while (!stack.empty()) {
-      const Node* n = stack.back();
-      stack.pop_back();
-      ++count;
-      if (n->level > 0) {
-        for (const Node* c : static_cast<const Inner*>(n)->child) {
-          if (c != nullptr) stack.push_back(c);
-        }
-      }
-    }
-    return count;
-  }
+  size_t CountNodes(const Node* root) const;
 
   // The expensive check of invariants 1 and 3 over every version: `roots` must be every root
   // reference into this trie (one entry per reference). Walks each distinct node once and
@@ -669,101 +260,14 @@ class PersistentTrie {
   // a bottom node's leaf count with its presence bits and its class, and the distinct nodes with
   // the pools' live count (so nothing leaked). For tests and
   // GROVE_EXPENSIVE_CHECKS builds; returns Internal naming the first broken rule.
-  Status CheckCounts(std::span<Node* const> roots) const {
-    std::unordered_map<const Node*, uint32_t> links;
-    std::vector<const Node*> stack;
-    for (const Node* r : roots) {
-      if (r == nullptr) continue;
-      if (links[r]++ == 0) stack.push_back(r);
-    }
-    while (!stack.empty()) {
-      const Node* n = stack.back();
-      stack.pop_back();
-      if (n->level == 0) {
-        const Bottom* b = static_cast<const Bottom*>(n);
-        int present = 0;
-        for (uint64_t word : b->present) present += PopCount(word);
-        if (present != b->leaves || b->leaves > kClasses.capacity[b->size_class]) {
-          return InternalError("trie: a bottom node's leaf count is not its presence bits");
-        }
-        continue;
-      }
-      for (const Node* c : static_cast<const Inner*>(n)->child) {
-        if (c == nullptr) continue;
-        if (c->level + 1 != n->level) return InternalError("trie: a child is not one level down");
-        if (links[c]++ == 0) stack.push_back(c);
-      }
-    }
-    for (const auto& [node, count] : links) {
-      if (node->rc.count() != count) {
-        return InternalError("trie: a node's count " + std::to_string(node->rc.count()) +
-                             " is not its " + std::to_string(count) + " links and roots");
-      }
-    }
-    if (static_cast<int64_t>(links.size()) != live_nodes()) {
-      return InternalError("trie: " + std::to_string(live_nodes()) + " live nodes, " +
-                           std::to_string(links.size()) + " reachable");
-    }
-    return Status::Ok();
-  }
+  Status CheckCounts(std::span<Node* const> roots) const;
 
   // Writes the distinct nodes reachable from `roots`, each once and children before parents,
   // then the roots as node indices: Load() rebuilds the same sharing, so the size follows the
   // distinct nodes, not roots x map size. Levels are written from the top of the highest root
   // H: u32 H, then per node u8 (H - 1 - level), the presence words (of kDegree or kBottomDegree
   // bits), then a u32 child index (inner) or the leaf bytes (bottom) for each present digit.
-  void Save(std::span<Node* const> roots, ByteWriter* w) const {
-    std::unordered_map<const Node*, uint32_t> index;
-    int top = height_;
-    for (const Node* r : roots) top = std::max(top, Height(r));
-    w->Put<uint32_t>(static_cast<uint32_t>(top));
-    const size_t count_at = w->Reserve<uint64_t>();
-    struct Frame {
-      const Node* node;
-      int next;  // the next child digit to visit
-    };
-    std::vector<Frame> stack;
-    for (const Node* root : roots) {
-      if (root == nullptr || index.count(root) != 0) continue;
-      stack.push_back({root, 0});
-      while (!stack.empty()) {
-        Frame& f = stack.back();
-        if (f.node->level > 0) {
-          const Inner* n = static_cast<const Inner*>(f.node);
-          while (f.next < kDegree &&
-                 (n->child[f.next] == nullptr || index.count(n->child[f.next]) != 0)) {
-            ++f.next;
-          }
-          if (f.next < kDegree) {
-            stack.push_back({n->child[f.next], 0});  // invalidates f
-            continue;
-          }
-        }
-        Frame done = f;
-        stack.pop_back();
-        index.emplace(done.node, static_cast<uint32_t>(index.size()));
-        w->Put<uint8_t>(static_cast<uint8_t>(top - 1 - done.node->level));
-        if (done.node->level > 0) {
-          const Inner* n = static_cast<const Inner*>(done.node);
-          uint64_t present[kWords] = {};
-          for (int d = 0; d < kDegree; ++d) {
-            if (n->child[d] != nullptr) present[d >> 6] |= uint64_t{1} << (d & 63);
-          }
-          w->PutBytes(present, sizeof(present));
-          for (int d = 0; d < kDegree; ++d) {
-            if (n->child[d] != nullptr) w->Put<uint32_t>(index.at(n->child[d]));
-          }
-        } else {
-          const Bottom* b = static_cast<const Bottom*>(done.node);
-          w->PutBytes(b->present, sizeof(b->present));
-          ForEachLeaf(b, [&](int, const Leaf& leaf) { w->Put(leaf); });
-        }
-      }
-    }
-    w->Patch<uint64_t>(count_at, index.size());
-    w->Put<uint64_t>(roots.size());
-    for (const Node* root : roots) w->Put<uint32_t>(root == nullptr ? 0 : index.at(root) + 1);
-  }
+  void Save(std::span<Node* const> roots, ByteWriter* w) const;
 
   // Rebuilds versions written by Save(): appends `root_count` roots to `roots`, each owning
   // one reference. valid_leaf(const Leaf&) rejects leaves the caller's model cannot hold.
@@ -772,94 +276,7 @@ class PersistentTrie {
   // on error nothing stays allocated and `roots` is unchanged. Nodes come from `slot`'s pools.
   template <typename V>
   Status Load(ByteReader* r, size_t root_count, int slot, V&& valid_leaf,
-              std::vector<Node*>* roots) {
-    uint32_t top = 0;
-    GROVE_RETURN_IF_ERROR(r->Get("trie height", &top));
-    if (top < static_cast<uint32_t>(height_) || top > static_cast<uint32_t>(max_height_)) {
-      return r->Error("trie height", std::to_string(top) + " is not in " + std::to_string(height_) +
-                                         ".." + std::to_string(max_height_) +
-                                         " (this configuration's heights)");
-    }
-    uint64_t count = 0;
-    GROVE_RETURN_IF_ERROR(r->GetCount("trie node count", 1 + sizeof(uint64_t) * kWords, &count));
-    if (count >= UINT32_MAX) return r->Error("trie node count", "too large");
-    std::vector<Node*> nodes;
-    std::vector<uint32_t> refs;
-    nodes.reserve(count);
-    refs.reserve(count);
-    auto fail = [&](Status s) {
-      for (Node* n : nodes) FreeNode(n, slot);
-      return s;
-    };
-    for (uint64_t k = 0; k < count; ++k) {
-      uint8_t depth = 0;
-      uint64_t present[kBottomWords];
-      Status s = r->Get("trie node level", &depth);
-      if (s.ok() && depth >= top) {
-        s = r->Error("trie node level",
-                     std::to_string(depth) + " is not below the height " + std::to_string(top));
-      }
-      if (!s.ok()) return fail(s);
-      const int level = static_cast<int>(top) - 1 - depth;
-      const int degree = level > 0 ? kDegree : kBottomDegree;
-      const int words = (degree + 63) / 64;
-      s = r->GetBytes("trie node presence", present, words * sizeof(uint64_t));
-      if (s.ok() && degree % 64 != 0 && (present[words - 1] >> (degree % 64)) != 0) {
-        s = r->Error("trie node presence", "a digit beyond the degree is marked present");
-      }
-      if (!s.ok()) return fail(s);
-      auto has = [&](int d) { return (present[d >> 6] >> (d & 63)) & 1; };
-      if (level > 0) {
-        Inner* n = NewInner(slot, level);
-        if (n == nullptr) return fail(ResourceExhaustedError("out of memory loading a trie"));
-        nodes.push_back(n);
-        refs.push_back(0);
-        for (int d = 0; d < kDegree; ++d) {
-          if (!has(d)) continue;
-          uint32_t c = 0;
-          s = r->Get("trie child index", &c);
-          if (s.ok() && (c >= k || nodes[c]->level + 1 != level)) {
-            s = r->Error("trie child index",
-                         std::to_string(c) + " is not an earlier node one level down");
-          }
-          if (!s.ok()) return fail(s);
-          n->child[d] = nodes[c];
-          ++refs[c];
-        }
-      } else {
-        int leaves = 0;
-        for (uint64_t word : present) leaves += PopCount(word);
-        Bottom* b = NewBottom(slot, kPacked ? ClassFor(leaves) : 0);
-        if (b == nullptr) return fail(ResourceExhaustedError("out of memory loading a trie"));
-        nodes.push_back(b);
-        refs.push_back(0);
-        std::memcpy(b->present, present, sizeof(present));
-        b->leaves = static_cast<uint16_t>(leaves);
-        Leaf* leaf = Leaves(b);
-        for (int d = 0, at = 0; d < kBottomDegree; ++d) {
-          if (!has(d)) continue;
-          Leaf* to = &leaf[kPacked ? at++ : d];
-          s = r->GetBytes("trie leaf", to, sizeof(Leaf));
-          if (s.ok() && !valid_leaf(*to)) s = r->Error("trie leaf", "impossible value");
-          if (!s.ok()) return fail(s);
-        }
-      }
-    }
-    uint64_t saved_roots = 0;
-    Status s = r->Get("trie root count", &saved_roots);
-    if (s.ok() && saved_roots != root_count) {
-      s = r->Error("trie root count",
-                   std::to_string(saved_roots) + " roots, expected " + std::to_string(root_count));
-    }
-    if (!s.ok()) return fail(s);
-    // Invariant 1: a node's count is its parent links plus the roots reaching it.
-    s = LinkRoots(
-        r, "trie root", root_count, nodes, &refs,
-        [&](size_t k) { return nodes[k]->level + 1 >= height_; }, roots);
-    if (!s.ok()) return fail(s);
-    for (const Node* root : *roots) RaiseTopHeight(Height(root));
-    return s;
-  }
+              std::vector<Node*>* roots);
 
   // Adds the nodes and bytes of the trie's pools to *m.
   void AddMemory(MemoryUse* m) const {
@@ -972,8 +389,10 @@ class PersistentTrie {
     return n;
   }
   // A new bottom node of size class c (its leaves zeroed unless kPacked: a packed node reads
-  // only the leaves it holds).
-  Bottom* NewBottom(int slot, int c) {
+  // only the leaves it holds). Always inlined: Update() copies a bottom node on most crossings,
+  // and GCC otherwise inlines it or not by the size of the file that includes the trie (its
+  // inline-unit-growth limit).
+  [[gnu::always_inline]] Bottom* NewBottom(int slot, int c) {
     void* p = bottom_pools_[c]->Allocate(slot);
     if (p == nullptr) return nullptr;
     Bottom* b = new (p) Bottom;
@@ -999,13 +418,7 @@ class PersistentTrie {
   // Update() could not get a node for `cur`'s place (the path child of the last copy when
   // `held`, the first node copied, is set; that link is then not counted): counts the link and
   // drops `held`, so the version holds the same contents. Returns false.
-  bool Abandon(Node* held, Node* cur, int slot) {
-    if (held != nullptr) {
-      if (cur != nullptr) cur->rc.Acquire();
-      Release(held, slot);
-    }
-    return false;
-  }
+  bool Abandon(Node* held, Node* cur, int slot);
 
   // A count of references to one node, to be dropped together.
   struct Drop {
@@ -1013,91 +426,19 @@ class PersistentTrie {
     uint32_t count = 0;
   };
   // Drops d.count references to d.node, freeing what dies (out of memory in ReleaseMany).
-  void DropRefs(Drop d, int slot) {
-    if (d.node->rc.Release(d.count)) FreeDead(d.node, slot);
-  }
+  void DropRefs(Drop d, int slot);
 
   // Frees `dead` (its count has reached zero) and every node only it reached. Iterative, with a
   // fixed stack: allocates nothing.
-  void FreeDead(Node* dead, int slot) {
-    std::array<Node*, (kDegree - 1) * kMaxHeight + 1> stack;
-    int top = 0;
-    stack[top++] = dead;
-    while (top > 0) {
-      Node* n = stack[--top];
-      if (n->level > 0) {
-        for (Node* c : static_cast<Inner*>(n)->child) {
-          if (c != nullptr && c->rc.Release()) stack[top++] = c;
-        }
-      }
-      FreeNode(n, slot);
-    }
-  }
+  void FreeDead(Node* dead, int slot);
 
   // VisitDistinct() from `roots` whose key prefixes (the digits above each root) are given.
   template <typename W, typename F>
   size_t VisitDistinctFrom(std::span<Node* const> roots, std::span<const uint64_t> prefixes,
-                           std::span<const W> weights, F& on_leaf) const {
-    // Level by level from the highest root down; a root joins at its own level.
-    int top = 0;
-    for (const Node* r : roots) top = std::max(top, Height(r));
-    std::vector<const Node*> level_nodes;
-    std::vector<uint64_t> level_prefix;
-    std::vector<W> level_weight;
-    std::unordered_map<const Node*, size_t> index;
-    auto add = [&](const Node* n, uint64_t prefix, W w) {
-      auto [it, inserted] = index.try_emplace(n, level_nodes.size());
-      if (inserted) {
-        level_nodes.push_back(n);
-        level_prefix.push_back(prefix);
-        level_weight.push_back(w);
-      } else {
-        level_weight[it->second] += w;
-      }
-    };
-    size_t distinct = 0;
-    for (int level = top - 1; level >= 0; --level) {
-      std::vector<const Node*> parents;
-      std::vector<uint64_t> parent_prefix;
-      std::vector<W> parent_weight;
-      parents.swap(level_nodes);
-      parent_prefix.swap(level_prefix);
-      parent_weight.swap(level_weight);
-      index.clear();
-      for (size_t k = 0; k < parents.size(); ++k) {
-        const Inner* n = static_cast<const Inner*>(parents[k]);
-        for (int i = 0; i < kDegree; ++i) {
-          if (n->child[i] != nullptr) {
-            add(n->child[i], (parent_prefix[k] << kLog2Degree) | i, parent_weight[k]);
-          }
-        }
-      }
-      for (size_t i = 0; i < roots.size(); ++i) {
-        if (Height(roots[i]) == level + 1) add(roots[i], prefixes[i], weights[i]);
-      }
-      distinct += level_nodes.size();
-    }
-    for (size_t k = 0; k < level_nodes.size(); ++k) {
-      ForEachLeaf(static_cast<const Bottom*>(level_nodes[k]), [&](int d, const Leaf& leaf) {
-        on_leaf((level_prefix[k] << kLog2BottomDegree) | d, leaf, level_weight[k]);
-      });
-    }
-    return distinct;
-  }
+                           std::span<const W> weights, F& on_leaf) const;
 
   // Adds `n` to an open-addressing set of pointers with room for it; false when present.
-  static bool InsertPointer(std::vector<const Node*>* set, const Node* n) {
-    const size_t mask = set->size() - 1;
-    size_t i = ((reinterpret_cast<uintptr_t>(n) >> 6) * 0x9E3779B97F4A7C15ull >> 20) & mask;
-    for (;; i = (i + 1) & mask) {
-      const Node*& slot = (*set)[i];
-      if (slot == n) return false;
-      if (slot == nullptr) {
-        slot = n;
-        return true;
-      }
-    }
-  }
+  static bool InsertPointer(std::vector<const Node*>* set, const Node* n);
 
   void RaiseTopHeight(int h) {
     int top = top_height_.load(std::memory_order_relaxed);
@@ -1113,112 +454,21 @@ class PersistentTrie {
     int bits;
     int low;
   };
-  BlockAt Locate(int bits, uint64_t prefix) const {
-    GROVE_CHECK(bits >= 0 && bits < SpanBits(height_) &&
-                (bits < kLog2BottomDegree || (bits - kLog2BottomDegree) % kLog2Degree == 0));
-    if (bits >= kLog2BottomDegree) {
-      return {(bits - kLog2BottomDegree) / kLog2Degree, prefix, bits, 0};
-    }
-    const int shift = kLog2BottomDegree - bits;
-    return {0, prefix >> shift, bits, static_cast<int>(prefix & ((uint64_t{1} << shift) - 1))};
-  }
+  BlockAt Locate(int bits, uint64_t prefix) const;
   // Whether version `root` can hold the node at (level, prefix): the prefix's digits above the
   // version are the fill key's.
-  bool HoldsSubtree(const Node* root, int level, uint64_t prefix) const {
-    const int shift = SpanBits(level + 1);
-    if (shift >= 64) return false;
-    const uint64_t low = prefix << shift;
-    return (low >> shift) == prefix && HeightFor(low, fill_) <= Height(root);
-  }
+  bool HoldsSubtree(const Node* root, int level, uint64_t prefix) const;
   // The node at (level, prefix) of a version, or nullptr.
-  Node* SubtreeOf(Node* root, int level, uint64_t prefix) const {
-    if (root == nullptr || !HoldsSubtree(root, level, prefix)) return nullptr;
-    Node* cur = root;
-    for (int l = root->level; cur != nullptr && l > level; --l) {
-      cur = static_cast<Inner*>(cur)->child[PrefixDigit(prefix, l - level - 1)];
-    }
-    return cur;
-  }
+  Node* SubtreeOf(Node* root, int level, uint64_t prefix) const;
   // The replacement of `n` (a node on the path to the block: above it, or the bottom node it is
   // part of) without the block, as a new reference: `n` itself when the block is not under it,
   // nullptr when nothing else is. Memoised in *replaced, so a node is copied once. Sets *ok =
   // false (and returns nullptr, holding nothing) when out of memory.
   Node* Without(Node* n, const BlockAt& block, int slot,
-                std::unordered_map<const Node*, Node*>* replaced, bool* ok) {
-    if (auto it = replaced->find(n); it != replaced->end()) {
-      if (it->second != nullptr) it->second->rc.Acquire();
-      return it->second;
-    }
-    if (n->level == 0) return BottomWithout(static_cast<Bottom*>(n), block, slot, replaced, ok);
-    Inner* old = static_cast<Inner*>(n);
-    const int d = PrefixDigit(block.prefix, old->level - block.level - 1);
-    Node* child = old->child[d];
-    Node* kept = nullptr;  // the replacement of the path child: a reference we own, or nullptr
-    if (child != nullptr && (old->level - 1 > block.level || block.bits < kLog2BottomDegree)) {
-      kept = Without(child, block, slot, replaced, ok);
-      if (!*ok) return nullptr;
-    }
-    if (child == nullptr || kept == child) {          // the block is not under n: n is unchanged
-      if (kept != nullptr) (void)kept->rc.Release();  // n holds it too: never the last one
-      n->rc.Acquire();
-      replaced->emplace(n, n);
-      return n;
-    }
-    bool empty = kept == nullptr;
-    for (int i = 0; i < kDegree && empty; ++i) empty = i == d || old->child[i] == nullptr;
-    if (empty) {
-      replaced->emplace(n, nullptr);
-      return nullptr;
-    }
-    Inner* copy = NewInner(slot, old->level);
-    if (copy == nullptr) {
-      Release(kept, slot);
-      *ok = false;
-      return nullptr;
-    }
-    for (int i = 0; i < kDegree; ++i) {
-      Node* c = i == d ? kept : old->child[i];
-      if (i != d && c != nullptr) c->rc.Acquire();
-      copy->child[i] = c;
-    }
-    replaced->emplace(n, copy);
-    return copy;
-  }
+                std::unordered_map<const Node*, Node*>* replaced, bool* ok);
   // Without() of the bottom node a block within a bottom node is part of.
   Node* BottomWithout(Bottom* old, const BlockAt& block, int slot,
-                      std::unordered_map<const Node*, Node*>* replaced, bool* ok) {
-    uint64_t keep[kBottomWords];
-    int kept = 0;
-    for (int w = 0; w < kBottomWords; ++w) {
-      keep[w] = 0;
-      for (uint64_t bits = old->present[w]; bits != 0; bits &= bits - 1) {
-        const int d = w * 64 + std::countr_zero(bits);
-        if ((d >> block.bits) != block.low) keep[w] |= uint64_t{1} << (d & 63);
-      }
-      kept += PopCount(keep[w]);
-    }
-    Node* result = nullptr;
-    if (kept == old->leaves) {  // no leaf of the block: unchanged
-      old->rc.Acquire();
-      result = old;
-    } else if (kept > 0) {
-      Bottom* copy = NewBottom(slot, kPacked ? ClassFor(kept) : 0);
-      if (copy == nullptr) {
-        *ok = false;
-        return nullptr;
-      }
-      copy->leaves = static_cast<uint16_t>(kept);
-      Leaf* to = Leaves(copy);
-      int at = 0;
-      ForEachLeaf(old, [&](int d, const Leaf& leaf) {
-        if ((keep[d >> 6] >> (d & 63)) & 1) to[kPacked ? at++ : d] = leaf;
-      });
-      std::memcpy(copy->present, keep, sizeof(keep));
-      result = copy;
-    }
-    replaced->emplace(old, result);
-    return result;
-  }
+                      std::unordered_map<const Node*, Node*>* replaced, bool* ok);
 
   int height_;
   int max_height_;
@@ -1235,5 +485,13 @@ class PersistentTrie {
 };
 
 }  // namespace grove
+
+// The members' definitions, by concern.
+#include "engine/persistent/persistent_trie_blocks.h"
+#include "engine/persistent/persistent_trie_checkpoint.h"
+#include "engine/persistent/persistent_trie_distinct.h"
+#include "engine/persistent/persistent_trie_lookup.h"
+#include "engine/persistent/persistent_trie_release.h"
+#include "engine/persistent/persistent_trie_update.h"
 
 #endif  // GROVE_ENGINE_PERSISTENT_PERSISTENT_TRIE_H_

@@ -16,12 +16,19 @@
 #include "concurrency/worker_pool.h"
 #include "engine/fastslam/fastslam_model.h"
 #include "engine/fastslam/vehicle_model.h"
+#include "engine/filter/filter_model.h"
+#include "engine/filter/filter_options.h"
 #include "engine/io/checkpoint_io.h"
 #include "engine/persistent/version_set.h"
 #include "tools/sim/fastslam_simulator.h"
 
 namespace grove {
 namespace {
+
+// The FastSLAM engine drives its model with a FilterDriver and takes its filter's options from
+// its configuration (FilterOptionsOf); it has no island mode.
+static_assert(PosedModel<fastslam::FastSlamModel<3>>);
+static_assert(FilterConfig<FastSlamConfig> && !IslandConfig<FastSlamConfig>);
 
 using fastslam::VehicleGeometry;
 using fastslam::VehiclePose;
