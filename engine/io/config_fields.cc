@@ -18,7 +18,9 @@ std::string IntervalText(const Interval& in) {
                      in.max_open ? ')' : ']');
 }
 
-std::string RangeText(const FieldInfo& info) {
+}  // namespace
+
+std::string FieldRangeText(const FieldInfo& info) {
   switch (info.type) {
     case FieldType::kInteger:
       if (info.max_integer == std::numeric_limits<int64_t>::max()) {
@@ -39,6 +41,8 @@ std::string RangeText(const FieldInfo& info) {
   }
   return "";
 }
+
+namespace {
 
 std::string_view Trimmed(std::string_view text) {
   while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
@@ -85,7 +89,7 @@ Status CheckFieldValue(const FieldInfo& info, const FieldValue& value) {
   }
   if (ok) return Status::Ok();
   return InvalidArgumentError(fmt::format("{} = {}: must be {}", info.name,
-                                          FormatFieldValue(info, value), RangeText(info)));
+                                          FormatFieldValue(info, value), FieldRangeText(info)));
 }
 
 StatusOr<FieldValue> ParseFieldValue(const FieldInfo& info, std::string_view text) {
@@ -123,8 +127,8 @@ StatusOr<FieldValue> ParseFieldValue(const FieldInfo& info, std::string_view tex
         }
       }
       if (!parsed) {
-        return InvalidArgumentError(
-            fmt::format("{} = {}: must be {}", info.name, QuoteForMessage(text), RangeText(info)));
+        return InvalidArgumentError(fmt::format("{} = {}: must be {}", info.name,
+                                                QuoteForMessage(text), FieldRangeText(info)));
       }
       break;
   }

@@ -22,29 +22,13 @@ std::string TypeName(FieldType type) {
   return "TEXT";
 }
 
-// The range as the help page writes it: "1..1000", ">= 0", "[0, 10]", "(0, 1]".
+// The range as the help page writes it: "1..1000", ">= 0", "[0, 10]", "(0, 1]" (the rule of the
+// field's messages without its "in "); choices are listed apart.
 std::string RangeHelp(const FieldInfo& info) {
-  switch (info.type) {
-    case FieldType::kInteger:
-      if (info.max_integer == std::numeric_limits<int64_t>::max()) {
-        return fmt::format(">= {}", info.min_integer);
-      }
-      return fmt::format("{}..{}", info.min_integer, info.max_integer);
-    case FieldType::kUnsigned:
-      return fmt::format("0..{}", std::numeric_limits<uint64_t>::max());
-    case FieldType::kReal: {
-      const Interval& in = info.interval;
-      const bool low = std::isfinite(in.min), high = std::isfinite(in.max);
-      if (!low && !high) return "any finite number";
-      if (!high) return fmt::format("{} {}", in.min_open ? ">" : ">=", in.min);
-      if (!low) return fmt::format("{} {}", in.max_open ? "<" : "<=", in.max);
-      return fmt::format("{}{}, {}{}", in.min_open ? '(' : '[', in.min, in.max,
-                         in.max_open ? ')' : ']');
-    }
-    case FieldType::kChoice:
-      return "";
-  }
-  return "";
+  if (info.type == FieldType::kChoice) return "";
+  const std::string rule = FieldRangeText(info);
+  if (rule == "finite") return "any finite number";
+  return rule.starts_with("in ") ? rule.substr(3) : rule;
 }
 
 // Parses `text` for the option `info` names: a real must be finite before its range is

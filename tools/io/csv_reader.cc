@@ -104,10 +104,16 @@ StatusOr<LineReader> LineReader::Open(const std::string& path, size_t max_line_b
     return IoError(fmt::format("{}: cannot stat: {}", path, ErrnoText(errno)));
   }
   if (S_ISDIR(st.st_mode)) return IoError(fmt::format("{}: is a directory, not a file", path));
+  StatusOr<LineReader> reader = Make(path, max_line_bytes);
+  if (reader.ok()) reader->fd_ = std::move(fd);
+  return reader;
+}
+
+StatusOr<LineReader> LineReader::Make(const std::string& path, size_t max_line_bytes) {
+  GROVE_RETURN_IF_ERROR(CheckMaxLineBytes(max_line_bytes));
   LineReader reader;
   reader.path_ = path;
   reader.max_line_bytes_ = max_line_bytes;
-  reader.fd_ = std::move(fd);
   reader.buffer_.resize(std::max(kMinBufferBytes, max_line_bytes + 2));
   return reader;
 }
@@ -115,23 +121,15 @@ StatusOr<LineReader> LineReader::Open(const std::string& path, size_t max_line_b
 StatusOr<LineReader> LineReader::FromStream(const std::string& path,
                                             std::unique_ptr<std::istream> in,
                                             size_t max_line_bytes) {
-  GROVE_RETURN_IF_ERROR(CheckMaxLineBytes(max_line_bytes));
-  LineReader reader;
-  reader.path_ = path;
-  reader.max_line_bytes_ = max_line_bytes;
-  reader.in_ = std::move(in);
-  reader.buffer_.resize(std::max(kMinBufferBytes, max_line_bytes + 2));
+  StatusOr<LineReader> reader = Make(path, max_line_bytes);
+  if (reader.ok()) reader->in_ = std::move(in);
   return reader;
 }
 
 StatusOr<LineReader> LineReader::FromFunction(const std::string& path, ReadFunction read,
                                               size_t max_line_bytes) {
-  GROVE_RETURN_IF_ERROR(CheckMaxLineBytes(max_line_bytes));
-  LineReader reader;
-  reader.path_ = path;
-  reader.max_line_bytes_ = max_line_bytes;
-  reader.read_ = std::move(read);
-  reader.buffer_.resize(std::max(kMinBufferBytes, max_line_bytes + 2));
+  StatusOr<LineReader> reader = Make(path, max_line_bytes);
+  if (reader.ok()) reader->read_ = std::move(read);
   return reader;
 }
 

@@ -75,6 +75,8 @@ class LineReader {
   };
 
   LineReader() = default;
+  // A reader of no input yet, its buffer sized for max_line_bytes (checked).
+  static StatusOr<LineReader> Make(const std::string& path, size_t max_line_bytes);
   StatusOr<bool> Finish(size_t first, size_t stop, std::string_view* line);
   // Appends what the input has, up to the buffer's end; sets eof_ at its end.
   Status Fill();

@@ -79,6 +79,9 @@ struct FieldInfo {
 // The value as text: decimal integers, the shortest exact form of a double ("0.5", "1e+308",
 // "nan"), a choice's name.
 GROVE_EXPORT std::string FormatFieldValue(const FieldInfo& info, const FieldValue& value);
+// The field's rule as its messages end: "in 1..1000", ">= 0", "in (0, 1]", "finite",
+// "one of \"a\", \"b\"".
+GROVE_EXPORT std::string FieldRangeText(const FieldInfo& info);
 // InvalidArgument "name = value: must be ..." when `value` is outside the field's range.
 GROVE_EXPORT Status CheckFieldValue(const FieldInfo& info, const FieldValue& value);
 // Parses the text form of a value (a command-line flag): InvalidArgument
