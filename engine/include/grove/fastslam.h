@@ -36,6 +36,7 @@
 
 #include "grove/config_fields.h"
 #include "grove/export.h"
+#include "grove/filter_config.h"
 #include "grove/resampling.h"
 #include "grove/status.h"
 #include "grove/types.h"
@@ -104,13 +105,19 @@ enum class FastSlamGateUnit {
 
 enum class FastSlamEvidence { kOff, kOn };
 
-struct GROVE_EXPORT FastSlamConfig {
+// The filter's fields come from FilterConfig (grove/filter_config.h): particles (Default: 100,
+// Bailey's NPARTICLES), seed, resampling, resample_threshold (resample after a scan when ESS / N
+// is below it; Default: 0.75, Bailey's NEFFECTIVE = 0.75 * NPARTICLES), threads and batch
+// (Default: 64).
+struct GROVE_EXPORT FastSlamConfig : FilterConfig {
+  FastSlamConfig() {
+    particles = 100;
+    resample_threshold = 0.75;
+    batch = 64;
+  }
+
   // ---- Options that change results ----
 
-  // Number of particles. Range: 1..2^31. Default: 100 (Bailey's NPARTICLES).
-  int64_t particles = 100;
-  // Seed of every random stream. Same seed, same result at any thread count. Default: 1.
-  uint64_t seed = 1;
   // The filter. Default: kFastSlam2.
   FastSlamFilter filter = FastSlamFilter::kFastSlam2;
   // The vehicle model. Default: kBailey.
@@ -136,11 +143,6 @@ struct GROVE_EXPORT FastSlamConfig {
   double start_x_m = 0;
   double start_y_m = 0;
   double start_heading_rad = 0;
-  // Resampling scheme. Default: systematic.
-  ResamplingScheme resampling = ResamplingScheme::kSystematic;
-  // Resample after a scan when ESS / N < threshold. Range: (0, 1]. Default: 0.75 (Bailey's
-  // NEFFECTIVE = 0.75 * NPARTICLES).
-  double resample_threshold = 0.75;
 
   // ---- The seed's family (filter kUnscented ... kDeSrcd) ----
 
@@ -184,14 +186,6 @@ struct GROVE_EXPORT FastSlamConfig {
   // Side of the spatial index's cells, metres (at most 8 landmarks a cell: a ninth is dropped
   // and counted). Range: [0.05, 1e4]. Default: 5.
   double index_cell_m = 5;
-
-  // ---- Options that change only speed ----
-
-  // Worker threads; 0 means one per hardware thread. Range: 0..256. Default: 0.
-  int threads = 0;
-  // Particles per parallel batch, at most (batches shrink to leave each thread at least 4).
-  // Range: >= 1. Default: 64.
-  int64_t batch = 64;
 
   // Checks every field; the message names the field, its value and the rule it breaks.
   Status Validate() const;
