@@ -325,11 +325,6 @@ class GROVE_EXPORT FastSlam {
 
  private:
   explicit FastSlam(std::unique_ptr<Impl> impl);
-  // Resume()'s work on one rank.
-  static StatusOr<std::unique_ptr<FastSlam>> ResumeShare(const FastSlamConfig& config,
-                                                         std::string_view checkpoint,
-                                                         const std::string& name,
-                                                         std::string* user_data, Collective* ranks);
   std::unique_ptr<Impl> impl_;
 };
 

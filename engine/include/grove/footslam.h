@@ -301,11 +301,6 @@ class GROVE_EXPORT FootSlam {
 
  private:
   explicit FootSlam(std::unique_ptr<Impl> impl);
-  // Resume()'s work on one rank.
-  static StatusOr<std::unique_ptr<FootSlam>> ResumeShare(const FootSlamConfig& config,
-                                                         std::string_view checkpoint,
-                                                         const std::string& name,
-                                                         std::string* user_data, Collective* ranks);
   std::unique_ptr<Impl> impl_;
 };
 
