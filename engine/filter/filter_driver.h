@@ -129,6 +129,8 @@ class FilterDriver {
   }
 
   bool failed() const { return failed_; }
+  // Whether the start time is known: set by SetStartTime() or by the first step.
+  bool start_time_set() const { return !start_time_unset_; }
   // FailedPrecondition after an error stopped the engine.
   Status CheckNotFailed(const char* what) const {
     if (!failed_) return Status::Ok();

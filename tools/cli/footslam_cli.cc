@@ -1,11 +1,11 @@
-#include "tools/cli/footslam_cli.h"
-
+// `grove footslam run|batch|simulate|evaluate|render`: their options and what runs them.
 #include <limits>
 #include <memory>
 #include <string>
 
 #include "grove/footslam.h"
 #include "tools/cli/across_ranks.h"
+#include "tools/cli/command.h"
 #include "tools/cli/config_flags.h"
 #include "tools/cli/mpi_world.h"
 #include "tools/cli/run_flags.h"
@@ -156,8 +156,7 @@ Command AddEvaluate(CLI::App* footslam) {
 }  // namespace
 
 std::vector<Command> AddFootSlamCommands(CLI::App* grove) {
-  CLI::App* footslam = grove->add_subcommand("footslam", "Pedestrian SLAM from step odometry");
-  footslam->require_subcommand(1);
+  CLI::App* footslam = AddFamily(grove, "footslam", "Pedestrian SLAM from step odometry");
   return {
       AddCommand<FootSlamRunCli>(footslam, "run", "Run FootSLAM on a step file"),
       AddCommand<FootSlamBatchCli>(

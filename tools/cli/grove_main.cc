@@ -8,10 +8,7 @@
 #include <vector>
 
 #include "grove/version.h"
-#include "tools/cli/bench_cli.h"
 #include "tools/cli/command.h"
-#include "tools/cli/fastslam_cli.h"
-#include "tools/cli/footslam_cli.h"
 #include "tools/cli/help_formatter.h"
 #include "tools/cli/parse_errors.h"
 #include "tools/run/run_loop.h"

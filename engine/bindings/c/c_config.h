@@ -43,24 +43,25 @@ CMember<CConfig> Member(const char* name, T CConfig::*member) {
           }};
 }
 
+// The row of CConfig's member `m`, which holds the field of the same name.
+#define GROVE_C_MEMBER(CConfig, m) ::grove::capi::Member(#m, &CConfig::m)
+
 // The rows of the filter's fields (grove/filter_config.h), which every model's C struct holds
 // under the same names.
 template <typename CConfig>
 std::vector<CMember<CConfig>> FilterMembers() {
   using C = CConfig;
-  return {
-      Member("particles", &C::particles),   Member("seed", &C::seed),
-      Member("resampling", &C::resampling), Member("resample_threshold", &C::resample_threshold),
-      Member("threads", &C::threads),       Member("batch", &C::batch)};
+  return {GROVE_C_MEMBER(C, particles),  GROVE_C_MEMBER(C, seed),
+          GROVE_C_MEMBER(C, resampling), GROVE_C_MEMBER(C, resample_threshold),
+          GROVE_C_MEMBER(C, threads),    GROVE_C_MEMBER(C, batch)};
 }
 
 // The rows of island mode's fields.
 template <typename CConfig>
 std::vector<CMember<CConfig>> IslandMembers() {
   using C = CConfig;
-  return {Member("islands", &C::islands),
-          Member("island_exchange_steps", &C::island_exchange_steps),
-          Member("island_exchange_fraction", &C::island_exchange_fraction)};
+  return {GROVE_C_MEMBER(C, islands), GROVE_C_MEMBER(C, island_exchange_steps),
+          GROVE_C_MEMBER(C, island_exchange_fraction)};
 }
 
 // A C++ configuration Config (its table `fields`) and its C struct CConfig (`members`).
@@ -71,7 +72,7 @@ class ConfigBinding {
   using CStruct = CConfig;
 
   ConfigBinding(const std::vector<ConfigField<Config>>& fields,
-                std::initializer_list<std::vector<CMember<CConfig>>> member_groups)
+                const std::vector<std::vector<CMember<CConfig>>>& member_groups)
       : fields_(fields) {
     for (const auto& group : member_groups) {
       for (const CMember<CConfig>& m : group) {
@@ -120,6 +121,15 @@ class ConfigBinding {
   std::vector<Row> rows_;
   Status status_;
 };
+
+// The binding of Config's table `fields` to CConfig's members (members() -> their groups),
+// built on first use and never destroyed: a call may come during static destruction.
+template <typename Config, typename CConfig, typename Members>
+const ConfigBinding<Config, CConfig>& BindOnce(const std::vector<ConfigField<Config>>& fields,
+                                               Members members) {
+  static const auto* binding = new ConfigBinding<Config, CConfig>(fields, members());
+  return *binding;
+}
 
 }  // namespace grove::capi
 

@@ -38,39 +38,38 @@ static_assert(std::is_same_v<std::underlying_type_t<FastSlamFilter>, int>);
 
 const ConfigBinding<FastSlamConfig, grove_fastslam_config>& Binding() {
   using C = grove_fastslam_config;
-  // Never destroyed: a call may come during static destruction.
-  static const auto* binding = new ConfigBinding<FastSlamConfig, C>(
-      FastSlamConfigFields(), {FilterMembers<C>(),
-                               {Member("filter", &C::filter),
-                                Member("vehicle", &C::vehicle),
-                                Member("wheelbase_m", &C::wheelbase_m),
-                                Member("encoder_offset_m", &C::encoder_offset_m),
-                                Member("laser_forward_m", &C::laser_forward_m),
-                                Member("laser_left_m", &C::laser_left_m),
-                                Member("sigma_speed_mps", &C::sigma_speed_mps),
-                                Member("sigma_steer_rad", &C::sigma_steer_rad),
-                                Member("sigma_range_m", &C::sigma_range_m),
-                                Member("sigma_bearing_rad", &C::sigma_bearing_rad),
-                                Member("start_x_m", &C::start_x_m),
-                                Member("start_y_m", &C::start_y_m),
-                                Member("start_heading_rad", &C::start_heading_rad),
-                                Member("ut_alpha", &C::ut_alpha),
-                                Member("ut_beta", &C::ut_beta),
-                                Member("ut_kappa", &C::ut_kappa),
-                                Member("cd_step", &C::cd_step),
-                                Member("de_scale", &C::de_scale),
-                                Member("de_crossover", &C::de_crossover),
-                                Member("de_generations", &C::de_generations),
-                                Member("association", &C::association),
-                                Member("reject_gate", &C::reject_gate),
-                                Member("augment_gate", &C::augment_gate),
-                                Member("gate_unit", &C::gate_unit),
-                                Member("evidence", &C::evidence),
-                                Member("evidence_threshold", &C::evidence_threshold),
-                                Member("sensor_range_m", &C::sensor_range_m),
-                                Member("sensor_fov_rad", &C::sensor_fov_rad),
-                                Member("index_cell_m", &C::index_cell_m)}});
-  return *binding;
+  return BindOnce<FastSlamConfig, C>(FastSlamConfigFields(), [] {
+    return std::vector<std::vector<CMember<C>>>{FilterMembers<C>(),
+                                                {GROVE_C_MEMBER(C, filter),
+                                                 GROVE_C_MEMBER(C, vehicle),
+                                                 GROVE_C_MEMBER(C, wheelbase_m),
+                                                 GROVE_C_MEMBER(C, encoder_offset_m),
+                                                 GROVE_C_MEMBER(C, laser_forward_m),
+                                                 GROVE_C_MEMBER(C, laser_left_m),
+                                                 GROVE_C_MEMBER(C, sigma_speed_mps),
+                                                 GROVE_C_MEMBER(C, sigma_steer_rad),
+                                                 GROVE_C_MEMBER(C, sigma_range_m),
+                                                 GROVE_C_MEMBER(C, sigma_bearing_rad),
+                                                 GROVE_C_MEMBER(C, start_x_m),
+                                                 GROVE_C_MEMBER(C, start_y_m),
+                                                 GROVE_C_MEMBER(C, start_heading_rad),
+                                                 GROVE_C_MEMBER(C, ut_alpha),
+                                                 GROVE_C_MEMBER(C, ut_beta),
+                                                 GROVE_C_MEMBER(C, ut_kappa),
+                                                 GROVE_C_MEMBER(C, cd_step),
+                                                 GROVE_C_MEMBER(C, de_scale),
+                                                 GROVE_C_MEMBER(C, de_crossover),
+                                                 GROVE_C_MEMBER(C, de_generations),
+                                                 GROVE_C_MEMBER(C, association),
+                                                 GROVE_C_MEMBER(C, reject_gate),
+                                                 GROVE_C_MEMBER(C, augment_gate),
+                                                 GROVE_C_MEMBER(C, gate_unit),
+                                                 GROVE_C_MEMBER(C, evidence),
+                                                 GROVE_C_MEMBER(C, evidence_threshold),
+                                                 GROVE_C_MEMBER(C, sensor_range_m),
+                                                 GROVE_C_MEMBER(C, sensor_fov_rad),
+                                                 GROVE_C_MEMBER(C, index_cell_m)}};
+  });
 }
 
 grove_landmark_estimate LandmarkToC(const LandmarkEstimate& e) {

@@ -20,31 +20,30 @@ static_assert(GROVE_FOOTSLAM_GRID_FIXED == static_cast<int>(FootSlamGrid::kFixed
 
 const ConfigBinding<FootSlamConfig, grove_footslam_config>& Binding() {
   using C = grove_footslam_config;
-  // Never destroyed: a call may come during static destruction.
-  static const auto* binding = new ConfigBinding<FootSlamConfig, C>(
-      FootSlamConfigFields(), {FilterMembers<C>(),
-                               IslandMembers<C>(),
-                               {Member("hex_radius_m", &C::hex_radius_m),
-                                Member("prior_count", &C::prior_count),
-                                Member("weighting", &C::weighting),
-                                Member("start_x_m", &C::start_x_m),
-                                Member("start_y_m", &C::start_y_m),
-                                Member("start_heading_rad", &C::start_heading_rad),
-                                Member("initial_heading_sigma_rad", &C::initial_heading_sigma_rad),
-                                Member("heading_drift_sigma_rad", &C::heading_drift_sigma_rad),
-                                Member("heading_sigma_rad", &C::heading_sigma_rad),
-                                Member("scale_sigma", &C::scale_sigma),
-                                Member("scale_drift_sigma", &C::scale_drift_sigma),
-                                Member("step_length_sigma_m", &C::step_length_sigma_m),
-                                Member("position_sigma_m", &C::position_sigma_m),
-                                Member("map", &C::map),
-                                Member("degree", &C::degree),
-                                Member("grid_size", &C::grid_size),
-                                Member("grid", &C::grid),
-                                Member("prior_map_confidence", &C::prior_map_confidence),
-                                Member("alphabet", &C::alphabet),
-                                Member("store_distance_m", &C::store_distance_m)}});
-  return *binding;
+  return BindOnce<FootSlamConfig, C>(FootSlamConfigFields(), [] {
+    return std::vector<std::vector<CMember<C>>>{FilterMembers<C>(),
+                                                IslandMembers<C>(),
+                                                {GROVE_C_MEMBER(C, hex_radius_m),
+                                                 GROVE_C_MEMBER(C, prior_count),
+                                                 GROVE_C_MEMBER(C, weighting),
+                                                 GROVE_C_MEMBER(C, start_x_m),
+                                                 GROVE_C_MEMBER(C, start_y_m),
+                                                 GROVE_C_MEMBER(C, start_heading_rad),
+                                                 GROVE_C_MEMBER(C, initial_heading_sigma_rad),
+                                                 GROVE_C_MEMBER(C, heading_drift_sigma_rad),
+                                                 GROVE_C_MEMBER(C, heading_sigma_rad),
+                                                 GROVE_C_MEMBER(C, scale_sigma),
+                                                 GROVE_C_MEMBER(C, scale_drift_sigma),
+                                                 GROVE_C_MEMBER(C, step_length_sigma_m),
+                                                 GROVE_C_MEMBER(C, position_sigma_m),
+                                                 GROVE_C_MEMBER(C, map),
+                                                 GROVE_C_MEMBER(C, degree),
+                                                 GROVE_C_MEMBER(C, grid_size),
+                                                 GROVE_C_MEMBER(C, grid),
+                                                 GROVE_C_MEMBER(C, prior_map_confidence),
+                                                 GROVE_C_MEMBER(C, alphabet),
+                                                 GROVE_C_MEMBER(C, store_distance_m)}};
+  });
 }
 
 // grove_hex_counts and HexCounts hold the same fields.

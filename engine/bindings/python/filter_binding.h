@@ -236,9 +236,9 @@ void RunRows(const Filter<Engine, Config>& f, size_t n, Step&& step, Context&& c
 // constructor (a config dict and keyword arguments, checked against `fields`), steps, config,
 // user_data, config_fields, mean_pose, heaviest_pose, mean_trajectory, summary (the facade's
 // summary as summary_dict(summary) makes it, with 'report'), checkpoint, resume, repr and
-// pickling; heaviest_trajectory and check_invariants when the engine has them. The caller adds
-// the model's own methods to the class returned. `doc` is the class's docstring, to which the
-// thread rules are added.
+// pickling; heaviest_trajectory, set_start_time and check_invariants when the engine has them. The
+// caller adds the model's own methods to the class returned. `doc` is the class's docstring, to
+// which the thread rules are added.
 template <typename Engine, typename Config, typename SummaryDict>
 py::class_<Filter<Engine, Config>> BindFilter(py::module_& m, const char* name,
                                               const std::string& doc,
@@ -339,6 +339,16 @@ py::class_<Filter<Engine, Config>> BindFilter(py::module_& m, const char* name,
         },
         "The heaviest particle's path traced through its ancestry, at the times of "
         "mean_trajectory(): a new float64 array of shape (n, 4), columns t, x, y, heading.");
+  }
+  if constexpr (requires(Engine & e) { e.SetStartTime(0.0); }) {
+    cls.def(
+        "set_start_time",
+        [](const F& f, double t) {
+          ThrowIfError(f.Locked([&](Engine& e) { return e.SetStartTime(t); }));
+        },
+        py::arg("t"),
+        "Sets the time of the start (the first step must come after it); without it the start "
+        "takes the first step's time. FailedPreconditionError after the first step.");
   }
   if constexpr (requires(const Engine& e) { e.CheckInvariants(); }) {
     cls.def(

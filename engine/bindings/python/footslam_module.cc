@@ -155,14 +155,6 @@ const char* BindFootSlam(py::module_& m) {
           "with \"row k (t = ...): \"; the rows before it stay applied. Ctrl-C stops it between "
           "steps (KeyboardInterrupt, the steps so far applied).")
       .def(
-          "set_start_time",
-          [](const PyFootSlam& f, double t) {
-            ThrowIfError(f.Locked([&](FootSlam& e) { return e.SetStartTime(t); }));
-          },
-          py::arg("t"),
-          "Sets the time of the start pose (the first step must come after it); without it the "
-          "start takes the first step's time. FailedPreconditionError after the first step.")
-      .def(
           "set_prior_map",
           [](const PyFootSlam& f, const py::object& map) {
             py::array a = HexArray(map);
