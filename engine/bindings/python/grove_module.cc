@@ -34,9 +34,9 @@ PYBIND11_MODULE(grove, m) {
   namespace py = pybind11;
   using namespace grove::python;
   m.doc() =
-      "grove: particle-filter SLAM (FootSLAM on hexagon grids, landmark FastSLAM) whose particles "
-      "share persistent maps.\n\n"
-      "Classes: FootSlam, FastSlam; errors: GroveError and one subclass per status code "
+      "grove: particle filters (FootSLAM on hexagon grids, landmark FastSLAM, range-only beacon "
+      "tracking) whose particles share persistent maps.\n\n"
+      "Classes: FootSlam, FastSlam, Tracker; errors: GroveError and one subclass per status code "
       "(InvalidArgumentError is also a ValueError). Every failing call raises with the engine's "
       "message and leaves the filter as it was unless the error says otherwise.\n\n"
       "Threads: one filter is used by one thread at a time (a mutex per object serialises the "
@@ -50,7 +50,7 @@ PYBIND11_MODULE(grove, m) {
         "This build: a dict with version, major, minor, patch, commit, compiler, build_type, "
         "simd_targets (compiled in, best first), simd_target (the one this machine runs) and "
         "string (the one-line form).");
-  py::tuple filters = py::make_tuple(BindFootSlam(m), BindFastSlam(m));
+  py::tuple filters = py::make_tuple(BindFootSlam(m), BindFastSlam(m), BindTracker(m));
   m.attr("_filters") = filters;
   // A Python function, so that pickle finds it by name at every protocol (a bound C++ function
   // is pickled through its capsule, which protocols 0 and 1 cannot do).

@@ -9,6 +9,7 @@ namespace grove::python {
 
 const char* BindFootSlam(pybind11::module_& m);  // footslam_module.cc
 const char* BindFastSlam(pybind11::module_& m);  // fastslam_module.cc
+const char* BindTracker(pybind11::module_& m);   // tracker_module.cc
 
 }  // namespace grove::python
 
