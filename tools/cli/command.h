@@ -1,6 +1,6 @@
 // A subcommand of the grove command and what runs it once the command line is parsed, and the
-// command families that add theirs: footslam (footslam_cli.cc), fastslam (fastslam_cli.cc) and
-// bench (bench_cli.cc).
+// command families that add theirs: footslam (footslam_cli.cc), fastslam (fastslam_cli.cc),
+// tracking (tracking_cli.cc) and bench (bench_cli.cc).
 #ifndef GROVE_TOOLS_CLI_COMMAND_H_
 #define GROVE_TOOLS_CLI_COMMAND_H_
 
@@ -35,6 +35,7 @@ inline CLI::App* AddFamily(CLI::App* grove, const char* name, const char* descri
 // Each adds its family and the family's subcommands to `grove`.
 std::vector<Command> AddFootSlamCommands(CLI::App* grove);
 std::vector<Command> AddFastSlamCommands(CLI::App* grove);
+std::vector<Command> AddTrackingCommands(CLI::App* grove);
 std::vector<Command> AddBenchCommands(CLI::App* grove);
 
 }  // namespace grove::tools
