@@ -109,7 +109,7 @@ bool PsdSquareRoot(const Eigen::Matrix<double, N, N>& a, Eigen::Matrix<double, N
 // one map uses the same reading, so no tag is stored):
 //   - covariance (FastSLAM 1.0/2.0, U-FastSLAM): P = [xx xy; xy yy], m^2. Covariance() and
 //     SetCovariance() read and write it; every function below uses this reading.
-//   - square root (the SRCD filters of issue 12): the lower Cholesky factor L of P = L L^T,
+//   - square root (the SRCD filters of Ankışhan et al.): the lower Cholesky factor L of P = L L^T,
 //     L = [xx 0; xy yy], m. CholeskyFactor() and SetCholeskyFactor() read and write it.
 struct Landmark {
   double x_m = 0;

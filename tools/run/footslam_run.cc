@@ -141,7 +141,8 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
         out->Add("mean_trajectory.csv", TrajectoryCsv(engine_->MeanTrajectory())));
     GROVE_RETURN_IF_ERROR(out->Add("smoothed_trajectory.csv", TrajectoryCsv(*smoothed)));
     if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
-    // The smoothed path: the best of the three paths on the simulator's walks (README).
+    // The smoothed path: the best of the three paths on the simulator's walks
+    // (engine/footslam/README.md).
     MapImage image = FootSlamImage(
         config_.hex_radius_m, *cumulative, *smoothed, odometry_.points(),
         fmt::format("FootSLAM, {} particles, {} steps: cumulative map, smoothed path, "
