@@ -3,6 +3,7 @@
 // input, configurations and checkpoints without changing anything.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -82,6 +83,37 @@ TEST(TrackerTest, FollowsATargetAmongFourBeacons) {
   EXPECT_EQ(summary.measurements, 240);
   EXPECT_EQ(summary.steps, 60);
   EXPECT_NE(summary.BriefReport().find("Tracker: 1500 particles"), std::string::npos);
+}
+
+// The bound is derived, not fitted: one update's four ranges alone, each with the configured
+// noise sigma (0.5 m, above the true +-0.5 m uniform noise's 0.29 m), locate the target by least
+// squares with mean squared error sigma^2 trace((H^T H)^-1), H the unit vectors from the beacons
+// to the target. The filter uses those ranges and the motion before them, so its RMS error after
+// the prior is forgotten must stay below that single-update RMS.
+TEST(TrackerTest, TrackingErrorStaysBelowTheSingleUpdateLeastSquaresBound) {
+  const std::vector<Update> track = CircleTrack(120, 0.5);
+  const TrackerConfig config = Small();
+  std::unique_ptr<Tracker> t = Track(config, track);
+  ASSERT_NE(t, nullptr);
+  const std::vector<StampedPose>& mean = t->MeanTrajectory();
+  double error_sq = 0, bound_sq = 0;
+  int n = 0;
+  for (size_t k = 10; k < track.size(); ++k, ++n) {
+    const Update& u = track[k];
+    error_sq += std::pow(mean[k + 1].pose.x_m - u.x, 2) + std::pow(mean[k + 1].pose.y_m - u.y, 2);
+    double a = 0, b = 0, c = 0;  // H^T H = [a b; b c]
+    for (const auto& beacon : kBeacons) {
+      const double d = std::hypot(u.x - beacon[0], u.y - beacon[1]);
+      const double ux = (u.x - beacon[0]) / d, uy = (u.y - beacon[1]) / d;
+      a += ux * ux;
+      b += ux * uy;
+      c += uy * uy;
+    }
+    bound_sq += config.range_sigma_m * config.range_sigma_m * (a + c) / (a * c - b * b);
+  }
+  const double rmse = std::sqrt(error_sq / n), bound = std::sqrt(bound_sq / n);
+  EXPECT_LT(rmse, bound) << "RMS error " << rmse << " m, single-update bound " << bound << " m";
+  EXPECT_GT(bound, 0.4);  // the geometry is as intended: about sigma near the square's centre
 }
 
 TEST(TrackerTest, SameSeedGivesTheSameBitsAtOneAndTwoThreads) {
