@@ -353,7 +353,7 @@ TEST_F(CliTest, SigtermStopsAtAStepBoundaryWithACheckpoint) {
   ExpectSameOutputs(full, out);
 }
 
-// ---- grove footslam batch ----
+// grove footslam batch
 
 size_t Occurrences(const std::string& text, const std::string& what) {
   size_t n = 0;
@@ -498,7 +498,7 @@ TEST_F(CliTest, ABatchStoppedBySigtermResumesWhereItStopped) {
   ExpectSameOutputs(dir_ / "solo", out / "x");
 }
 
-// ---- Reliability, round two (the numbers in the test names' comments) ----
+// Reliability, round two (the numbers in the test names' comments)
 
 // 1: a step file from a pipe is read once, whole.
 TEST_F(CliTest, StepsFromAFifoAreReadWhole) {

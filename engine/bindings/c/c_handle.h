@@ -196,8 +196,8 @@ inline grove_filter_summary FilterSummaryToC(const FilterSummary& s) {
   return out;
 }
 
-// ---- Configurations and handles: config_default, config_from_json, create, create_json,
-// resume, destroy, last_error ----
+// Configurations and handles: config_default, config_from_json, create, create_json,
+// resume, destroy, last_error
 
 template <typename Binding>
 void ConfigDefault(const Binding& b, typename Binding::CStruct* config) {
@@ -292,7 +292,7 @@ const char* LastError(const H* h) noexcept {
   return h == nullptr ? "" : h->error.c_str();
 }
 
-// ---- Calls on a handle ----
+// Calls on a handle
 
 // A stepping call: f(Engine&) -> Status after counting the call (which drops the kept
 // read-outs).
@@ -353,7 +353,7 @@ grove_status Summary(H* h, const char* call, CSummary* summary, Convert&& conver
   return Get(h, call, summary, "summary", [&](auto& e) { return convert(e.Summary()); });
 }
 
-// ---- Arrays under the size-query rule (grove/c_api.h) ----
+// Arrays under the size-query rule (grove/c_api.h)
 
 // Checks (out, capacity, count) before anything is computed.
 template <typename H, typename Out>

@@ -77,7 +77,7 @@
 extern "C" {
 #endif
 
-/* ---- Status and version ---- */
+/* Status and version */
 
 /* Mirrors grove::StatusCode value for value. */
 typedef enum grove_status {
@@ -100,7 +100,7 @@ GROVE_EXPORT const char* grove_version(void);
 /* The library's version numbers; any pointer may be NULL. */
 GROVE_EXPORT void grove_version_numbers(int* major, int* minor, int* patch);
 
-/* ---- Shared value types ---- */
+/* Shared value types */
 
 /* A pose in the map frame at time t_s (seconds). */
 typedef struct grove_pose {
@@ -148,7 +148,7 @@ enum {
   GROVE_RESAMPLING_MULTINOMIAL = 3
 };
 
-/* ---- FootSLAM ---- */
+/* FootSLAM */
 
 typedef struct grove_footslam grove_footslam;
 
@@ -322,7 +322,7 @@ GROVE_EXPORT grove_status grove_footslam_resume(const grove_footslam_config* con
                                                 const void* data, size_t size, grove_footslam** out,
                                                 char* error, size_t error_size);
 
-/* ---- Landmark FastSLAM ---- */
+/* Landmark FastSLAM */
 
 typedef struct grove_fastslam grove_fastslam;
 
@@ -481,7 +481,7 @@ GROVE_EXPORT grove_status grove_fastslam_resume(const grove_fastslam_config* con
                                                 const void* data, size_t size, grove_fastslam** out,
                                                 char* error, size_t error_size);
 
-/* ---- Range-only beacon tracking (grove/tracking.h) ---- */
+/* Range-only beacon tracking (grove/tracking.h) */
 
 typedef struct grove_tracker grove_tracker;
 

@@ -117,7 +117,7 @@ struct GROVE_EXPORT FastSlamConfig : FilterConfig {
     batch = 64;
   }
 
-  // ---- Options that change results ----
+  // Options that change results
 
   // The filter. Default: kFastSlam2.
   FastSlamFilter filter = FastSlamFilter::kFastSlam2;
@@ -145,7 +145,7 @@ struct GROVE_EXPORT FastSlamConfig : FilterConfig {
   double start_y_m = 0;
   double start_heading_rad = 0;
 
-  // ---- The seed's family (filter kUnscented ... kDeSrcd) ----
+  // The seed's family (filter kUnscented ... kDeSrcd)
 
   // U-FastSLAM's scaled unscented transform. Ranges: alpha (0, 10], beta [0, 100],
   // kappa (-4, 100]. Defaults: Kim's 0.9, 2, 0.
@@ -163,7 +163,7 @@ struct GROVE_EXPORT FastSlamConfig : FilterConfig {
   double de_crossover = 0.8;
   int64_t de_generations = 10;
 
-  // ---- Unknown data association (association != kKnown) ----
+  // Unknown data association (association != kKnown)
 
   // Default: kKnown.
   FastSlamAssociation association = FastSlamAssociation::kKnown;
@@ -310,7 +310,7 @@ class GROVE_EXPORT FastSlam {
   // Walks every shared map node and path entry and checks its reference count (tests).
   Status CheckInvariants() const;
 
-  // ---- Checkpoints (as FootSlam's) ----
+  // Checkpoints (as FootSlam's)
   StatusOr<std::string> Checkpoint(std::string_view user_data = {}) const;
   static StatusOr<std::unique_ptr<FastSlam>> Resume(const FastSlamConfig& config,
                                                     std::string_view checkpoint,

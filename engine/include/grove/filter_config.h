@@ -32,7 +32,7 @@ namespace grove {
 // particles, resample_threshold and batch in its constructor (FootSlamConfig: 30,000 particles,
 // FastSlamConfig: 100 particles, resampling at ESS / N < 0.75).
 struct FilterConfig {
-  // ---- Options that change results ----
+  // Options that change results
 
   // Number of particles. Range: 1..2^31. Default: 1000 (a model's configuration sets its own).
   int64_t particles = 1000;
@@ -43,7 +43,7 @@ struct FilterConfig {
   // Resample when ESS / N < threshold. Range: (0, 1]; 1 resamples every step. Default: 0.5.
   double resample_threshold = 0.5;
 
-  // ---- Options that change only speed ----
+  // Options that change only speed
 
   // Worker threads. 0 means one per hardware thread. Range: 0..256 (more threads than cores
   // only add overhead; oneTBB runs at most as many as the process may use). Default: 0.

@@ -75,7 +75,7 @@ enum class FootSlamGrid {
 struct GROVE_EXPORT FootSlamConfig : FilterConfig, IslandConfig {
   FootSlamConfig() { particles = 30000; }
 
-  // ---- Options that change results ----
+  // Options that change results
 
   // Circumradius of the pointy-top hexagons, metres. Range: (0, 1000]. Default: 0.5.
   double hex_radius_m = 0.5;
@@ -268,7 +268,7 @@ class GROVE_EXPORT FootSlam {
   // state); for tests and debugging.
   Status CheckInvariants() const;
 
-  // ---- Checkpoints ----
+  // Checkpoints
 
   // The whole state after the last step as the bytes of a checkpoint file (format in
   // tools/io/FORMATS.md, "Checkpoints"): every particle's pose, error states, weight, map and path,

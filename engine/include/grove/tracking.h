@@ -43,7 +43,7 @@ namespace grove {
 struct GROVE_EXPORT TrackerConfig : FilterConfig {
   TrackerConfig() { particles = 2000; }
 
-  // ---- Options that change results ----
+  // Options that change results
 
   // The prior: position and velocity at the start, metres and m/s. Range: |position| <= 1e9,
   // |velocity| <= 1e6. Default: at rest at the origin.
