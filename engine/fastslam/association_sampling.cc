@@ -5,8 +5,8 @@
 
 namespace grove::fastslam {
 
-void SampleDecisions(std::span<Match> matches, size_t detections, double log_p0,
-                     RandomStream* rs, std::vector<Decision>* out, double* log_correction) {
+void SampleDecisions(std::span<Match> matches, size_t detections, double log_p0, RandomStream* rs,
+                     std::vector<Decision>* out, double* log_correction) {
   std::sort(matches.begin(), matches.end(), [](const Match& a, const Match& b) {
     return a.detection != b.detection ? a.detection < b.detection : a.key < b.key;
   });

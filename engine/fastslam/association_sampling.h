@@ -36,8 +36,8 @@ namespace grove::fastslam {
 // d2 <= augment_gate, in any order; reordered by detection and key), each kAssociated or kNew;
 // *log_correction gets the sum over detections of log T - log L_drawn (see above). `rs` gives
 // one uniform per detection.
-void SampleDecisions(std::span<Match> matches, size_t detections, double log_p0,
-                     RandomStream* rs, std::vector<Decision>* out, double* log_correction);
+void SampleDecisions(std::span<Match> matches, size_t detections, double log_p0, RandomStream* rs,
+                     std::vector<Decision>* out, double* log_correction);
 
 }  // namespace grove::fastslam
 
