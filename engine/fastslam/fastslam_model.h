@@ -505,13 +505,13 @@ class FastSlamModel {
       // Nothing to weigh or draw; the evidence of what is in view still falls.
       if (!association_.evidence()) return Status::Ok();
       for (size_t i = begin; i < end; ++i) {
-        GROVE_RETURN_IF_ERROR(DecideScan(scan, i, &sc));
+        GROVE_RETURN_IF_ERROR(DecideScan(scan, step, i, &sc));
         GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
       }
       return Status::Ok();
     }
     for (size_t i = begin; i < end; ++i) {
-      GROVE_RETURN_IF_ERROR(DecideScan(scan, i, &sc));
+      GROVE_RETURN_IF_ERROR(DecideScan(scan, step, i, &sc));
       double lw = 0;
       Eigen::Vector3d mu = ToVector(poses_.pose(i));
       Eigen::Matrix3d sigma = steps_.Stored(poses_.cov(i));
@@ -543,14 +543,15 @@ class FastSlamModel {
         GROVE_RETURN_IF_ERROR(DrawAndWeigh(scan, step, i, &sc.decisions, mu, sigma, &lw));
         GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
       }
+      if (association_.sampled()) lw += sc.log_correction;
       log_w[i] += lw;
     }
     return Status::Ok();
   }
 
   // Unknown association: particle i's query and decisions from its pose now, into sc.
-  Status DecideScan(const ScanStep& scan, size_t i, Scratch* sc) const {
-    return association_.DecideScan(trie_, maps_[i], scan, i, poses_.pose(i), sc);
+  Status DecideScan(const ScanStep& scan, uint64_t step, size_t i, Scratch* sc) const {
+    return association_.DecideScan(trie_, maps_[i], scan, step, i, poses_.pose(i), sc);
   }
   // Unknown association: applies particle i's decisions in sc from its pose now.
   Status ApplyScan(const ScanStep& scan, size_t i, int slot, Scratch* sc) {
