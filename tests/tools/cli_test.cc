@@ -1050,8 +1050,8 @@ TEST_F(CliTest, AMistypedOptionOrCommandGetsTheNearestSuggested) {
   o = Grove("footslam");
   EXPECT_EQ(o.exit_code, 2) << o.err;
   EXPECT_EQ(o.err,
-            "grove: error: footslam: a command is required: run, batch, simulate, evaluate or "
-            "render\n");
+            "grove: error: footslam: a command is required: run, steps, batch, simulate, evaluate "
+            "or render\n");
   EXPECT_FALSE(fs::exists(dir_ / "mc"));
   EXPECT_FALSE(fs::exists(dir_ / "b"));
 }
