@@ -229,6 +229,7 @@ class FootImu::Impl {
       return;
     }
     const imu::StepDelta d = filter_.SinceClone();
+    if (std::hypot(d.position.x(), d.position.y()) < config_.min_step_m) return;
     FootStep step;
     step.t_s = mid_s;
     step.dx_m = d.position.x();

@@ -33,6 +33,8 @@ const std::vector<ConfigField<FootImuConfig>>& FootImuConfigFields() {
                    "Moving runs this short between still samples are still"),
       IntegerField("min_stance_samples", &C::min_stance_samples, 1, 100000, kChangesResults,
                    "Still samples a stance needs to end a step"),
+      RealField("min_step_m", &C::min_step_m, I::Closed(0, 10), kChangesResults,
+                "Stances closer than this to the previous step's end do not end a step, metres"),
       RealField("accel_noise_mps2_per_sqrt_hz", &C::accel_noise_mps2_per_sqrt_hz, I::Closed(0, 100),
                 kChangesResults, "Filter: accelerometer noise density, m/s^2/sqrt(Hz)"),
       RealField("gyro_noise_radps_per_sqrt_hz", &C::gyro_noise_radps_per_sqrt_hz, I::Closed(0, 10),
@@ -95,11 +97,11 @@ double FootImuConfig::Threshold() const {
     case ZeroVelocityDetector::kShoe:
       return 3e4;
     case ZeroVelocityDetector::kAre:
-      return 1e4;
+      return 3e4;
     case ZeroVelocityDetector::kMv:
-      return 500;
+      return 50;
     case ZeroVelocityDetector::kMag:
-      return 300;
+      return 100;
   }
   return 3e4;
 }

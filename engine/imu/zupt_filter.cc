@@ -123,24 +123,29 @@ void ZuptFilter::Propagate(const Eigen::Vector3d& accel0, const Eigen::Vector3d&
   p.block<3, 3>(kBg, kBg).diagonal().array() += noise_.gyro_bias * noise_.gyro_bias * dt;
 }
 
-void ZuptFilter::Update3(int first, const Eigen::Vector3d& y, double r) {
+bool ZuptFilter::Update3(int first, const Eigen::Vector3d& y, double r, double gate) {
   Covariance& p = p_cov_;
   Eigen::Matrix3d s = p.block<3, 3>(first, first);
   s.diagonal().array() += r;
-  const Eigen::Matrix<double, kStates, 3> k =
-      p.middleCols<3>(first) * s.llt().solve(Eigen::Matrix3d::Identity());
+  const Eigen::Matrix3d s_inv = s.llt().solve(Eigen::Matrix3d::Identity());
+  if (gate > 0 && y.dot(s_inv * y) > gate) return false;
+  const Eigen::Matrix<double, kStates, 3> k = p.middleCols<3>(first) * s_inv;
   const Eigen::Matrix<double, 3, kStates> hp = p.middleRows<3>(first);
   p.noalias() -= k * hp;
   p = 0.5 * (p + p.transpose()).eval();
   Inject(k * y);
+  return true;
 }
 
 // Still, 0 = v + dv: -v measures the velocity error dv.
-void ZuptFilter::UpdateZeroVelocity(double sigma) { Update3(kV, -v_, sigma * sigma); }
+void ZuptFilter::UpdateZeroVelocity(double sigma) { Update3(kV, -v_, sigma * sigma, 0); }
 
-void ZuptFilter::UpdateZeroAngularRate(const Eigen::Vector3d& gyro, double sigma) {
-  // Still, the raw rate is the bias plus noise: gyro - bg measures the bias error dbg.
-  Update3(kBg, gyro - bg_, sigma * sigma);
+bool ZuptFilter::UpdateZeroAngularRate(const Eigen::Vector3d& gyro, double sigma) {
+  // Still, the raw rate is the bias plus noise: gyro - bg measures the bias error dbg. A foot
+  // that rolls while its velocity is zero is not still in rate: such samples fail the gate
+  // (chi-square, 3 degrees of freedom, 0.1 %) and are skipped.
+  constexpr double kGate = 16.27;
+  return Update3(kBg, gyro - bg_, sigma * sigma, kGate);
 }
 
 void ZuptFilter::Inject(const Eigen::Matrix<double, kStates, 1>& dx) {

@@ -68,9 +68,11 @@ class ZuptFilter {
   // dt seconds: trapezoidal rates with a coning term, trapezoidal specific force and velocity.
   void Propagate(const Eigen::Vector3d& accel0, const Eigen::Vector3d& gyro0,
                  const Eigen::Vector3d& accel1, const Eigen::Vector3d& gyro1, double dt);
-  // Velocity is zero (m/s sigma); the angular rate `gyro` (raw) is zero (rad/s sigma).
+  // Velocity is zero (m/s sigma).
   void UpdateZeroVelocity(double sigma);
-  void UpdateZeroAngularRate(const Eigen::Vector3d& gyro, double sigma);
+  // The angular rate `gyro` (raw) is zero (rad/s sigma); false, nothing changed, when the
+  // innovation fails the gate.
+  bool UpdateZeroAngularRate(const Eigen::Vector3d& gyro, double sigma);
 
   // Clones position and heading: the start of the next step.
   void Clone();
@@ -90,8 +92,9 @@ class ZuptFilter {
   // The 1 x 3 derivative of heading with respect to the attitude error.
   Eigen::RowVector3d HeadingJacobian() const;
   // Kalman update with a 3-row measurement of the states at `first` (selection matrix), the
-  // innovation `y` and noise variance `r`.
-  void Update3(int first, const Eigen::Vector3d& y, double r);
+  // innovation `y` and noise variance `r`; refused (false) when the normalised innovation
+  // squared exceeds `gate` > 0.
+  bool Update3(int first, const Eigen::Vector3d& y, double r, double gate);
 
   FilterNoise noise_;
   double gravity_;

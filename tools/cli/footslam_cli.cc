@@ -128,6 +128,8 @@ class FootSlamStepsCli {
         "PyShoe MAT");
     imu_->imu_option()->required();
     AddPath(app, "--out", &options_.out_path, "Step file to write")->required();
+    AddPath(app, "--stances", &options_.stances_path,
+            "Also write the stance that ends each step: t,begin,end (seconds)");
     app->add_flag("--print-config", print_config_,
                   "Print the effective foot IMU configuration and exit");
     app->add_flag("--no-progress", no_progress_, "No summary on stderr");

@@ -38,6 +38,15 @@ int FootImuStepsCommand(const FootImuConfig& config, const FootImuStepsOptions& 
   if (Status s = WriteFileAtomically(options.out_path, FootStepsCsv(steps)); !s.ok()) {
     return Fail(kExitOutput, s.message());
   }
+  if (!options.stances_path.empty()) {
+    std::string text = "t,begin,end\n";
+    for (const FootStep& s : steps) {
+      text += fmt::format("{},{},{}\n", s.t_s, s.stance_begin_s, s.stance_end_s);
+    }
+    if (Status s = WriteFileAtomically(options.stances_path, text); !s.ok()) {
+      return Fail(kExitOutput, s.message());
+    }
+  }
   if (options.progress) {
     const FootImuSummary summary = source->Summary();
     std::fprintf(stderr, "%s\n", summary.BriefReport().c_str());

@@ -16,7 +16,8 @@ namespace grove::tools {
 
 struct FootImuStepsOptions {
   std::string imu_path;
-  std::string out_path;  // the step file
+  std::string out_path;      // the step file
+  std::string stances_path;  // the stance of each step: t,begin,end (empty: none)
   ImuReaderOptions reader;
   bool progress = true;  // the summary on stderr
 };

@@ -29,21 +29,27 @@ double Ease(double s) { return s * s * s * (10 + s * (-15 + 6 * s)); }
 double EaseD1(double s) { return 30 * s * s * (1 - s) * (1 - s); }
 double EaseD2(double s) { return 60 * s * (1 - s) * (1 - 2 * s); }
 
-// A bump on [0, 1]: 0 at the ends with two derivatives, 1 at the middle.
-double Bump(double u) {
-  if (u <= 0 || u >= 1) return 0;
-  const double w = u * (1 - u);
-  return 64 * w * w * w;
+// The pitch lobes over the swing, c s^3 (1 - s)^5 (toe off, peak 1 at s = 3/8) and its mirror
+// (heel strike, peak at 5/8): the foot turns toes down, then quickly through level to toes up,
+// the rate rising from the stance as s^2 (the angular acceleration continuous).
+constexpr double kLobeScale = 1.0 / (27.0 / 512 * 3125.0 / 32768);  // 1 / max of s^3 (1 - s)^5
+double Lobe(double s) {
+  if (s <= 0 || s >= 1) return 0;
+  const double v = 1 - s;
+  return kLobeScale * s * s * s * v * v * v * v * v;
 }
-double BumpD1(double u) {
-  if (u <= 0 || u >= 1) return 0;
-  const double w = u * (1 - u);
-  return 192 * w * w * (1 - 2 * u);
+double LobeD1(double s) {
+  if (s <= 0 || s >= 1) return 0;
+  const double v = 1 - s;
+  return kLobeScale * s * s * v * v * v * v * (3 * v - 5 * s);
 }
-double BumpD2(double u) {
-  if (u <= 0 || u >= 1) return 0;
-  const double w = u * (1 - u);
-  return 384 * w * ((1 - 2 * u) * (1 - 2 * u) - w);
+
+// The height bump on [0, 1]: 64 (s (1 - s))^3, 0 at the ends with two derivatives, 1 at the
+// middle.
+double BumpD2(double s) {
+  if (s <= 0 || s >= 1) return 0;
+  const double w = s * (1 - s);
+  return 384 * w * ((1 - 2 * s) * (1 - 2 * s) - w);
 }
 
 // The foot's pose and its derivatives at one instant, in the truth frame.
@@ -64,14 +70,9 @@ FootMotion SwingMotion(const TrueStance& a, const TrueStance& b, const GaitModel
   const double dy = b.y_m - a.y_m;
   const double e2 = EaseD2(s) / (d * d);
   m.accel = {dx * e2, dy * e2, gait.clearance_m * BumpD2(s) / (d * d)};
-  // Toes down after toe off (the first 60 % of the swing), toes up before heel strike (the last
-  // 60 %).
-  constexpr double kSpan = 0.6;
-  const double u1 = s / kSpan;
-  const double u2 = (s - (1 - kSpan)) / kSpan;
-  m.pitch = gait.toe_off_pitch_rad * Bump(u1) - gait.heel_strike_pitch_rad * Bump(u2);
+  m.pitch = gait.toe_off_pitch_rad * Lobe(s) - gait.heel_strike_pitch_rad * Lobe(1 - s);
   m.pitch_rate =
-      (gait.toe_off_pitch_rad * BumpD1(u1) - gait.heel_strike_pitch_rad * BumpD1(u2)) / (kSpan * d);
+      (gait.toe_off_pitch_rad * LobeD1(s) + gait.heel_strike_pitch_rad * LobeD1(1 - s)) / d;
   m.heading = a.heading_rad + (b.heading_rad - a.heading_rad) * Ease(s);
   m.heading_rate = (b.heading_rad - a.heading_rad) * EaseD1(s) / d;
   return m;

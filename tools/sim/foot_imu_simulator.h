@@ -6,11 +6,11 @@
 // stride is two of the walker's steps; the other foot takes the steps between). At each landing
 // the foot is flat and still for stance_fraction of the mean stride period, centred on the true
 // time; the walk starts and ends with rest_s of stillness. In a swing the foot moves along the
-// straight line between its stances with the minimum-jerk time profile (zero velocity and
-// acceleration at both ends), rises by clearance_m, pitches toes down by
-// toe_off_pitch_rad after leaving the ground and toes up by heel_strike_pitch_rad before
-// landing, and turns from one stance's heading to the next (each stance faces along the path
-// there). No impact transients: every signal is smooth.
+// straight line between its stances (velocity, acceleration and jerk zero at both ends), rises
+// by clearance_m, pitches toes down by toe_off_pitch_rad after leaving the ground, turns quickly
+// through level to toes up by heel_strike_pitch_rad before landing, and turns from one stance's
+// heading to the next (each stance faces along the path there). No impact transients: every
+// signal is smooth, so that an ideal sensor's samples integrate to the true path.
 //
 // Frames. The sensor frame is the foot's: x forward (towards the toes), y left, z up; it
 // measures specific force (0, 0, +g) when still and level. The truth frame is the walk's, z up.

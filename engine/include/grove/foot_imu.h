@@ -61,8 +61,9 @@ struct GROVE_EXPORT FootImuConfig {
   // Samples in the detector's window, centred on the sample decided (one more after it than
   // before it when even). Range: 1..1001. Default: 5.
   int detector_window = 5;
-  // The detector's threshold on T. 0: the detector's own default (SHOE 3e4, ARE 1e4, MV 500,
-  // MAG 300; engine/imu/README.md says how they were chosen). Range: >= 0. Default: 0.
+  // The detector's threshold on T. 0: the detector's own default (SHOE 3e4, as OpenShoe's;
+  // ARE 3e4, MV 50, MAG 100: engine/imu/README.md says how they were chosen). Range: >= 0.
+  // Default: 0.
   double detector_threshold = 0;
   // sigma_a and sigma_w of the statistics (OpenShoe's values). Range: (0, 100] and (0, 10].
   // Defaults: 0.01 m/s^2 and 0.1 deg/s.
@@ -74,6 +75,10 @@ struct GROVE_EXPORT FootImuConfig {
   // A run of still samples ends a step only when it is at least this long; shorter runs still
   // get zero-velocity updates. Range: 1..100000. Default: 5.
   int min_stance_samples = 5;
+  // A stance less than this far (horizontally) from the previous step's end does not end a
+  // step: the foot twitched within one stance, and the walk on from there joins the next step.
+  // Range: [0, 10] m. Default: 0.15.
+  double min_step_m = 0.15;
 
   // Error-state Kalman filter. Process noise as densities (the sensor's white noise, raised to
   // cover what the model leaves out: impacts, vibration, a foot that is not quite still).
@@ -95,8 +100,8 @@ struct GROVE_EXPORT FootImuConfig {
   // Initial alignment, from the first stance: the first run of still samples lasting
   // alignment_s sets roll and pitch from the mean specific force and the gyroscope biases to
   // the mean angular rate; heading is alignment_heading_rad. Samples before it are skipped.
-  // Range: (0, 3600] s. Default: 0.2.
-  double alignment_s = 0.2;
+  // Range: (0, 3600] s. Default: 0.5.
+  double alignment_s = 0.5;
   // Heading of the sensor's x axis at the alignment, radians counter-clockwise from the
   // odometry frame's x axis. Range: [-10, 10]. Default: 0.
   double alignment_heading_rad = 0;
