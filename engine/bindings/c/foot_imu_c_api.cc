@@ -1,7 +1,5 @@
 // The C API of the foot IMU front end (grove/c_api_foot_imu.h) over grove::FootImu. As in
 // c_api.cc, every entry point catches everything: no exception crosses into C.
-#include "grove/c_api_foot_imu.h"
-
 #include <algorithm>
 #include <cstring>
 #include <exception>
@@ -13,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "grove/c_api_foot_imu.h"
 #include "grove/config_json.h"
 #include "grove/foot_imu.h"
 #include "grove/status.h"
@@ -189,7 +188,7 @@ void grove_foot_imu_config_default(grove_foot_imu_config* config) {
 }
 
 grove_status grove_foot_imu_config_from_json(const char* json, grove_foot_imu_config* config,
-                                              char* error, size_t error_size) {
+                                             char* error, size_t error_size) {
   return Guard(nullptr, error, error_size, [&]() -> grove::Status {
     if (config == nullptr) return grove::InvalidArgumentError("config is NULL");
     grove::FootImuConfig c = ToCpp(*config);
@@ -263,13 +262,13 @@ grove_status grove_foot_imu_finish(grove_foot_imu* imu) {
   });
 }
 
-grove_status grove_foot_imu_take_steps(grove_foot_imu* imu, grove_foot_step* out,
-                                       size_t capacity, size_t* count) {
+grove_status grove_foot_imu_take_steps(grove_foot_imu* imu, grove_foot_step* out, size_t capacity,
+                                       size_t* count) {
   return OnHandle(imu, [&]() -> grove::Status {
     if (count == nullptr) return grove::InvalidArgumentError("count is NULL");
     if (out == nullptr && capacity != 0) {
-      return grove::InvalidArgumentError("out is NULL but capacity is " +
-                                         std::to_string(capacity) + " (a size query passes 0)");
+      return grove::InvalidArgumentError("out is NULL but capacity is " + std::to_string(capacity) +
+                                         " (a size query passes 0)");
     }
     *count = imu->pending.size();
     if (out == nullptr) return grove::Status::Ok();

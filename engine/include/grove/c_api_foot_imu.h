@@ -164,7 +164,7 @@ GROVE_EXPORT grove_status grove_foot_imu_take_steps(grove_foot_imu* imu, grove_f
                                                     size_t capacity, size_t* count);
 GROVE_EXPORT grove_status grove_foot_imu_get_state(grove_foot_imu* imu, grove_foot_imu_state* out);
 GROVE_EXPORT grove_status grove_foot_imu_get_summary(grove_foot_imu* imu,
-                                                 grove_foot_imu_summary* out);
+                                                     grove_foot_imu_summary* out);
 
 #ifdef __cplusplus
 }
