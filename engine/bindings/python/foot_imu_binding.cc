@@ -35,11 +35,19 @@ void ThrowIfError(const Status& status, const std::string& context = "") {
 }
 
 // The columns of take_steps()'s array.
-const char* const kStepColumns[] = {
-    "t",      "dx",        "dy",     "dz",
-    "dheading", "var_dx",  "cov_dx_dy", "var_dy",
-    "cov_dx_dheading", "cov_dy_dheading", "var_dheading", "stance_begin",
-    "stance_end"};
+const char* const kStepColumns[] = {"t",
+                                    "dx",
+                                    "dy",
+                                    "dz",
+                                    "dheading",
+                                    "var_dx",
+                                    "cov_dx_dy",
+                                    "var_dy",
+                                    "cov_dx_dheading",
+                                    "cov_dy_dheading",
+                                    "var_dheading",
+                                    "stance_begin",
+                                    "stance_end"};
 constexpr py::ssize_t kStepColumnCount = sizeof(kStepColumns) / sizeof(kStepColumns[0]);
 
 FootImuConfig MakeConfig(const py::object& config, const py::kwargs& kwargs) {
@@ -64,7 +72,8 @@ FootImuConfig MakeConfig(const py::object& config, const py::kwargs& kwargs) {
     text = py::cast<std::string>(dumps(merged));
   } catch (py::error_already_set& e) {
     if (!e.matches(PyExc_TypeError) && !e.matches(PyExc_ValueError)) throw;
-    ThrowIfError(InvalidArgumentError(std::string("config: ") + py::str(e.value()).cast<std::string>()));
+    ThrowIfError(
+        InvalidArgumentError(std::string("config: ") + py::str(e.value()).cast<std::string>()));
   }
   FootImuConfig result;
   ThrowIfError(ApplyConfigJson(FootImuConfigFields(), "config", text, &result));
@@ -218,9 +227,8 @@ void BindFootImu(py::module_& m, RaiseStatusFn raise) {
           "a time not after the previous or more than max_sample_interval_s after it; the rows "
           "before it are taken. FailedPreconditionError after finish().")
       .def(
-          "finish", [](const PyFootImu& f) { ThrowIfError(f.Locked([](FootImu& e) {
-                      return e.Finish();
-                    })); },
+          "finish",
+          [](const PyFootImu& f) { ThrowIfError(f.Locked([](FootImu& e) { return e.Finish(); })); },
           "The end of the recording: decides the samples the detector held back and ends a "
           "stance still open as a step.")
       .def(
@@ -231,22 +239,24 @@ void BindFootImu(py::module_& m, RaiseStatusFn raise) {
           "The steps finished since the last call, oldest first: a new float64 array of shape "
           "(n, 13), columns STEP_COLUMNS (s, m, rad; the covariance of dx, dy, dheading).")
       .def(
-          "state", [](const PyFootImu& f) { return StateDict(f.Locked([](FootImu& e) {
-                     return e.State();
-                   })); },
+          "state",
+          [](const PyFootImu& f) {
+            return StateDict(f.Locked([](FootImu& e) { return e.State(); }));
+          },
           "The navigation state after the last sample the filter processed: a dict (t, "
           "position, velocity, roll, pitch, heading, accel_bias, gyro_bias, still).")
       .def(
-          "summary", [](const PyFootImu& f) { return SummaryDict(f.Locked([](FootImu& e) {
-                       return e.Summary();
-                     })); },
+          "summary",
+          [](const PyFootImu& f) {
+            return SummaryDict(f.Locked([](FootImu& e) { return e.Summary(); }));
+          },
           "What the run read and found: a dict (samples, still_samples, stances, steps, "
           "distance, origin_t, gravity, seconds, report, ...).")
       .def_property_readonly(
           "config",
-          [](const PyFootImu& f) { return ConfigDict(f.Locked([](FootImu& e) {
-                                     return e.config();
-                                   })); },
+          [](const PyFootImu& f) {
+            return ConfigDict(f.Locked([](FootImu& e) { return e.config(); }));
+          },
           "The configuration in use, every key.");
   m.def(
       "foot_imu_steps",
