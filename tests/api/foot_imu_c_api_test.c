@@ -7,24 +7,9 @@
 #include <string.h>
 
 #include "grove/c_api_foot_imu.h"
+#include "tests/api/c_checks.h"
 
-#define CHECK(cond)                                                            \
-  do {                                                                         \
-    if (!(cond)) {                                                             \
-      fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
-      exit(1);                                                                 \
-    }                                                                          \
-  } while (0)
-
-#define CHECK_STATUS(call, expected, message)                                                 \
-  do {                                                                                        \
-    grove_status status_ = (call);                                                            \
-    if (status_ != (expected)) {                                                              \
-      fprintf(stderr, "%s:%d: %s returned %s, expected %s (%s)\n", __FILE__, __LINE__, #call, \
-              grove_status_name(status_), grove_status_name(expected), (message));            \
-      exit(1);                                                                                \
-    }                                                                                         \
-  } while (0)
+#define CHECK_STATUS(call, expected, message) CHECK_STATUS_MSG(call, expected, message)
 #define CHECK_IMU(h, call, expected) CHECK_STATUS(call, expected, grove_foot_imu_last_error(h))
 
 enum { kRateHz = 200, kSteps = 6 };

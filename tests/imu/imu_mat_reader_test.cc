@@ -22,7 +22,7 @@ std::vector<std::pair<std::string, MatMatrix>> Recording(int n) {
   MatMatrix imu{static_cast<size_t>(n), 6, std::vector<double>(6 * static_cast<size_t>(n), 0.0)};
   for (int k = 0; k < n; ++k) {
     ts.values.push_back(0.005 * k);
-    imu.values[k + 2 * n] = 9.8;       // az
+    imu.values[k + 2 * n] = 9.8;        // az
     imu.values[k + 3 * n] = 0.001 * k;  // gx
   }
   return {{"ts", ts}, {"imu", imu}, {"gt", MatMatrix{1, 1, {0.0}}}};
