@@ -16,7 +16,7 @@ shift || true
 packages=(cmake g++ make pkg-config libtbb-dev libeigen3-dev libjemalloc-dev libgtest-dev
   libbenchmark-dev libcli11-dev libfmt-dev nlohmann-json3-dev librandom123-dev libcairo2-dev
   zlib1g-dev libboost-dev gnuplot-nox libhwy-dev pybind11-dev python3-dev python3-numpy
-  python3-matplotlib libopenmpi-dev openmpi-bin)
+  python3-matplotlib libopenmpi-dev openmpi-bin libmatio-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1107,6 +1107,10 @@ py::dict VersionDict() {
 }
 
 }  // namespace
+
+// grove.FootImu (foot_imu_binding.cc); `raise` raises a status as the module's exception.
+void BindFootImu(py::module_& m, void (*raise)(const Status& status, const std::string& context));
+
 }  // namespace grove::python
 
 PYBIND11_MODULE(grove, m) {
@@ -1115,7 +1119,8 @@ PYBIND11_MODULE(grove, m) {
   m.doc() =
       "grove: particle-filter SLAM (FootSLAM on hexagon grids, landmark FastSLAM) whose particles "
       "share persistent maps.\n\n"
-      "Classes: FootSlam, FastSlam; errors: GroveError and one subclass per status code "
+      "Classes: FootSlam, FastSlam, FootImu (foot IMU samples to steps); errors: GroveError and "
+      "one subclass per status code "
       "(InvalidArgumentError is also a ValueError). Every failing call raises with the engine's "
       "message and leaves the filter as it was unless the error says otherwise.\n\n"
       "Threads: one filter is used by one thread at a time (a mutex per object serialises the "
@@ -1137,6 +1142,8 @@ PYBIND11_MODULE(grove, m) {
         "string (the one-line form).");
   BindFootSlam(m);
   BindFastSlam(m);
+  BindFootImu(
+      m, [](const grove::Status& status, const std::string& context) { Raise(status, context); });
   // A Python function, so that pickle finds it by name at every protocol (a bound C++ function
   // is pickled through its capsule, which protocols 0 and 1 cannot do).
   m.def(
@@ -1163,6 +1170,7 @@ def _refuse_when_initialised(cls, name):
     guarded.__doc__ = original.__doc__
     setattr(cls, name, guarded)
 
+_refuse_when_initialised(FootImu, "__init__")
 for _cls in (FootSlam, FastSlam):
     _refuse_when_initialised(_cls, "__init__")
     _refuse_when_initialised(_cls, "__setstate__")
