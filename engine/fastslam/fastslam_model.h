@@ -121,6 +121,9 @@ class FastSlamModel {
   // The prediction of particles [begin, end) over control c (FilterSteps::PredictPose() redoes
   // one of them).
   Status Predict(const ControlStep& c, uint64_t step, size_t begin, size_t end, int slot) {
+    if (traits().pose == FilterTraits::Pose::kSampledMotion) {
+      return PredictSampled(c, step, begin, end, slot);
+    }
     const bool ekf = traits().pose == FilterTraits::Pose::kEkf;
     const bool sigma_points = traits().draws_every_scan();
     const VehicleGeometry& geometry = steps_.geometry();
@@ -134,15 +137,9 @@ class FastSlamModel {
       shared = ControlTermsOf(geometry, c.v_mps, c.steer_rad, c.dt_s);
       turn = HeadingUnit{std::cos(shared.turn_rad), std::sin(shared.turn_rad)};
     }
+    if (segment_start_) GROVE_RETURN_IF_ERROR(StartSegments(step, begin, end, slot));
     for (size_t i = begin; i < end; ++i) {
       const VehiclePose p = poses_.pose(i);
-      if (segment_start_) {
-        SegmentStart s{p.x_m, p.y_m, p.heading_rad, static_cast<uint32_t>(first_ + i), 0};
-        SegmentHistory::Node* node =
-            history_.Append(paths_[i], static_cast<uint32_t>(step), s, slot);
-        if (node == nullptr) return NoMemoryError(first_ + i, "path");
-        paths_[i] = node;
-      }
       VehiclePose next;
       if (sigma_points) {
         Eigen::Vector3d mean = ToVector(p);
@@ -152,25 +149,16 @@ class FastSlamModel {
         next = ToPose(mean);
         poses_.cov(i) = steps_.Store(m);
       } else {
-        ControlTerms own;
-        if (!ekf && !steps_.NoisyTerms(c, step, static_cast<uint32_t>(first_ + i), &own)) {
-          return BadSteering(i);
-        }
-        const ControlTerms& u = ekf ? shared : own;
         StepTrig trig;
-        next = MoveVehicle(geometry, u, p, &trig);
-        if (ekf) {
-          Eigen::Matrix3d gv;
-          Eigen::Matrix<double, 3, 2> gu;
-          VehicleJacobians(geometry, u, trig, &gv, &gu);
-          steps_.PropagateCovariance(gv, gu, &poses_.cov(i));
-        }
+        next = MoveVehicle(geometry, shared, p, &trig);
+        Eigen::Matrix3d gv;
+        Eigen::Matrix<double, 3, 2> gu;
+        VehicleJacobians(geometry, shared, trig, &gv, &gu);
+        steps_.PropagateCovariance(gv, gu, &poses_.cov(i));
       }
       if (!std::isfinite(next.x_m) || !std::isfinite(next.y_m) ||
           !std::isfinite(next.heading_rad)) {
-        return FailedPreconditionError(fmt::format("particle {}'s pose ({}, {}, {}) is not finite",
-                                                   first_ + i, next.x_m, next.y_m,
-                                                   next.heading_rad));
+        return PoseNotFinite(i, next);
       }
       poses_.pose(i) = next;
       if (ekf) {
@@ -436,6 +424,35 @@ class FastSlamModel {
       }
     }
     return Status::Ok();
+  }
+
+  // FastSLAM 1.0's Predict(): every particle of [begin, end) at once (MoveSampled()).
+  Status PredictSampled(const ControlStep& c, uint64_t step, size_t begin, size_t end, int slot) {
+    if (segment_start_) GROVE_RETURN_IF_ERROR(StartSegments(step, begin, end, slot));
+    const MotionResult r =
+        steps_.PredictSampled(c, step, static_cast<uint32_t>(first_ + begin), segment_start_,
+                              &poses_.pose(begin), &poses_.unit(begin), end - begin);
+    if (r.first_failed == end - begin) return Status::Ok();
+    const size_t i = begin + r.first_failed;
+    if (r.why == MotionFailure::kSteering) return BadSteering(i);
+    return PoseNotFinite(i, poses_.pose(i));
+  }
+
+  // Particles [begin, end) start a path segment at `step` from their poses now.
+  Status StartSegments(uint64_t step, size_t begin, size_t end, int slot) {
+    for (size_t i = begin; i < end; ++i) {
+      const VehiclePose& p = poses_.pose(i);
+      const SegmentStart s{p.x_m, p.y_m, p.heading_rad, static_cast<uint32_t>(first_ + i), 0};
+      SegmentHistory::Node* node = history_.Append(paths_[i], static_cast<uint32_t>(step), s, slot);
+      if (node == nullptr) return NoMemoryError(first_ + i, "path");
+      paths_[i] = node;
+    }
+    return Status::Ok();
+  }
+
+  Status PoseNotFinite(size_t i, const VehiclePose& p) const {
+    return FailedPreconditionError(fmt::format("particle {}'s pose ({}, {}, {}) is not finite",
+                                               first_ + i, p.x_m, p.y_m, p.heading_rad));
   }
 
   Status BadSteering(size_t i) const {
