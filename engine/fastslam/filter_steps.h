@@ -22,7 +22,7 @@
 #include <cstdint>
 #include <span>
 
-#include "concurrency/normal_batch.h"
+#include "concurrency/normal_pairs.h"
 #include "concurrency/random_stream.h"
 #include "engine/fastslam/filter_traits.h"
 #include "engine/fastslam/landmark_math.h"
@@ -171,8 +171,9 @@ class FilterSteps {
   }
 
   // FastSLAM 1.0: the predictions of the filter's particles first, first + 1, ... at
-  // poses[0, n) and units[0, n) by `step`'s control c (MoveSampled()), each with its own normals
-  // from its stream for the step. units_from_headings: as MoveSampled()'s.
+  // poses[0, n) and units[0, n) by `step`'s control c (MoveSampled()), each with its own pair of
+  // normals from its stream for the step (DrawNormalPairs(): the speed's first when both sigmas
+  // are above 0). units_from_headings: as MoveSampled()'s.
   MotionResult PredictSampled(const ControlStep& c, uint64_t step, uint32_t first,
                               bool units_from_headings, VehiclePose* poses, HeadingUnit* units,
                               size_t n) const {
@@ -189,8 +190,8 @@ class FilterSteps {
       const size_t m = std::min(kBlock, n - b);
       if (u.normals() > 0) {
         const uint32_t at = first + static_cast<uint32_t>(b);
-        DrawNormals(seed_, step + 1, StreamPurpose::kMotion, at, at + static_cast<uint32_t>(m),
-                    std::span<double* const>(rows, static_cast<size_t>(u.normals())));
+        DrawNormalPairs(seed_, step + 1, StreamPurpose::kMotion, at, at + static_cast<uint32_t>(m),
+                        noise[0], noise[1]);
       }
       const MotionResult r = MoveSampled(u, rows, units_from_headings, poses + b, units + b, m);
       if (r.first_failed < m) return {b + r.first_failed, r.why};

@@ -88,7 +88,7 @@ HWY_INLINE bool MoveVector(D d, const SampledControl& u, const double* nv, const
     const VD sa = hn::Add(hn::Mul(sg, c), hn::Mul(cg, s));  // sin(G + phi)
     x = hn::Add(x, hn::Mul(vdt, ca));
     y = hn::Add(y, hn::Mul(vdt, sa));
-    turn = hn::Div(hn::Mul(vdt, sg), hn::Set(d, u.geometry.wheelbase_m));
+    turn = hn::Mul(hn::Mul(vdt, sg), hn::Set(d, 1 / u.geometry.wheelbase_m));
   } else {
     const VD l = hn::Set(d, u.geometry.wheelbase_m);
     const VD a = hn::Set(d, u.geometry.laser_forward_m);
