@@ -317,9 +317,7 @@ Status LogGaussianDensityImpl(const Eigen::Matrix<double, N, 1>& v,
 
 }  // namespace
 
-double WrapAngle(double angle) {
-  if (angle > -kPi && angle <= kPi) [[likely]]
-    return angle;
+double WrapAngleFar(double angle) {
   // remainder() is exact and returns r in [-kPi, kPi] with angle - r a multiple of kTwoPi.
   const double r = std::remainder(angle, kTwoPi);
   return r == -kPi ? kPi : r;
