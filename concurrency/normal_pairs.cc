@@ -95,23 +95,39 @@ HWY_INLINE VD LogVector(D d, VD x) {
                  hn::Add(log_m, hn::Mul(e, hn::Set(d, k::kLn2Lo))));
 }
 
-// The pairs of the particles in `particle`'s lanes.
-HWY_INLINE void PairVector(D d, const StreamKey& key, VU particle, VD& first, VD& second) {
-  namespace k = normal_pairs_internal;
-  const DU du;
-  VU w0, w1, w2, w3;
-  Philox(du, key, 0, particle, w0, w1, w2, w3);
-  const VU low = hn::Set(du, 0xFFFFFFFFu);
-  const VU b0 = hn::Or(hn::ShiftLeft<32>(w0), hn::And(w1, low));
-  const VU b1 = hn::Or(hn::ShiftLeft<32>(w2), hn::And(w3, low));
-  const VU one = hn::Set(du, k::kOneBits);
-  const VD u = hn::Sub(hn::Set(d, 2.0), hn::BitCast(d, hn::Or(hn::ShiftRight<12>(b0), one)));
-  const VD f = hn::Sub(hn::BitCast(d, hn::Or(hn::ShiftRight<12>(b1), one)), hn::Set(d, 1.0));
+// Uniforms from the 32-bit words in the low halves of w's lanes: (w + 1) / 2^32 in (0, 1] for
+// the logarithm, or w / 2^32 in [0, 1) for the angle.
+HWY_INLINE VD OpenUniform(D d, VU w) {
+  const DI di;
+  const VD x = hn::ConvertTo(d, hn::BitCast(di, hn::And(w, hn::Set(DU(), 0xFFFFFFFFu))));
+  return hn::Mul(hn::Add(x, hn::Set(d, 1.0)), hn::Set(d, 0x1p-32));
+}
+HWY_INLINE VD HalfOpenUniform(D d, VU w) {
+  const DI di;
+  const VD x = hn::ConvertTo(d, hn::BitCast(di, hn::And(w, hn::Set(DU(), 0xFFFFFFFFu))));
+  return hn::Mul(x, hn::Set(d, 0x1p-32));
+}
+
+// sqrt(-2 log u) (cos 2 pi f, sin 2 pi f) in every lane.
+HWY_INLINE void BoxMuller(D d, VD u, VD f, VD& first, VD& second) {
   const VD r = hn::Sqrt(hn::Mul(hn::Set(d, -2.0), LogVector(d, u)));
   VD s, c;
-  SinCosVector(d, hn::Mul(f, hn::Set(d, k::kTwoPi)), s, c);
+  SinCosVector(d, hn::Mul(f, hn::Set(d, normal_pairs_internal::kTwoPi)), s, c);
   first = hn::Mul(r, c);
   second = hn::Mul(r, s);
+}
+
+// The pairs of particles 2b and 2b + 1 for the blocks b in `block`'s lanes, written to
+// first[0, 2 Lanes) and second[0, 2 Lanes) in particle order.
+HWY_INLINE void PairsOfBlocks(D d, const StreamKey& key, VU block, double* first, double* second) {
+  const DU du;
+  VU w0, w1, w2, w3;
+  Philox(du, key, 0, block, w0, w1, w2, w3);
+  VD first_even, second_even, first_odd, second_odd;
+  BoxMuller(d, OpenUniform(d, w0), HalfOpenUniform(d, w1), first_even, second_even);
+  BoxMuller(d, OpenUniform(d, w2), HalfOpenUniform(d, w3), first_odd, second_odd);
+  hn::StoreInterleaved2(first_even, first_odd, d, first);
+  hn::StoreInterleaved2(second_even, second_odd, d, second);
 }
 
 void DrawNormalPairsImpl(uint64_t seed, uint64_t step, uint32_t purpose, uint32_t begin,
@@ -121,35 +137,21 @@ void DrawNormalPairsImpl(uint64_t seed, uint64_t step, uint32_t purpose, uint32_
   const StreamKey key{static_cast<uint32_t>(seed), static_cast<uint32_t>(seed >> 32),
                       static_cast<uint32_t>(step),
                       static_cast<uint32_t>(step >> 32) ^ (purpose << 16)};
-  const size_t lanes = hn::Lanes(d);
-  const size_t n = end - begin;
-  size_t i = 0;
-  // Two vectors at a time: one vector's chain of dependent operations (Philox's rounds, the
-  // logarithm, the polynomials) is long, and a second, independent one fills the gaps.
-  for (; i + 2 * lanes <= n; i += 2 * lanes) {
-    VD a0, b0, a1, b1;
-    PairVector(d, key, hn::Iota(du, uint64_t{begin} + i), a0, b0);
-    PairVector(d, key, hn::Iota(du, uint64_t{begin} + i + lanes), a1, b1);
-    hn::StoreU(a0, d, first + i);
-    hn::StoreU(b0, d, second + i);
-    hn::StoreU(a1, d, first + i + lanes);
-    hn::StoreU(b1, d, second + i + lanes);
-  }
-  for (; i + lanes <= n; i += lanes) {
-    VD a, b;
-    PairVector(d, key, hn::Iota(du, uint64_t{begin} + i), a, b);
-    hn::StoreU(a, d, first + i);
-    hn::StoreU(b, d, second + i);
-  }
-  if (i < n) {
-    // The last partial vector whole, then copied: no access past end - begin.
-    HWY_ALIGN double a[hn::MaxLanes(D())], b[hn::MaxLanes(D())];
-    VD va, vb;
-    PairVector(d, key, hn::Iota(du, uint64_t{begin} + i), va, vb);
-    hn::Store(va, d, a);
-    hn::Store(vb, d, b);
-    std::memcpy(first + i, a, (n - i) * sizeof(double));
-    std::memcpy(second + i, b, (n - i) * sizeof(double));
+  const uint64_t lanes = hn::Lanes(d);
+  HWY_ALIGN double a[2 * hn::MaxLanes(D())], b[2 * hn::MaxLanes(D())];
+  // Blocks of particle pairs, a vector of them at a time: particles [2 block, 2 block + 2 lanes).
+  for (uint64_t block = begin / 2; 2 * block < end; block += lanes) {
+    const uint64_t p0 = 2 * block;
+    const uint64_t lo = p0 < begin ? begin : p0;
+    const uint64_t hi = p0 + 2 * lanes < end ? p0 + 2 * lanes : end;
+    if (lo == p0 && hi == p0 + 2 * lanes) {
+      PairsOfBlocks(d, key, hn::Iota(du, block), first + (p0 - begin), second + (p0 - begin));
+      continue;
+    }
+    // A vector that reaches past [begin, end): whole, then the part inside copied.
+    PairsOfBlocks(d, key, hn::Iota(du, block), a, b);
+    std::memcpy(first + (lo - begin), a + (lo - p0), (hi - lo) * sizeof(double));
+    std::memcpy(second + (lo - begin), b + (lo - p0), (hi - lo) * sizeof(double));
   }
 }
 
@@ -171,11 +173,12 @@ void DrawNormalPairs(uint64_t seed, uint64_t step, uint32_t purpose, uint32_t be
 void NormalPairReference(uint64_t seed, uint64_t step, uint32_t particle, uint32_t purpose,
                          double* first, double* second) {
   namespace k = normal_pairs_internal;
-  RandomStream stream(seed, step, particle, purpose);
-  const uint64_t b0 = stream.NextU64();
-  const uint64_t b1 = stream.NextU64();
-  const double u = 2.0 - std::bit_cast<double>((b0 >> 12) | k::kOneBits);
-  const double f = std::bit_cast<double>((b1 >> 12) | k::kOneBits) - 1.0;
+  RandomStream stream(seed, step, particle / 2, purpose);
+  const uint64_t b0 = stream.NextU64();  // Philox words 0 and 1
+  const uint64_t b1 = stream.NextU64();  // words 2 and 3
+  const uint64_t block = particle % 2 == 0 ? b0 : b1;
+  const double u = (static_cast<double>(block >> 32) + 1.0) * 0x1p-32;
+  const double f = static_cast<double>(block & 0xFFFFFFFFu) * 0x1p-32;
   const double r = std::sqrt(-2.0 * k::LogOne(u));
   const double angle = f * k::kTwoPi;
   double s, c;

@@ -1,17 +1,17 @@
-// DrawNormalPairs: two standard normal deviates per particle from its counter-based stream by the
-// Box-Muller transform, with particles in SIMD lanes (Google Highway, dispatched at run time like
-// DrawNormals).
+// DrawNormalPairs: two standard normal deviates per particle from the counter-based streams by
+// the Box-Muller transform, with particles in SIMD lanes (Google Highway, dispatched at run time
+// like DrawNormals).
 //
-// A particle's pair comes from the first Philox4x32-10 block of RandomStream(seed, step, particle,
-// purpose), its two 64-bit words b0 and b1 (what two NextU64() calls return): with u = 2 - (1 +
-// the top 52 bits of b0 / 2^52) in (0, 1] and f = the top 52 bits of b1 / 2^52 in [0, 1),
+// Particles 2b and 2b + 1 share one Philox4x32-10 block, the first of RandomStream(seed, step, b,
+// purpose): its 32-bit words w0, w1 are particle 2b's, w2, w3 particle 2b + 1's. With
+// u = (w0 + 1) / 2^32 in (0, 1] and f = w1 / 2^32 in [0, 1),
 //   first = sqrt(-2 log u) cos(2 pi f),   second = sqrt(-2 log u) sin(2 pi f)
-// (Box and Muller, "A note on the generation of random normal deviates", 1958). Every draw is
-// one block: no rejection, no table and no scalar path, unlike the ziggurat's NextNormal (whose
-// draws these are not). log is a fixed sequence of IEEE operations (an atanh series of degree 21
-// after the exponent is split off, within 2 ulp), the sine and cosine SinCosVector's, and the
-// source is compiled with -ffp-contract=off: the same bits on every Highway target, in any lane
-// and in NormalPairReference. |deviate| <= sqrt(2 ln 2^52) = 8.49.
+// (Box and Muller, "A note on the generation of random normal deviates", 1958). A block per two
+// particles: no rejection, no table and no scalar path, unlike the ziggurat's NextNormal (whose
+// draws these are not). log is a fixed sequence of IEEE operations (an atanh series after the
+// exponent is split off, within 2 ulp), the sine and cosine SinCosVector's, and the source is
+// compiled with -ffp-contract=off: the same bits on every Highway target, in any lane and in
+// NormalPairReference. |deviate| <= sqrt(2 ln 2^32) = 6.66.
 //
 // Thread safety: pure functions of their arguments.
 #ifndef GROVE_CONCURRENCY_NORMAL_PAIRS_H_

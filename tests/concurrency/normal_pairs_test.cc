@@ -65,7 +65,7 @@ TEST(NormalPairsDistributionTest, PairsAreIndependentStandardNormals) {
       sq += x * x;
       fourth += x * x * x * x;
       beyond += std::fabs(x) > 2;
-      ASSERT_LE(std::fabs(x), 8.5);
+      ASSERT_LE(std::fabs(x), 6.7);
     }
     cross += a[i] * b[i];
   }
