@@ -47,6 +47,7 @@
 #include "engine/fastslam/filter_steps.h"
 #include "engine/fastslam/filter_traits.h"
 #include "engine/fastslam/landmark_math.h"
+#include "engine/fastslam/landmark_updates.h"
 #include "engine/fastslam/particle_poses.h"
 #include "engine/fastslam/unknown_association.h"
 #include "engine/fastslam/vehicle_model.h"
@@ -97,6 +98,7 @@ class FastSlamModel {
                VehiclePose{config.start_x_m, config.start_y_m, WrapAngle(config.start_heading_rad)},
                steps_.restart_covariance(), steps_.traits().draws_after_resampling),
         association_(config, steps_.traits(), n_, first_, slots),
+        updates_(slots),
         evolution_(config, steps_.traits().evolution, n_, first_, ranks) {}
 
   size_t size() const { return n_; }
@@ -181,29 +183,29 @@ class FastSlamModel {
                  double* log_w) {
     if (association_.active()) return AdvanceUnknown(scan, step, begin, end, slot, log_w);
     if (scan.observations.empty() && !traits().draws_every_scan()) return Status::Ok();
+    if (traits().pose == FilterTraits::Pose::kSampledMotion) {
+      return updates_.Apply(steps_, &trie_, &maps_[begin], &poses_.pose(begin), first_ + begin,
+                            scan, end - begin, slot, log_w + begin);
+    }
     for (size_t i = begin; i < end; ++i) {
       double lw = 0;
-      if (traits().pose == FilterTraits::Pose::kSampledMotion) {
-        GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &lw));
+      Eigen::Vector3d mu = ToVector(poses_.pose(i));
+      Eigen::Matrix3d sigma = steps_.Stored(poses_.cov(i));
+      for (const LandmarkObservation& z : scan.observations) {
+        const Landmark* l = trie_.Find(maps_[i], static_cast<uint64_t>(z.id));
+        if (l == nullptr) continue;
+        double w = 0;
+        GROVE_RETURN_IF_ERROR(ProposalStepOf(i, z, *l, &mu, &sigma, &w));
+        lw += w;
+      }
+      if (traits().draws_after_resampling) {
+        poses_.proposal_mu(i) = mu;
+        poses_.proposal_sigma(i) = steps_.Store(sigma);
       } else {
-        Eigen::Vector3d mu = ToVector(poses_.pose(i));
-        Eigen::Matrix3d sigma = steps_.Stored(poses_.cov(i));
-        for (const LandmarkObservation& z : scan.observations) {
-          const Landmark* l = trie_.Find(maps_[i], static_cast<uint64_t>(z.id));
-          if (l == nullptr) continue;
-          double w = 0;
-          GROVE_RETURN_IF_ERROR(ProposalStepOf(i, z, *l, &mu, &sigma, &w));
-          lw += w;
-        }
-        if (traits().draws_after_resampling) {
-          poses_.proposal_mu(i) = mu;
-          poses_.proposal_sigma(i) = steps_.Store(sigma);
-        } else {
-          // The importance ratio replaces the predictive likelihood.
-          GROVE_RETURN_IF_ERROR(DrawAndWeigh(scan, step, i, nullptr, mu, sigma, &lw));
-          double unused = 0;
-          GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &unused));
-        }
+        // The importance ratio replaces the predictive likelihood.
+        GROVE_RETURN_IF_ERROR(DrawAndWeigh(scan, step, i, nullptr, mu, sigma, &lw));
+        double unused = 0;
+        GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &unused));
       }
       log_w[i] += lw;
     }
@@ -618,6 +620,7 @@ class FastSlamModel {
   ParticlePoses poses_;
   bool segment_start_ = true;
   UnknownAssociation<Trie> association_;
+  LandmarkUpdates<Trie> updates_;
   DifferentialEvolution evolution_;
   std::vector<Status> batch_status_;  // RunInBatches' scratch
 };

@@ -9,6 +9,8 @@
 #include <string>
 #include <string_view>
 
+#include "engine/fastslam/landmark_batch.h"
+
 // Structure: each public function validates its inputs once, then runs an unchecked core
 // (Linearize, KalmanCore, ProposalCore) that checks only what the arithmetic itself can break
 // (a factorisation failing, a result overflowing). These run once per observation and particle,
@@ -278,94 +280,6 @@ Status KalmanCore(const Eigen::Vector2d& v, const Eigen::Matrix2d& h, const Eige
   return Status::Ok();
 }
 
-// An observation of a landmark linearised at its mean (H = [dx/r dy/r; -dy/q dx/q]), its
-// innovation v and covariance S = H P H^T + R, R = diag(r0, r1): the arithmetic of Linearize()
-// and InnovationOf() in one pass, which report why it failed.
-struct LandmarkInnovation {
-  double v0, v1;                  // v
-  double h00, h01, h10, h11;      // H
-  double hp00, hp01, hp10, hp11;  // H P
-  double s00, s01, s11, det;      // S and its determinant
-};
-
-// False when the landmark is at the sensor or S is not positive definite. REQUIRES: finite
-// inputs (ValidateInputs()).
-bool TryInnovation(const VehiclePose& pose, const RangeBearing& z, double r0, double r1,
-                   const Landmark& l, LandmarkInnovation* n) {
-  const double dx = l.x_m - pose.x_m;
-  const double dy = l.y_m - pose.y_m;
-  const double q = dx * dx + dy * dy;
-  if (!(q > 0)) [[unlikely]] {
-    return false;
-  }
-  const double r = std::sqrt(q);
-  n->v0 = z.range_m - r;
-  n->v1 = WrapAngle(z.bearing_rad - WrapAngle(std::atan2(dy, dx) - pose.heading_rad));
-  n->h00 = dx / r;
-  n->h01 = dy / r;
-  n->h10 = -dy / q;
-  n->h11 = dx / q;
-  const double a = l.xx, b = l.xy, c = l.yy;
-  n->hp00 = n->h00 * a + n->h01 * b;
-  n->hp01 = n->h00 * b + n->h01 * c;
-  n->hp10 = n->h10 * a + n->h11 * b;
-  n->hp11 = n->h10 * b + n->h11 * c;
-  n->s00 = n->hp00 * n->h00 + n->hp01 * n->h01 + r0;
-  n->s01 = n->hp00 * n->h10 + n->hp01 * n->h11 + 0.0;
-  n->s11 = n->hp10 * n->h10 + n->hp11 * n->h11 + r1;
-  n->det = n->s00 * n->s11 - n->s01 * n->s01;
-  return n->s00 > 0 && n->det > 0 && std::isfinite(n->det);
-}
-
-// log N(v; 0, S) and *m2 = v^T S^-1 v (through S = L D L^T: never negative).
-double LogLikelihoodOf(const LandmarkInnovation& n, double* m2) {
-  const double t = n.v1 - (n.s01 / n.s00) * n.v0;
-  *m2 = n.v0 * n.v0 / n.s00 + t * t * (n.s00 / n.det);
-  return -0.5 * *m2 - kLogTwoPi - 0.5 * std::log(n.det);
-}
-
-// The EKF landmark update of UpdateLandmark() in one pass (the arithmetic of KalmanCore() after
-// TryInnovation()). Returns false, writing nothing, when TryInnovation() fails or a result is
-// not finite. REQUIRES: finite inputs (ValidateInputs()).
-bool TryUpdateLandmark(const VehiclePose& pose, const RangeBearing& z, double r0, double r1,
-                       Landmark* l, double* log_likelihood) {
-  LandmarkInnovation n;
-  if (!TryInnovation(pose, z, r0, r1, *l, &n)) [[unlikely]] {
-    return false;
-  }
-  const double inv = 1 / n.det;
-  const double k00 = (n.hp00 * n.s11 - n.hp10 * n.s01) * inv;
-  const double k01 = (n.hp10 * n.s00 - n.hp00 * n.s01) * inv;
-  const double k10 = (n.hp01 * n.s11 - n.hp11 * n.s01) * inv;
-  const double k11 = (n.hp11 * n.s00 - n.hp01 * n.s01) * inv;
-  const double m0 = l->x_m + (k00 * n.v0 + k01 * n.v1);
-  const double m1 = l->y_m + (k10 * n.v0 + k11 * n.v1);
-  // P' = A P A^T + K R K^T, A = I - K H.
-  const double a = l->xx, b = l->xy, c = l->yy;
-  const double a00 = 1 - (k00 * n.h00 + k01 * n.h10), a01 = -(k00 * n.h01 + k01 * n.h11);
-  const double a10 = -(k10 * n.h00 + k11 * n.h10), a11 = 1 - (k10 * n.h01 + k11 * n.h11);
-  const double ap00 = a00 * a + a01 * b, ap01 = a00 * b + a01 * c;
-  const double ap10 = a10 * a + a11 * b, ap11 = a10 * b + a11 * c;
-  const double kr00 = k00 * r0, kr01 = k01 * r1, kr10 = k10 * r0, kr11 = k11 * r1;
-  const double p00 = ap00 * a00 + ap01 * a01 + (kr00 * k00 + kr01 * k01);
-  const double p11 = ap10 * a10 + ap11 * a11 + (kr10 * k10 + kr11 * k11);
-  const double p01 = 0.5 * ((ap00 * a10 + ap01 * a11 + (kr00 * k10 + kr01 * k11)) +
-                            (ap10 * a00 + ap11 * a01 + (kr10 * k00 + kr11 * k01)));
-  double m2;
-  const double ll = LogLikelihoodOf(n, &m2);
-  // x * 0 is 0 for a finite x and NaN otherwise.
-  if ((m0 * 0 + m1 * 0) + (p00 * 0 + p01 * 0 + p11 * 0) + ll * 0 != 0) [[unlikely]] {
-    return false;
-  }
-  l->x_m = m0;
-  l->y_m = m1;
-  l->xx = p00;
-  l->xy = p01;
-  l->yy = p11;
-  if (log_likelihood != nullptr) *log_likelihood = ll;
-  return true;
-}
-
 // Q = Hv sigma Hv^T + S: the innovation covariance with the pose uncertain.
 Eigen::Matrix2d PoseInnovationCovariance(const Matrix23d& h_pose, const Eigen::Matrix3d& sigma,
                                          const Eigen::Matrix2d& s) {
@@ -461,6 +375,19 @@ Status LogGaussianDensityImpl(const Eigen::Matrix<double, N, 1>& v,
   return Status::Ok();
 }
 
+// Why the landmark update (or likelihood) of UpdateLandmarkBatch() failed for usable inputs: the
+// same steps with their checks, for the message.
+Status WhyUpdateFailed(const VehiclePose& pose, const RangeBearing& z, const SensorNoise& noise,
+                       const Landmark& landmark) {
+  ObservationLinearization lin;
+  GROVE_RETURN_IF_ERROR(Linearize(pose, landmark.x_m, landmark.y_m, &lin));
+  Eigen::Vector2d mean = Mean(landmark);
+  Eigen::Matrix2d cov = Covariance(landmark);
+  GROVE_RETURN_IF_ERROR(KalmanCore(Innovation(z, lin.z_pred), lin.h_landmark,
+                                   SensorCovariance(noise), &mean, &cov, nullptr));
+  return FailedPreconditionError("the landmark update is not finite");
+}
+
 }  // namespace
 
 double WrapAngleFar(double angle) {
@@ -546,17 +473,13 @@ Status UpdateLandmark(const VehiclePose& pose, const RangeBearing& z, const Sens
   }
   const double sr = std::max(noise.sigma_range_m, kMinSigma);
   const double sb = std::max(noise.sigma_bearing_rad, kMinSigma);
-  if (TryUpdateLandmark(pose, z, sr * sr, sb * sb, landmark, log_likelihood)) [[likely]] {
+  Landmark* const leaf = landmark;
+  double ll = 0;
+  if (UpdateLandmarkBatch(&pose, &leaf, z, sr * sr, sb * sb, &ll, 1) == 1) [[likely]] {
+    if (log_likelihood != nullptr) *log_likelihood = ll;
     return Status::Ok();
   }
-  // Why it failed, from the same steps with their checks.
-  ObservationLinearization lin;
-  GROVE_RETURN_IF_ERROR(Linearize(pose, landmark->x_m, landmark->y_m, &lin));
-  Eigen::Vector2d mean = Mean(*landmark);
-  Eigen::Matrix2d cov = Covariance(*landmark);
-  GROVE_RETURN_IF_ERROR(KalmanCore(Innovation(z, lin.z_pred), lin.h_landmark,
-                                   SensorCovariance(noise), &mean, &cov, nullptr));
-  return FailedPreconditionError("the landmark update is not finite");
+  return WhyUpdateFailed(pose, z, noise, *landmark);
 }
 
 Status ObservationLogLikelihood(const VehiclePose& pose, const RangeBearing& z,
@@ -567,26 +490,15 @@ Status ObservationLogLikelihood(const VehiclePose& pose, const RangeBearing& z,
   }
   const double sr = std::max(noise.sigma_range_m, kMinSigma);
   const double sb = std::max(noise.sigma_bearing_rad, kMinSigma);
-  // The innovation TryUpdateLandmark() forms, so the value equals UpdateLandmark()'s.
-  LandmarkInnovation n;
-  if (TryInnovation(pose, z, sr * sr, sb * sb, landmark, &n)) [[likely]] {
-    double m2;
-    const double ll = LogLikelihoodOf(n, &m2);
-    if (std::isfinite(ll)) [[likely]] {
-      if (log_likelihood != nullptr) *log_likelihood = ll;
-      if (mahalanobis_sq != nullptr) *mahalanobis_sq = m2;
-      return Status::Ok();
-    }
+  // The innovation UpdateLandmark() forms, so the value equals its log-likelihood.
+  const Landmark* const leaf = &landmark;
+  double ll = 0, m2 = 0;
+  if (LandmarkLikelihoodBatch(&pose, &leaf, z, sr * sr, sb * sb, &ll, &m2, 1) == 1) [[likely]] {
+    if (log_likelihood != nullptr) *log_likelihood = ll;
+    if (mahalanobis_sq != nullptr) *mahalanobis_sq = m2;
+    return Status::Ok();
   }
-  // Why it failed, from the same steps with their checks.
-  ObservationLinearization lin;
-  GROVE_RETURN_IF_ERROR(Linearize(pose, landmark.x_m, landmark.y_m, &lin));
-  Innovation2 s;
-  GROVE_RETURN_IF_ERROR(
-      InnovationOf(lin.h_landmark, Covariance(landmark), SensorCovariance(noise), &s));
-  return FailedPreconditionError(
-      fmt::format("log-likelihood is not finite (innovation covariance S = {})",
-                  FormatMatrix(Matrix2Of(s.s00, s.s01, s.s11))));
+  return WhyUpdateFailed(pose, z, noise, landmark);
 }
 
 Status ProposalUpdate(const Eigen::Vector2d& innovation, const Matrix23d& h_pose,
