@@ -107,7 +107,7 @@ def main():
         timer, webmap = build_timer(args.fasterslam_build.resolve(), out)
         version = subprocess.run([args.grove, "--version"], capture_output=True,
                                  text=True).stdout.strip()
-        print(f"machine: {machine()}\n{version}\n{load()} before", flush=True)
+        print(f"- machine: {machine()}\n- {version}\n- {load()} before", flush=True)
         runs = [("grove", "fastslam1", t) for t in args.threads]
         if args.fastslam2:
             runs.append(("grove", "fastslam2", 1))
@@ -121,7 +121,7 @@ def main():
                          grove_once(args.grove, args.data, out, filt, n, threads))
                     times.setdefault((n, side), []).append(t)
             print(f"round {r + 1} of {args.rounds} done, {load()}", file=sys.stderr)
-        print(f"{load()} after; {args.rounds} rounds, sides alternated\n")
+        print(f"- {load()} after; {args.rounds} rounds, sides alternated\n")
         print("| particles | threads | grove filter time | ns per particle-step | FasterSLAM "
               "(1 core) | ns per particle-step | ratio grove / FasterSLAM, min / median / max "
               "| grove speed-up over 1 thread |")
