@@ -11,8 +11,9 @@ once per thread count; the order of the two sides flips every round. grove's fig
 `filter_time_s` from summary.json (reading the CSVs and writing outputs excluded). FasterSLAM's
 call also simulates the drive and its noisy controls and observations, a small share of its time.
 
-Prints, per particle count and thread count, the medians, the per-round ratio grove / FasterSLAM
-(min / median / max), grove's 2-thread speed-up, and the load average before and after.
+Prints, per particle count and thread count, the medians (and per particle-step: over particles
+times the 17,382 control steps), the per-round ratio grove / FasterSLAM (min / median / max),
+grove's 2-thread speed-up, and the load average before and after.
 
 Usage: fasterslam_rounds.py FASTERSLAM_BUILD GROVE [--data DIR] [--rounds N] [--particles N ...]
            [--threads T ...] [--fastslam2] [--out DIR]
