@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "grove/checksum.h"
+#include "tools/io/bundled_data.h"
 #include "tools/io/csv_reader.h"
 #include "tools/io/gzip_line_reader.h"
 
@@ -89,7 +90,7 @@ StatusOr<InputFile> DescribeFile(const std::string& path) {
 
 }  // namespace
 
-const char* BundledVictoriaParkDir() { return GROVE_VICTORIA_PARK_DIR; }
+std::string BundledVictoriaParkDir() { return BundledDataDir() + "/victoria_park"; }
 
 nlohmann::json InputFilesJson(const std::vector<InputFile>& files) {
   nlohmann::json out = nlohmann::json::array();

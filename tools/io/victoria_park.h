@@ -29,8 +29,8 @@
 
 namespace grove::tools {
 
-// The bundled copy (the source tree's tools/data/victoria_park).
-const char* BundledVictoriaParkDir();
+// The bundled copy: victoria_park/ in the data directory (BundledDataDir()).
+std::string BundledVictoriaParkDir();
 
 // A file a run read, as stored: its path, size and CRC-32 (summary.json names them).
 struct InputFile {

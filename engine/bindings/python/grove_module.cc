@@ -1106,6 +1106,25 @@ py::dict VersionDict() {
   return d;
 }
 
+// The module's first step on import. An interpreter other than the one the module was built for
+// usually fails here (no numpy on its path), so the error names both interpreters and the ways
+// out instead of pybind11's bare "initialization failed" (GROVE_PYTHON_BUILT_FOR: CMakeLists.txt).
+void RequireNumpy() {
+  try {
+    py::module_::import("numpy");
+  } catch (py::error_already_set& e) {
+    py::module_ sys = py::module_::import("sys");
+    const std::string here = py::str(sys.attr("executable")).cast<std::string>() + ", Python " +
+                             py::str(sys.attr("version")).cast<std::string>();
+    throw py::import_error(
+        "grove: numpy cannot be imported (" + std::string(e.what()) + ") by this interpreter (" +
+        here +
+        "); grove was built for " GROVE_PYTHON_BUILT_FOR
+        ": run that interpreter, install numpy for this one, or build grove for this one "
+        "(pip install --no-build-isolation ./engine/bindings/python from the source tree)");
+  }
+}
+
 }  // namespace
 
 // grove.FootImu (foot_imu_binding.cc); `raise` raises a status as the module's exception.
@@ -1127,6 +1146,7 @@ PYBIND11_MODULE(grove, m) {
       "calls on it); two filters share nothing and run in parallel in two Python threads, since "
       "every call releases the GIL while it filters. Arrays returned are copies owned by the "
       "caller: they stay valid after later steps and after the filter is gone.";
+  RequireNumpy();
   MakeErrors(m);
   g_pose_type = py::module_::import("collections")
                     .attr("namedtuple")("Pose", py::make_tuple("x", "y", "heading"))
