@@ -63,9 +63,12 @@ int FastSlamAccuracyBenchCommand(const FastSlamAccuracyOptions& options) {
     association = FastSlamAssociation::kMaximumLikelihood;
   } else if (options.association == "ml_exclusive") {
     association = FastSlamAssociation::kExclusive;
+  } else if (options.association == "sampled") {
+    association = FastSlamAssociation::kSampled;
   } else if (options.association != "known") {
-    return Fail(kExitUsage, fmt::format("--association = {}: must be known, ml or ml_exclusive",
-                                        QuoteForMessage(options.association)));
+    return Fail(kExitUsage,
+                fmt::format("--association = {}: must be known, ml, ml_exclusive or sampled",
+                            QuoteForMessage(options.association)));
   }
   const bool unknown = association != FastSlamAssociation::kKnown;
   std::vector<std::vector<std::string>> rows;

@@ -1,6 +1,6 @@
 // The `grove` Python module: every model's class (one file each: footslam_module.cc,
-// fastslam_module.cc, tracker_module.cc) on the shared layer (filter_binding.h,
-// python_values.h), over the public headers alone.
+// fastslam_module.cc, tracker_module.cc) and the foot IMU front end (foot_imu_binding.cc) on the
+// shared layer (filter_binding.h, python_values.h), over the public headers alone.
 #include <pybind11/eval.h>
 #include <pybind11/pybind11.h>
 
@@ -27,7 +27,27 @@ py::dict VersionDict() {
   return d;
 }
 
+// The module's first step on import. An interpreter other than the one the module was built for
+// usually fails here (no numpy on its path), so the error names both interpreters and the ways
+// out instead of pybind11's bare "initialization failed" (GROVE_PYTHON_BUILT_FOR: CMakeLists.txt).
+void RequireNumpy() {
+  try {
+    py::module_::import("numpy");
+  } catch (py::error_already_set& e) {
+    py::module_ sys = py::module_::import("sys");
+    const std::string here = py::str(sys.attr("executable")).cast<std::string>() + ", Python " +
+                             py::str(sys.attr("version")).cast<std::string>();
+    throw py::import_error(
+        "grove: numpy cannot be imported (" + std::string(e.what()) + ") by this interpreter (" +
+        here +
+        "); grove was built for " GROVE_PYTHON_BUILT_FOR
+        ": run that interpreter, install numpy for this one, or build grove for this one "
+        "(pip install --no-build-isolation ./engine/bindings/python from the source tree)");
+  }
+}
+
 }  // namespace
+
 }  // namespace grove::python
 
 PYBIND11_MODULE(grove, m) {
@@ -36,13 +56,15 @@ PYBIND11_MODULE(grove, m) {
   m.doc() =
       "grove: particle filters (FootSLAM on hexagon grids, landmark FastSLAM, range-only beacon "
       "tracking) whose particles share persistent maps.\n\n"
-      "Classes: FootSlam, FastSlam, Tracker; errors: GroveError and one subclass per status code "
+      "Classes: FootSlam, FastSlam, Tracker, FootImu (foot IMU samples to steps); errors: "
+      "GroveError and one subclass per status code "
       "(InvalidArgumentError is also a ValueError). Every failing call raises with the engine's "
       "message and leaves the filter as it was unless the error says otherwise.\n\n"
       "Threads: one filter is used by one thread at a time (a mutex per object serialises the "
       "calls on it); two filters share nothing and run in parallel in two Python threads, since "
       "every call releases the GIL while it filters. Arrays returned are copies owned by the "
       "caller: they stay valid after later steps and after the filter is gone.";
+  RequireNumpy();
   MakeErrors(m);
   MakePoseType(m);
   m.attr("__version__") = grove::Version().version;
@@ -52,6 +74,7 @@ PYBIND11_MODULE(grove, m) {
         "string (the one-line form).");
   py::tuple filters = py::make_tuple(BindFootSlam(m), BindFastSlam(m), BindTracker(m));
   m.attr("_filters") = filters;
+  BindFootImu(m);
   // A Python function, so that pickle finds it by name at every protocol (a bound C++ function
   // is pickled through its capsule, which protocols 0 and 1 cannot do).
   m.def(
@@ -78,6 +101,7 @@ def _refuse_when_initialised(cls, name):
     guarded.__doc__ = original.__doc__
     setattr(cls, name, guarded)
 
+_refuse_when_initialised(FootImu, "__init__")
 for _name in _filters:
     _refuse_when_initialised(globals()[_name], "__init__")
     _refuse_when_initialised(globals()[_name], "__setstate__")

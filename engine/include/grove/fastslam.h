@@ -96,6 +96,10 @@ enum class FastSlamAssociation {
   // As kMaximumLikelihood, and within a scan one landmark per detection and one detection per
   // landmark (greedy by likelihood).
   kExclusive,
+  // Unknown association, per particle: each detection's association drawn in proportion to its
+  // likelihoods, a new landmark (p0) included, and weighted by their sum
+  // (engine/fastslam/association_sampling.h).
+  kSampled,
 };
 
 // How the gates are given.
