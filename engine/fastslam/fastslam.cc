@@ -13,6 +13,7 @@
 #include "concurrency/worker_pool.h"
 #include "engine/fastslam/fastslam_model.h"
 #include "engine/filter/filter_driver.h"
+#include "engine/filter/filter_facade.h"
 #include "engine/io/checkpoint_io.h"
 #include "engine/ranks/collective.h"
 
@@ -26,11 +27,10 @@ using fastslam::VehiclePose;
 
 namespace {
 
-constexpr char kCheckpointKind[] = "grove fastslam";
-// FastSLAM's checkpoint body layout; bumped whenever it changes.
+// FastSLAM's checkpoints. The body layout's version is bumped whenever it changes.
 // Version 3: the seed's filters (their configuration fields, evolution counts).
 // Version 4: the rank and rank count of the share it holds.
-constexpr uint32_t kFastSlamFormatVersion = 4;
+constexpr CheckpointFormat kFastSlamCheckpoint = {"grove fastslam", "FastSLAM", 4};
 
 // The landmark trees' degree, 2^kLog2Degree (engine/fastslam/README.md, "FastSLAM 1.0 and 2.0:
 // accuracy and speed", has the measurement).
@@ -329,30 +329,27 @@ class FastSlam::Impl {
 
   Status CheckInvariants() const { return model_.CheckCounts(); }
 
-  StatusOr<std::string> Save(std::string_view user_data) const {
-    GROVE_RETURN_IF_ERROR(driver_.CheckNotFailed("there is no state to save"));
-    ByteWriter w;
-    WriteCheckpointHead(&w, kCheckpointKind, CheckpointFieldsOf(FastSlamConfigFields(), config_),
-                        user_data);
-    // Across ranks, each rank saves its own share: which share it is comes first.
-    WriteCheckpointRank(&w, ranks_);
-    driver_.Save(&w);
-    model_.Save(&w);
-    w.Put<int64_t>(controls_);
-    w.Put<int64_t>(scans_);
-    w.Put<int64_t>(observations_);
-    w.Put<double>(last_control_s_);
-    w.Put<double>(held_.v_mps);
-    w.Put<double>(held_.steer_rad);
-    w.Put<uint64_t>(log_.size());
-    w.PutBytes(log_.data(), log_.size() * sizeof(StepRecord));
-    w.Put<uint32_t>(kCheckpointEndMarker);
-    return w.Take();
+  StatusOr<std::string> Checkpoint(std::string_view user_data) const {
+    return SaveCheckpoint(kFastSlamCheckpoint, FastSlamConfigFields(), config_, ranks_, driver_,
+                          user_data, [&](ByteWriter* w) {
+                            model_.Save(w);
+                            w->Put<int64_t>(controls_);
+                            w->Put<int64_t>(scans_);
+                            w->Put<int64_t>(observations_);
+                            w->Put<double>(last_control_s_);
+                            w->Put<double>(held_.v_mps);
+                            w->Put<double>(held_.steer_rad);
+                            w->Put<uint64_t>(log_.size());
+                            w->PutBytes(log_.data(), log_.size() * sizeof(StepRecord));
+                          });
   }
 
   Status Load(ByteReader* r) {
-    GROVE_RETURN_IF_ERROR(ReadCheckpointRank(r, ranks_));
-    GROVE_RETURN_IF_ERROR(driver_.Load(r));
+    return LoadCheckpoint(r, ranks_, &driver_, [&](ByteReader* body) { return LoadBody(body); });
+  }
+
+  // The model's part of a checkpoint body, after the driver's.
+  Status LoadBody(ByteReader* r) {
     const uint64_t steps = static_cast<uint64_t>(driver_.steps());
     GROVE_RETURN_IF_ERROR(model_.Load(r, steps));
     int64_t controls = 0, scans = 0, observations = 0;
@@ -386,11 +383,6 @@ class FastSlam::Impl {
     if (!std::isfinite(last_control) || !std::isfinite(v) ||
         !fastslam::SteeringUsable(geometry_, g)) {
       return r->Error("held control", "not finite or not usable");
-    }
-    uint32_t end = 0;
-    GROVE_RETURN_IF_ERROR(r->Get("end marker", &end));
-    if (end != kCheckpointEndMarker || !r->at_end()) {
-      return r->Error("end marker", "missing, or bytes follow it");
     }
     controls_ = controls;
     scans_ = scans;
@@ -502,11 +494,7 @@ FastSlamSummary FastSlam::Summary() const { return impl_->Summary(); }
 Status FastSlam::CheckInvariants() const { return impl_->CheckInvariants(); }
 
 StatusOr<std::string> FastSlam::Checkpoint(std::string_view user_data) const {
-  return NoThrow([&]() -> StatusOr<std::string> {
-    StatusOr<std::string> body = impl_->Save(user_data);
-    if (!body.ok()) return body.status();
-    return SealCheckpoint(*body, kFastSlamFormatVersion);
-  });
+  return NoThrow([&] { return impl_->Checkpoint(user_data); });
 }
 
 StatusOr<std::unique_ptr<FastSlam>> FastSlam::Resume(const FastSlamConfig& config,
@@ -520,30 +508,9 @@ StatusOr<std::unique_ptr<FastSlam>> FastSlam::Resume(const FastSlamConfig& confi
                                                      std::string_view checkpoint,
                                                      const std::string& name,
                                                      std::string* user_data, Collective* ranks) {
-  return ResumeOnRanks<FastSlam>(
-      ranks, [&](Collective* r) { return ResumeShare(config, checkpoint, name, user_data, r); });
-}
-
-StatusOr<std::unique_ptr<FastSlam>> FastSlam::ResumeShare(const FastSlamConfig& config,
-                                                          std::string_view checkpoint,
-                                                          const std::string& name,
-                                                          std::string* user_data,
-                                                          Collective* ranks) {
-  GROVE_RETURN_IF_ERROR(config.Validate());
-  return NoThrow([&]() -> StatusOr<std::unique_ptr<FastSlam>> {
-    StatusOr<UnsealedCheckpoint> file = UnsealCheckpoint(checkpoint, name);
-    if (!file.ok()) return file.status();
-    ByteReader reader(file->body, name);
-    std::string user;
-    GROVE_RETURN_IF_ERROR(ReadCheckpointHead(
-        &reader, kCheckpointKind, "FastSLAM", file->format_version, kFastSlamFormatVersion,
-        CheckpointFieldsOf(FastSlamConfigFields(), config), &user));
-    StatusOr<std::unique_ptr<FastSlam>> slam = Create(config, ranks);
-    if (!slam.ok()) return slam.status();
-    GROVE_RETURN_IF_ERROR((*slam)->impl_->Load(&reader));
-    if (user_data != nullptr) user_data->swap(user);
-    return slam;
-  });
+  return ResumeFacade<FastSlam>(kFastSlamCheckpoint, FastSlamConfigFields(), config, checkpoint,
+                                name, user_data, ranks,
+                                [](FastSlam& slam, ByteReader* r) { return slam.impl_->Load(r); });
 }
 
 }  // namespace grove

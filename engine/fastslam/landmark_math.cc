@@ -25,7 +25,7 @@ const double kLogTwoPi = std::log(kTwoPi);
 
 using Llt2 = Eigen::LLT<Eigen::Matrix2d>;
 
-// ---- Messages (error path only).
+// Messages (error path only).
 
 template <typename Derived>
 std::string FormatMatrix(const Eigen::MatrixBase<Derived>& m) {
@@ -66,7 +66,7 @@ Status NotPositiveDefinite(std::string_view what, const Eigen::Matrix2d& m) {
       fmt::format("{} = {} is not positive definite", what, FormatMatrix(m)));
 }
 
-// ---- Small numerical helpers.
+// Small numerical helpers.
 
 // The symmetric part of a square matrix (expression), evaluated.
 template <typename Derived>
@@ -101,7 +101,7 @@ double LogDensity(const Eigen::LLT<Eigen::Matrix<double, N, N>>& llt,
   return -0.5 * m2 - 0.5 * N * kLogTwoPi - std::log(llt.matrixLLT().diagonal().prod());
 }
 
-// ---- Validation.
+// Validation.
 
 bool Finite(const VehiclePose& p) {
   return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.heading_rad);
@@ -171,7 +171,7 @@ Status ValidateVehicleCovariance(const Eigen::Matrix3d& a) {
   return Status::Ok();
 }
 
-// ---- Cores: inputs already validated.
+// Cores: inputs already validated.
 
 // The linearisation at (pose, lx, ly). REQUIRES: finite inputs.
 Status Linearize(const VehiclePose& pose, double lx, double ly, ObservationLinearization* out) {

@@ -81,7 +81,7 @@ struct ControlNoise {
 // (1.5e-8 m and rad).
 inline constexpr double kPoseRestartVariance = 2.220446049250313e-16;
 
-// ---- U-FastSLAM (covariances) ----
+// U-FastSLAM (covariances)
 
 // The prediction of N(mean, cov) over one control (v, steer) held for dt_s.
 Status UnscentedPredict(const VehicleGeometry& g, double v_mps, double steer_rad, double dt_s,
@@ -100,7 +100,7 @@ Status UnscentedUpdateLandmark(const VehiclePose& pose, const RangeBearing& z,
                                const SensorNoise& noise, const UnscentedRule& rule,
                                Landmark* landmark, double* log_likelihood);
 
-// ---- SRCD (Cholesky factors) ----
+// SRCD (Cholesky factors)
 
 // The prediction of N(mean, factor factor^T).
 Status CentralDifferencePredict(const VehicleGeometry& g, double v_mps, double steer_rad,

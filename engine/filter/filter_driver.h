@@ -55,18 +55,6 @@ auto NoThrow(F&& f) noexcept -> decltype(f()) {
   }
 }
 
-// A facade's Resume() across ranks (collective): resume_share(ranks) on every rank, whose
-// errors then reach every rank, and the ranks' files must be of one step (CheckCheckpointSteps).
-// Without ranks, or with one, resume_share(nullptr).
-template <typename Engine, typename F>
-StatusOr<std::unique_ptr<Engine>> ResumeOnRanks(Collective* ranks, F&& resume_share) {
-  if (ranks == nullptr || ranks->size() == 1) return resume_share(nullptr);
-  StatusOr<std::unique_ptr<Engine>> engine = resume_share(ranks);
-  GROVE_RETURN_IF_ERROR(AgreeStatus(*ranks, engine.status()));
-  GROVE_RETURN_IF_ERROR(CheckCheckpointSteps(*ranks, (*engine)->steps()));
-  return engine;
-}
-
 enum class TimeOrder {
   kIncreasing,     // every step after the one before (FootSLAM's steps)
   kNonDecreasing,  // a step may share the time of the one before (an update after a prediction)
@@ -142,6 +130,8 @@ class FilterDriver {
   }
 
   bool failed() const { return failed_; }
+  // Whether the start time is known: set by SetStartTime() or by the first step.
+  bool start_time_set() const { return !start_time_unset_; }
   // FailedPrecondition after an error stopped the engine.
   Status CheckNotFailed(const char* what) const {
     if (!failed_) return Status::Ok();

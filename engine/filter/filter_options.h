@@ -1,5 +1,5 @@
 // FilterOptions: how a ParticleFilter resamples, batches and draws, alone or across ranks; and
-// FilterOptionsOf, the options a model's configuration gives (FilterConfig).
+// FilterOptionsOf, the options a model's configuration gives (grove/filter_config.h).
 #ifndef GROVE_ENGINE_FILTER_FILTER_OPTIONS_H_
 #define GROVE_ENGINE_FILTER_FILTER_OPTIONS_H_
 
@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "engine/ranks/collective.h"
+#include "grove/filter_config.h"
 #include "grove/resampling.h"
 
 namespace grove {
@@ -44,38 +45,16 @@ struct FilterOptions {
   double exchange_fraction = 0.1;
 };
 
-// A model's configuration that gives a filter's options: fields named and meant as
-// FilterOptions' (`particles`: the whole filter's count).
-template <typename C>
-concept FilterConfig = requires(const C& c) {
-  requires std::same_as<decltype(c.resampling), ResamplingScheme>;
-  requires std::floating_point<decltype(c.resample_threshold)>;
-  requires std::integral<decltype(c.batch)>;
-  requires std::same_as<decltype(c.seed), uint64_t>;
-  requires std::integral<decltype(c.particles)>;
-};
-
-// A configuration with island mode: FilterOptions' islands, exchange_steps and exchange_fraction
-// as `islands`, `island_exchange_steps` and `island_exchange_fraction`.
-template <typename C>
-concept IslandConfig = FilterConfig<C> && requires(const C& c) {
-  requires std::same_as<decltype(c.islands), int>;
-  requires std::integral<decltype(c.island_exchange_steps)>;
-  requires std::floating_point<decltype(c.island_exchange_fraction)>;
-};
-
-// The loop's options from a model's configuration, whose fields carry the same names.
-template <FilterConfig Config>
+// The loop's options from a model's configuration (grove/filter_config.h), island mode's too
+// when it has them (an IslandConfig).
+template <std::derived_from<FilterConfig> Config>
 FilterOptions FilterOptionsOf(const Config& c) {
   FilterOptions o;
   o.resampling = c.resampling;
   o.resample_threshold = c.resample_threshold;
   o.batch = static_cast<size_t>(c.batch);
   o.seed = c.seed;
-  static_assert(
-      IslandConfig<Config> || !requires { c.islands; },
-      "a configuration with islands gives every island field");
-  if constexpr (IslandConfig<Config>) {
+  if constexpr (std::derived_from<Config, IslandConfig>) {
     o.islands = c.islands;
     o.exchange_steps = static_cast<uint64_t>(c.island_exchange_steps);
     o.exchange_fraction = c.island_exchange_fraction;
@@ -85,7 +64,7 @@ FilterOptions FilterOptionsOf(const Config& c) {
 
 // The options of one rank's share of a filter of c.particles across `ranks` (null: one
 // process, as FilterOptionsOf(c)).
-template <FilterConfig Config>
+template <std::derived_from<FilterConfig> Config>
 FilterOptions FilterOptionsOf(const Config& c, Collective* ranks) {
   FilterOptions o = FilterOptionsOf(c);
   o.collective = ranks;

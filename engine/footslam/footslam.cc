@@ -6,11 +6,11 @@
 #include <algorithm>
 #include <memory>
 #include <string>
-#include <thread>
 #include <utility>
 #include <vector>
 
 #include "engine/filter/filter_driver.h"
+#include "engine/filter/filter_facade.h"
 #include "engine/filter/resampler.h"
 #include "engine/footslam/alphabet_htree_map.h"
 #include "engine/footslam/footslam_engine.h"
@@ -23,7 +23,7 @@
 namespace grove {
 
 using footslam::HTreeLayout;
-using footslam::kFootSlamFormatVersion;
+using footslam::kFootSlamCheckpoint;
 using footslam::MakeFootSlamEngine;
 
 namespace {
@@ -115,23 +115,15 @@ StatusOr<std::unique_ptr<FootSlam>> FootSlam::Create(const FootSlamConfig& confi
 
 StatusOr<std::unique_ptr<FootSlam>> FootSlam::Create(const FootSlamConfig& config,
                                                      Collective* ranks) {
-  GROVE_RETURN_IF_ERROR(config.Validate());
-  if (ranks != nullptr && ranks->size() > 1) {
-    GROVE_RETURN_IF_ERROR(CheckAcrossRanks(config, ranks->size()));
-  } else {
-    ranks = nullptr;
-  }
-  return NoThrow([&]() -> StatusOr<std::unique_ptr<FootSlam>> {
-    int threads = config.threads > 0
-                      ? config.threads
-                      : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-    StatusOr<HTreeLayout> layout =
-        HTreeLayout::Create(config.grid_size, config.degree, config.grid);
-    if (!layout.ok()) return layout.status();
-    std::unique_ptr<Impl> impl = MakeFootSlamEngine(config, threads, std::move(*layout), ranks);
-    GROVE_RETURN_IF_ERROR(impl->Init());
-    return std::unique_ptr<FootSlam>(new FootSlam(std::move(impl)));
-  });
+  return CreateFacade<FootSlam>(
+      config, ranks, [&](int threads, Collective* r) -> StatusOr<std::unique_ptr<FootSlam>> {
+        StatusOr<HTreeLayout> layout =
+            HTreeLayout::Create(config.grid_size, config.degree, config.grid);
+        if (!layout.ok()) return layout.status();
+        std::unique_ptr<Impl> impl = MakeFootSlamEngine(config, threads, std::move(*layout), r);
+        GROVE_RETURN_IF_ERROR(impl->Init());
+        return std::unique_ptr<FootSlam>(new FootSlam(std::move(impl)));
+      });
 }
 
 Status FootSlam::Step(double t_s, double dx_m, double dy_m) { return impl_->Step(t_s, dx_m, dy_m); }
@@ -164,11 +156,7 @@ FootSlamSummary FootSlam::Summary() const { return impl_->Summary(); }
 Status FootSlam::CheckInvariants() const { return impl_->CheckInvariants(); }
 
 StatusOr<std::string> FootSlam::Checkpoint(std::string_view user_data) const {
-  return NoThrow([&]() -> StatusOr<std::string> {
-    StatusOr<std::string> body = impl_->Save(user_data);
-    if (!body.ok()) return body.status();
-    return SealCheckpoint(*body, kFootSlamFormatVersion);
-  });
+  return NoThrow([&] { return impl_->Checkpoint(user_data); });
 }
 
 StatusOr<std::unique_ptr<FootSlam>> FootSlam::Resume(const FootSlamConfig& config,
@@ -182,31 +170,9 @@ StatusOr<std::unique_ptr<FootSlam>> FootSlam::Resume(const FootSlamConfig& confi
                                                      std::string_view checkpoint,
                                                      const std::string& name,
                                                      std::string* user_data, Collective* ranks) {
-  return ResumeOnRanks<FootSlam>(
-      ranks, [&](Collective* r) { return ResumeShare(config, checkpoint, name, user_data, r); });
-}
-
-StatusOr<std::unique_ptr<FootSlam>> FootSlam::ResumeShare(const FootSlamConfig& config,
-                                                          std::string_view checkpoint,
-                                                          const std::string& name,
-                                                          std::string* user_data,
-                                                          Collective* ranks) {
-  GROVE_RETURN_IF_ERROR(config.Validate());
-  return NoThrow([&]() -> StatusOr<std::unique_ptr<FootSlam>> {
-    StatusOr<UnsealedCheckpoint> file = UnsealCheckpoint(checkpoint, name);
-    if (!file.ok()) return file.status();
-    ByteReader reader(file->body, name);
-    // The kind, format and configuration first: a checkpoint of another run costs no engine.
-    std::string user;
-    GROVE_RETURN_IF_ERROR(ReadCheckpointHead(
-        &reader, footslam::kCheckpointKind, "FootSLAM", file->format_version,
-        kFootSlamFormatVersion, CheckpointFieldsOf(FootSlamConfigFields(), config), &user));
-    StatusOr<std::unique_ptr<FootSlam>> slam = Create(config, ranks);
-    if (!slam.ok()) return slam.status();
-    GROVE_RETURN_IF_ERROR((*slam)->impl_->Load(&reader));
-    if (user_data != nullptr) user_data->swap(user);
-    return slam;
-  });
+  return ResumeFacade<FootSlam>(kFootSlamCheckpoint, FootSlamConfigFields(), config, checkpoint,
+                                name, user_data, ranks,
+                                [](FootSlam& slam, ByteReader* r) { return slam.impl_->Load(r); });
 }
 
 }  // namespace grove

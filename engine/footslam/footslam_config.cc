@@ -11,76 +11,64 @@
 
 namespace grove {
 
-// FootSlam takes its filter's options, island mode's among them, from its configuration.
-static_assert(IslandConfig<FootSlamConfig>);
-
 const std::vector<ConfigField<FootSlamConfig>>& FootSlamConfigFields() {
   using C = FootSlamConfig;
   using I = Interval;
   // Never destroyed: read-outs of it may run during static destruction.
-  static const auto* fields = new std::vector<ConfigField<C>>{
-      IntegerField("particles", &C::particles, 1, int64_t{1} << 31, kChangesResults,
-                   "Number of particles"),
-      UnsignedField("seed", &C::seed, kChangesResults, "Seed of every random stream"),
-      RealField("hex_radius_m", &C::hex_radius_m, I::LeftOpen(0, 1000), kChangesResults,
-                "Circumradius of the hexagons, metres"),
-      RealField("prior_count", &C::prior_count, I::LeftOpen(0, 1e6), kChangesResults,
-                "Prior count added to every edge counter"),
-      ChoiceField("weighting", &C::weighting, {"paper", "prior_ratio"}, kChangesResults,
-                  "Weighting rule: paper or prior_ratio"),
-      RealField("prior_map_confidence", &C::prior_map_confidence, I::Closed(0, 1e6),
-                kChangesResults, "Weight of a prior map's counts, added to the prior count"),
-      RealField("store_distance_m", &C::store_distance_m, I::Closed(0, 1e9), kChangesResults,
-                "Store map areas this far from every particle (storage of diversity); 0: off"),
-      RealField("start_x_m", &C::start_x_m, I::Closed(-1e12, 1e12), kChangesResults,
-                "Start position x in the map frame, metres"),
-      RealField("start_y_m", &C::start_y_m, I::Closed(-1e12, 1e12), kChangesResults,
-                "Start position y in the map frame, metres"),
-      RealField("start_heading_rad", &C::start_heading_rad, I::Closed(-1000, 1000), kChangesResults,
-                "Start heading in the map frame, radians"),
-      RealField("initial_heading_sigma_rad", &C::initial_heading_sigma_rad, I::Closed(0, 10),
-                kChangesResults, "Initial spread of the heading error, radians"),
-      RealField("heading_drift_sigma_rad", &C::heading_drift_sigma_rad, I::Closed(0, 10),
-                kChangesResults, "Random-walk step of the heading error per step, radians"),
-      RealField("heading_sigma_rad", &C::heading_sigma_rad, I::Closed(0, 10), kChangesResults,
-                "White noise on each step's heading, radians"),
-      RealField("scale_sigma", &C::scale_sigma, I::Closed(0, 10), kChangesResults,
-                "Initial spread of the step-length scale error"),
-      RealField("scale_drift_sigma", &C::scale_drift_sigma, I::Closed(0, 10), kChangesResults,
-                "Random-walk step of the scale error per step"),
-      RealField("step_length_sigma_m", &C::step_length_sigma_m, I::Closed(0, 100), kChangesResults,
-                "White noise on each step's length, metres"),
-      RealField("position_sigma_m", &C::position_sigma_m, I::Closed(0, 100), kChangesResults,
-                "White noise on each step's end position, per axis, metres"),
-      ChoiceField("resampling", &C::resampling,
-                  {"systematic", "stratified", "residual", "multinomial"}, kChangesResults,
-                  "Resampling scheme"),
-      RealField("resample_threshold", &C::resample_threshold, I::LeftOpen(0, 1), kChangesResults,
-                "Resample when ESS/N is below this; 1 resamples every step"),
-      IntegerField("islands", &C::islands, 1, 65536, kChangesResults,
-                   "Island mode: islands of whole 4,096-particle blocks, each resampled alone; "
-                   "1: off"),
-      IntegerField("island_exchange_steps", &C::island_exchange_steps, 1, int64_t{1} << 40,
-                   kChangesResults,
-                   "Island mode: steps between exchanges of particles with the next island"),
-      RealField("island_exchange_fraction", &C::island_exchange_fraction, I::Closed(0, 0.5),
-                kChangesResults,
-                "Island mode: share of the smallest island's particles sent at an exchange"),
-      ChoiceField("map", &C::map, {"htree", "naive"}, kChangesResults,
-                  "Map representation: htree or naive"),
-      IntegerField("degree", &C::degree, 1, 256, kChangesResults,
-                   "H-tree degree: 4, 16, 64 or 256"),
-      IntegerField("grid_size", &C::grid_size, 1, 65536, kChangesResults,
-                   "Hexagons per grid side, a power of sqrt(degree)"),
-      ChoiceField("grid", &C::grid, {"growing", "fixed"}, kChangesResults,
-                  "Grid: growing (gains levels when a particle leaves it) or fixed (the paper's)"),
-      IntegerField("alphabet", &C::alphabet, 0, 5, kChangesResults,
-                   "Alphabet bound T; 0 switches the alphabet off"),
-      IntegerField("threads", &C::threads, 0, 256, kChangesSpeedOnly,
-                   "Worker threads; 0: one per hardware thread"),
-      IntegerField("batch", &C::batch, 1, int64_t{1} << 31, kChangesSpeedOnly,
-                   "Particles per parallel batch"),
-  };
+  static const auto* fields = new std::vector<ConfigField<C>>([] {
+    const FilterFieldRows<C> filter =
+        FilterFields<C>("Resample when ESS/N is below this; 1 resamples every step");
+    return JoinFields<C>(
+        {filter.population,
+         {
+             RealField("hex_radius_m", &C::hex_radius_m, I::LeftOpen(0, 1000), kChangesResults,
+                       "Circumradius of the hexagons, metres"),
+             RealField("prior_count", &C::prior_count, I::LeftOpen(0, 1e6), kChangesResults,
+                       "Prior count added to every edge counter"),
+             ChoiceField("weighting", &C::weighting, {"paper", "prior_ratio"}, kChangesResults,
+                         "Weighting rule: paper or prior_ratio"),
+             RealField("prior_map_confidence", &C::prior_map_confidence, I::Closed(0, 1e6),
+                       kChangesResults, "Weight of a prior map's counts, added to the prior count"),
+             RealField(
+                 "store_distance_m", &C::store_distance_m, I::Closed(0, 1e9), kChangesResults,
+                 "Store map areas this far from every particle (storage of diversity); 0: off"),
+             RealField("start_x_m", &C::start_x_m, I::Closed(-1e12, 1e12), kChangesResults,
+                       "Start position x in the map frame, metres"),
+             RealField("start_y_m", &C::start_y_m, I::Closed(-1e12, 1e12), kChangesResults,
+                       "Start position y in the map frame, metres"),
+             RealField("start_heading_rad", &C::start_heading_rad, I::Closed(-1000, 1000),
+                       kChangesResults, "Start heading in the map frame, radians"),
+             RealField("initial_heading_sigma_rad", &C::initial_heading_sigma_rad, I::Closed(0, 10),
+                       kChangesResults, "Initial spread of the heading error, radians"),
+             RealField("heading_drift_sigma_rad", &C::heading_drift_sigma_rad, I::Closed(0, 10),
+                       kChangesResults, "Random-walk step of the heading error per step, radians"),
+             RealField("heading_sigma_rad", &C::heading_sigma_rad, I::Closed(0, 10),
+                       kChangesResults, "White noise on each step's heading, radians"),
+             RealField("scale_sigma", &C::scale_sigma, I::Closed(0, 10), kChangesResults,
+                       "Initial spread of the step-length scale error"),
+             RealField("scale_drift_sigma", &C::scale_drift_sigma, I::Closed(0, 10),
+                       kChangesResults, "Random-walk step of the scale error per step"),
+             RealField("step_length_sigma_m", &C::step_length_sigma_m, I::Closed(0, 100),
+                       kChangesResults, "White noise on each step's length, metres"),
+             RealField("position_sigma_m", &C::position_sigma_m, I::Closed(0, 100), kChangesResults,
+                       "White noise on each step's end position, per axis, metres"),
+         },
+         filter.resampling,
+         {
+             ChoiceField("map", &C::map, {"htree", "naive"}, kChangesResults,
+                         "Map representation: htree or naive"),
+             IntegerField("degree", &C::degree, 1, 256, kChangesResults,
+                          "H-tree degree: 4, 16, 64 or 256"),
+             IntegerField("grid_size", &C::grid_size, 1, 65536, kChangesResults,
+                          "Hexagons per grid side, a power of sqrt(degree)"),
+             ChoiceField(
+                 "grid", &C::grid, {"growing", "fixed"}, kChangesResults,
+                 "Grid: growing (gains levels when a particle leaves it) or fixed (the paper's)"),
+             IntegerField("alphabet", &C::alphabet, 0, 5, kChangesResults,
+                          "Alphabet bound T; 0 switches the alphabet off"),
+         },
+         filter.speed});
+  }());
   return *fields;
 }
 

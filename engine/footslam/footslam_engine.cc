@@ -294,36 +294,25 @@ class FootSlamEngine final : public FootSlam::Impl {
     return s;
   }
 
-  StatusOr<std::string> Save(std::string_view user_data) const override {
-    GROVE_RETURN_IF_ERROR(driver_.CheckNotFailed("there is no state to save"));
-    ByteWriter w;
-    WriteCheckpointHead(&w, kCheckpointKind, CheckpointFieldsOf(FootSlamConfigFields(), config_),
-                        user_data);
-    // Across ranks, each rank saves its own share: which share it is comes first.
-    WriteCheckpointRank(&w, ranks_);
-    driver_.Save(&w);
-    model_.Save(&w);
-    map_.Save(&w);
-    SavePrior(&w);
-    store_.Save(&w);
-    w.Put<uint32_t>(kCheckpointEndMarker);
-    return w.Take();
+  StatusOr<std::string> Checkpoint(std::string_view user_data) const override {
+    return SaveCheckpoint(kFootSlamCheckpoint, FootSlamConfigFields(), config_, ranks_, driver_,
+                          user_data, [&](ByteWriter* w) {
+                            model_.Save(w);
+                            map_.Save(w);
+                            SavePrior(w);
+                            store_.Save(w);
+                          });
   }
 
   Status Load(ByteReader* r) override {
-    GROVE_RETURN_IF_ERROR(ReadCheckpointRank(r, ranks_));
-    GROVE_RETURN_IF_ERROR(driver_.Load(r));
-    GROVE_RETURN_IF_ERROR(model_.Load(r, static_cast<uint64_t>(driver_.steps())));
-    GROVE_RETURN_IF_ERROR(map_.Load(r, layout_.key_count()));
-    GROVE_RETURN_IF_ERROR(LoadPrior(r));
-    GROVE_RETURN_IF_ERROR(store_.Load(r, layout_.key_count(), user_prior_));
-    SelectPrior();
-    uint32_t end = 0;
-    GROVE_RETURN_IF_ERROR(r->Get("end marker", &end));
-    if (end != kCheckpointEndMarker || !r->at_end()) {
-      return r->Error("end marker", "missing, or bytes follow it");
-    }
-    return Status::Ok();
+    return LoadCheckpoint(r, ranks_, &driver_, [&](ByteReader* body) -> Status {
+      GROVE_RETURN_IF_ERROR(model_.Load(body, static_cast<uint64_t>(driver_.steps())));
+      GROVE_RETURN_IF_ERROR(map_.Load(body, layout_.key_count()));
+      GROVE_RETURN_IF_ERROR(LoadPrior(body));
+      GROVE_RETURN_IF_ERROR(store_.Load(body, layout_.key_count(), user_prior_));
+      SelectPrior();
+      return Status::Ok();
+    });
   }
 
   Status CheckInvariants() const override { return model_.CheckCounts(); }

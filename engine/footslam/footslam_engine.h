@@ -11,6 +11,7 @@
 #include <string_view>
 #include <vector>
 
+#include "engine/filter/filter_facade.h"
 #include "engine/footslam/htree_layout.h"
 #include "engine/io/checkpoint_io.h"
 #include "engine/ranks/collective.h"
@@ -38,20 +39,22 @@ class FootSlam::Impl {
   virtual StatusOr<std::vector<HexCounts>> HeaviestMap() const = 0;
   virtual std::vector<HexCounts> StoredMap() const = 0;
   virtual FootSlamSummary Summary() const = 0;
-  virtual StatusOr<std::string> Save(std::string_view user_data) const = 0;
-  // Replaces the state of a freshly created engine with the rest of a checkpoint body.
+  // The whole state as a checkpoint file (SaveCheckpoint).
+  virtual StatusOr<std::string> Checkpoint(std::string_view user_data) const = 0;
+  // Replaces the state of a freshly created engine with the rest of a checkpoint body, after
+  // its head (LoadCheckpoint).
   virtual Status Load(ByteReader* r) = 0;
   virtual Status CheckInvariants() const = 0;
 };
 
 namespace footslam {
 
-inline constexpr char kCheckpointKind[] = "grove footslam";
-// FootSLAM's checkpoint body layout; bumped whenever it changes. 2: path positions relative to
-// the start, the filter's count of weighting steps. 3: the grid field, maps grown past
-// the first grid. 4: the stored map of storage of diversity. 5: the island fields. 6: the
-// alphabet's symbol tree with bottom nodes of two H-tree levels (degrees 4 and 16).
-inline constexpr uint32_t kFootSlamFormatVersion = 6;
+// FootSLAM's checkpoints. The body layout's version is bumped whenever it changes. 2: path
+// positions relative to the start, the filter's count of weighting steps. 3: the grid field,
+// maps grown past the first grid. 4: the stored map of storage of diversity. 5: the island
+// fields. 6: the alphabet's symbol tree with bottom nodes of two H-tree levels (degrees 4 and
+// 16).
+inline constexpr CheckpointFormat kFootSlamCheckpoint = {"grove footslam", "FootSLAM", 6};
 
 // The engine of config.map and config.degree on `threads` workers over the grid `layout`, a
 // rank's share of the particles across `ranks` (null: all of them). Call Init() before stepping

@@ -10,7 +10,8 @@
 // Every body starts with the head written by WriteCheckpointHead(): the kind ("grove
 // footslam"), the configuration hash (CRC-32 of the field block), the field block (every
 // configuration field that changes results: name, type, value) and the embedder's user data.
-// The model's own state follows (engine/footslam/footslam.cc), then an end marker.
+// The rank record, the driver's state and the model's own state follow, then an end marker
+// (engine/filter/filter_facade.h).
 //
 // A reader never reads past its end and never trusts a count: every error is a Status naming
 // the field and the byte offset, so a corrupt or hostile file cannot crash the process.

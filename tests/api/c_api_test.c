@@ -9,22 +9,19 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "tests/api/c_checks.h"
+#include "tests/api/c_check.h"
 
-#define CHECK_STATUS(call, expected) CHECK_STATUS_MSG(call, expected, "")
 /* For calls on a handle: the message is the handle's last error. */
 #define CHECK_FOOT(h, call, expected) CHECK_STATUS_MSG(call, expected, grove_footslam_last_error(h))
 #define CHECK_FAST(h, call, expected) CHECK_STATUS_MSG(call, expected, grove_fastslam_last_error(h))
 
 static const double kPi = 3.14159265358979323846;
 
-static int Contains(const char* text, const char* part) { return strstr(text, part) != NULL; }
-
 static int PoseFinite(const grove_pose* p) {
   return isfinite(p->t_s) && isfinite(p->x_m) && isfinite(p->y_m) && isfinite(p->heading_rad);
 }
 
-/* ---- The FootSLAM walk: a 4 m square, 0.5 m steps, walked anticlockwise ten times ---- */
+/* The FootSLAM walk: a 4 m square, 0.5 m steps, walked anticlockwise ten times */
 
 enum { kSquareSide = 8, kLoopSteps = 4 * kSquareSide, kWalkSteps = 10 * kLoopSteps };
 
@@ -607,7 +604,7 @@ static void TestFootRuns(void) {
   printf("ok: footslam read-outs that changed between size query and fill are re-sized\n");
 }
 
-/* ---- Landmark FastSLAM: Bailey's vehicle on a circle of radius 10 m among 8 landmarks ---- */
+/* Landmark FastSLAM: Bailey's vehicle on a circle of radius 10 m among 8 landmarks */
 
 enum { kLandmarks = 8, kScans = 300, kControlEvery = 50, kMaxObs = kLandmarks };
 static const double kSpeed = 3.0, kDt = 0.1, kWheelbase = 4.0;

@@ -7,10 +7,9 @@
 #include <string.h>
 
 #include "grove/c_api_foot_imu.h"
-#include "tests/api/c_checks.h"
+#include "tests/api/c_check.h"
 
-#define CHECK_STATUS(call, expected, message) CHECK_STATUS_MSG(call, expected, message)
-#define CHECK_IMU(h, call, expected) CHECK_STATUS(call, expected, grove_foot_imu_last_error(h))
+#define CHECK_IMU(h, call, expected) CHECK_STATUS_MSG(call, expected, grove_foot_imu_last_error(h))
 
 enum { kRateHz = 200, kSteps = 6 };
 static const double kGravity = 9.80665;
@@ -19,8 +18,6 @@ static const double kSwingS = 0.5;
 static const double kStanceS = 0.6;
 static const double kRollRad = 0.5;
 static const double kPi = 3.14159265358979323846;
-
-static int Contains(const char* text, const char* part) { return strstr(text, part) != NULL; }
 
 /* A sensor walking along x: stances, then swings whose position follows a minimum-jerk profile
  * over kStepM while the sensor rolls about its x axis by kRollRad sin^2(pi u) and back (a foot
@@ -60,7 +57,7 @@ static grove_foot_imu* NewImu(void) {
   char error[512];
   grove_foot_imu_config_default(&c);
   c.gravity_mps2 = kGravity;
-  CHECK_STATUS(grove_foot_imu_create(&c, &h, error, sizeof error), GROVE_OK, error);
+  CHECK_STATUS_MSG(grove_foot_imu_create(&c, &h, error, sizeof error), GROVE_OK, error);
   CHECK(h != NULL);
   CHECK(error[0] == '\0');
   return h;
@@ -76,41 +73,42 @@ static void TestConfig(void) {
   CHECK(c.zupt_sigma_mps == 0.01);
   grove_foot_imu_config_default(NULL); /* does nothing */
 
-  CHECK_STATUS(grove_foot_imu_config_from_json("{\"detector\": \"are\", \"detector_window\": 9}",
-                                               &c, error, sizeof error),
-               GROVE_OK, error);
+  CHECK_STATUS_MSG(grove_foot_imu_config_from_json(
+                       "{\"detector\": \"are\", \"detector_window\": 9}", &c, error, sizeof error),
+                   GROVE_OK, error);
   CHECK(c.detector == GROVE_DETECTOR_ARE);
   CHECK(c.detector_window == 9);
   before = c;
-  CHECK_STATUS(grove_foot_imu_config_from_json("{\"detector_windwo\": 3}", &c, error, sizeof error),
-               GROVE_INVALID_ARGUMENT, "an unknown key");
+  CHECK_STATUS_MSG(
+      grove_foot_imu_config_from_json("{\"detector_windwo\": 3}", &c, error, sizeof error),
+      GROVE_INVALID_ARGUMENT, "an unknown key");
   CHECK(Contains(error, "detector_window")); /* the nearest key is suggested */
   CHECK(memcmp(&c, &before, sizeof c) == 0);
-  CHECK_STATUS(grove_foot_imu_config_from_json(NULL, &c, error, sizeof error),
-               GROVE_INVALID_ARGUMENT, "NULL json");
-  CHECK_STATUS(grove_foot_imu_config_from_json("{}", NULL, error, sizeof error),
-               GROVE_INVALID_ARGUMENT, "NULL config");
+  CHECK_STATUS_MSG(grove_foot_imu_config_from_json(NULL, &c, error, sizeof error),
+                   GROVE_INVALID_ARGUMENT, "NULL json");
+  CHECK_STATUS_MSG(grove_foot_imu_config_from_json("{}", NULL, error, sizeof error),
+                   GROVE_INVALID_ARGUMENT, "NULL config");
 
   c.detector_window = 0;
-  CHECK_STATUS(grove_foot_imu_create(&c, &h, error, sizeof error), GROVE_INVALID_ARGUMENT,
-               "window 0");
+  CHECK_STATUS_MSG(grove_foot_imu_create(&c, &h, error, sizeof error), GROVE_INVALID_ARGUMENT,
+                   "window 0");
   CHECK(h == NULL);
   CHECK(Contains(error, "detector_window"));
   c.detector_window = 5;
   c.detector = 17;
-  CHECK_STATUS(grove_foot_imu_create(&c, &h, error, sizeof error), GROVE_INVALID_ARGUMENT,
-               "detector 17");
+  CHECK_STATUS_MSG(grove_foot_imu_create(&c, &h, error, sizeof error), GROVE_INVALID_ARGUMENT,
+                   "detector 17");
   CHECK(Contains(error, "detector"));
-  CHECK_STATUS(grove_foot_imu_create(NULL, &h, error, sizeof error), GROVE_INVALID_ARGUMENT,
-               "NULL config");
-  CHECK_STATUS(grove_foot_imu_create(&c, NULL, error, sizeof error), GROVE_INVALID_ARGUMENT,
-               "NULL out");
-  CHECK_STATUS(grove_foot_imu_create_json("{\"zupt_sigma_mps\": -1}", &h, error, sizeof error),
-               GROVE_INVALID_ARGUMENT, "a negative sigma");
+  CHECK_STATUS_MSG(grove_foot_imu_create(NULL, &h, error, sizeof error), GROVE_INVALID_ARGUMENT,
+                   "NULL config");
+  CHECK_STATUS_MSG(grove_foot_imu_create(&c, NULL, error, sizeof error), GROVE_INVALID_ARGUMENT,
+                   "NULL out");
+  CHECK_STATUS_MSG(grove_foot_imu_create_json("{\"zupt_sigma_mps\": -1}", &h, error, sizeof error),
+                   GROVE_INVALID_ARGUMENT, "a negative sigma");
   CHECK(Contains(error, "zupt_sigma_mps"));
   CHECK(h == NULL);
-  CHECK_STATUS(grove_foot_imu_create_json("{\"detector\": \"mv\"}", &h, error, sizeof error),
-               GROVE_OK, error);
+  CHECK_STATUS_MSG(grove_foot_imu_create_json("{\"detector\": \"mv\"}", &h, error, sizeof error),
+                   GROVE_OK, error);
   grove_foot_imu_destroy(h);
   grove_foot_imu_destroy(NULL);
 }

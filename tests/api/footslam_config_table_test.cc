@@ -50,7 +50,7 @@ FootSlamConfig Small() {
 TEST(FootSlamConfigTableTest, EveryMemberHasARow) {
   EXPECT_EQ(FootSlamConfigFields().size(), 29u)
       << "add the new FootSlamConfig field to FootSlamConfigFields() and update this count";
-  EXPECT_EQ(sizeof(FootSlamConfig), 208u)
+  EXPECT_EQ(sizeof(FootSlamConfig), 216u)
       << "FootSlamConfig changed: give the new field a row in FootSlamConfigFields()";
   std::set<std::string> names;
   for (const auto& f : FootSlamConfigFields()) {

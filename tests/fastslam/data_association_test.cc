@@ -273,7 +273,7 @@ TEST(FindMatches, IndexGivesTheSameMatchesAsTheWholeMap) {
   EXPECT_GT(ignored, 20);
 }
 
-// ---- Through the facade ----
+// Through the facade
 
 FastSlamConfig Unknown(FastSlamFilter filter) {
   FastSlamConfig c;

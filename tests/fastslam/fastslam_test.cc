@@ -28,7 +28,8 @@ namespace {
 // The FastSLAM engine drives its model with a FilterDriver and takes its filter's options from
 // its configuration (FilterOptionsOf); it has no island mode.
 static_assert(PosedModel<fastslam::FastSlamModel<3>>);
-static_assert(FilterConfig<FastSlamConfig> && !IslandConfig<FastSlamConfig>);
+static_assert(std::derived_from<FastSlamConfig, FilterConfig> &&
+              !std::derived_from<FastSlamConfig, IslandConfig>);
 
 using fastslam::VehicleGeometry;
 using fastslam::VehiclePose;

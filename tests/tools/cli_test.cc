@@ -353,7 +353,7 @@ TEST_F(CliTest, SigtermStopsAtAStepBoundaryWithACheckpoint) {
   ExpectSameOutputs(full, out);
 }
 
-// ---- grove footslam batch ----
+// grove footslam batch
 
 size_t Occurrences(const std::string& text, const std::string& what) {
   size_t n = 0;
@@ -498,7 +498,7 @@ TEST_F(CliTest, ABatchStoppedBySigtermResumesWhereItStopped) {
   ExpectSameOutputs(dir_ / "solo", out / "x");
 }
 
-// ---- Reliability, round two (the numbers in the test names' comments) ----
+// Reliability, round two (the numbers in the test names' comments)
 
 // 1: a step file from a pipe is read once, whole.
 TEST_F(CliTest, StepsFromAFifoAreReadWhole) {
@@ -1183,6 +1183,65 @@ TEST_F(CliTest, ProgressReachesOneHundredPercent) {
               (dir_ / "f").string());
   const std::string steps = Write("steps.csv", "t,dx,dy\n# a comment\n1,0.7,0\n\n2,0.7,0\n");
   expect_done("footslam run --particles 5 --steps " + steps + " --out " + (dir_ / "s").string());
+}
+
+// A simulated target tracked from its ranges: the same trajectory.csv at 1 and 2 threads and
+// after a resume from a periodic checkpoint, close to the truth by `footslam evaluate`.
+TEST_F(CliTest, TrackingSimulateRunResumeAndEvaluate) {
+  fs::path sim = dir_ / "sim";
+  Outcome o = Grove("tracking simulate --seconds 60 --seed 3 --out " + sim.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_EQ(Slurp(sim / "beacons.csv").rfind("id,x,y\n", 0), 0u);
+  EXPECT_EQ(Slurp(sim / "measurements.csv").rfind("t,beacon,range\n", 0), 0u);
+  const std::string run = "tracking run --no-progress --particles 1000 --beacons " +
+                          (sim / "beacons.csv").string() + " --measurements " +
+                          (sim / "measurements.csv").string() + " ";
+  fs::path one = dir_ / "one", two = dir_ / "two", part = dir_ / "part", resumed = dir_ / "res";
+  ASSERT_EQ(Grove(run + "--threads 1 --out " + one.string()).exit_code, 0);
+  ASSERT_EQ(Grove(run + "--threads 2 --out " + two.string()).exit_code, 0);
+  EXPECT_TRUE(Slurp(one / "trajectory.csv") == Slurp(two / "trajectory.csv"));
+  const nlohmann::json summary = nlohmann::json::parse(Slurp(one / "summary.json"));
+  EXPECT_EQ(summary["measurements"], 240);
+  EXPECT_EQ(summary["steps"], 60);
+  EXPECT_EQ(summary["config"]["particles"], 1000);
+
+  ASSERT_EQ(Grove(run + "--checkpoint-every 25 --out " + part.string()).exit_code, 0);
+  fs::copy_file(part / "checkpoint.grove", dir_ / "cp.grove");
+  o = Grove(run + "--threads 2 --resume " + (dir_ / "cp.grove").string() + " --out " +
+            resumed.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_TRUE(Slurp(one / "trajectory.csv") == Slurp(resumed / "trajectory.csv"));
+  o = Grove(run + "--range-sigma-m 0.4 --resume " + (dir_ / "cp.grove").string() + " --out " +
+            (dir_ / "other").string());
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find("range_sigma_m = 0.5"), std::string::npos) << o.err;
+
+  o = Grove("footslam evaluate --truth " + (sim / "truth.csv").string() + " --trajectory " +
+            (one / "trajectory.csv").string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  const nlohmann::json error = nlohmann::json::parse(o.out);
+  EXPECT_EQ(error["matched"], 60);
+  EXPECT_LT(error["rmse_m"].get<double>(), 1.0) << o.out;
+}
+
+// Bad tracking inputs: file:line:column, exit 3, no output directory left behind.
+TEST_F(CliTest, TrackingBadInputsStopWithFileLineColumn) {
+  const std::string beacons = Write("beacons.csv", "id,x,y\n0,0,0\n1,10,0\n");
+  auto expect = [&](const std::string& rows, const std::string& where, const std::string& what) {
+    SCOPED_TRACE(rows);
+    const std::string m = Write("m.csv", "t,beacon,range\n" + rows);
+    fs::path out = dir_ / "out";
+    Outcome o = Grove("tracking run --no-progress --particles 50 --beacons " + beacons +
+                      " --measurements " + m + " --out " + out.string());
+    EXPECT_EQ(o.exit_code, 3) << o.err;
+    EXPECT_NE(o.err.find(m + ":" + where), std::string::npos) << o.err;
+    EXPECT_NE(o.err.find(what), std::string::npos) << o.err;
+    EXPECT_FALSE(fs::exists(out));
+  };
+  expect("1,0,5\n1,7,5\n", "3:3:", "beacon 7 is not one of the beacons file's");
+  expect("1,0,5\n2,1,-1\n", "3:5:", "range = -1: must be >= 0");
+  expect("2,0,5\n1,1,5\n", "3:1:", "is before the previous row's");
+  expect("1,0,nan\n", "2:5:", "must be finite");
 }
 
 // A bad IMU recording stops `footslam steps` and `footslam run --imu` with FILE:LINE:COLUMN, the

@@ -88,7 +88,7 @@ BaileySimOptions NoNoise(BaileySimOptions o) {
   return o;
 }
 
-// ---- The map reader.
+// The map reader.
 
 TEST(BaileyMapReaderTest, ReadsTheRealWebmap) {
   StatusOr<BaileyMap> map = ReadBaileyMap(WebmapPath().string());
@@ -190,7 +190,7 @@ TEST(BaileyMapReaderTest, FileErrorsNameThePath) {
   EXPECT_EQ(missing.status().code(), StatusCode::kNotFound);
 }
 
-// ---- Options and presets.
+// Options and presets.
 
 // The webmap preset is example_webmap.ini, read here from the bundled copy.
 TEST(BaileySimOptionsTest, WebmapPresetIsTheIni) {
@@ -319,7 +319,7 @@ TEST(BaileySimOptionsTest, ValidateNamesFieldValueAndRule) {
   }
 }
 
-// ---- The simulation.
+// The simulation.
 
 // With zero noise, integrating controls.csv from the start of truth.csv by the vehicle model,
 // with dt the difference of the written times, lands on every row of truth.csv.
@@ -642,7 +642,7 @@ TEST(BaileySimulatorTest, UnreachableWaypointFailsInsteadOfCirclingForEver) {
   EXPECT_FALSE(SimulateBailey(BaileyMap{}, o).ok());  // no waypoint
 }
 
-// ---- The command.
+// The command.
 
 class FastSlamSimulateCommandTest : public ::testing::Test {
  protected:

@@ -1,10 +1,11 @@
-#include "tools/cli/bench_cli.h"
-
+// `grove bench paper|scaling|fastslam-accuracy|fastslam-speed|victoria-park`: their options and
+// what runs them.
 #include <cstdint>
 #include <limits>
 
 #include "grove/fastslam.h"
 #include "tools/bench/bench_commands.h"
+#include "tools/cli/command.h"
 #include "tools/cli/typed_flags.h"
 #include "tools/run/run_loop.h"
 
@@ -107,9 +108,7 @@ class VictoriaParkBenchCli : public BenchCli<VictoriaParkBenchOptions, VictoriaP
 }  // namespace
 
 std::vector<Command> AddBenchCommands(CLI::App* grove) {
-  CLI::App* bench =
-      grove->add_subcommand("bench", "Reproduce the paper's figures; measure scaling");
-  bench->require_subcommand(1);
+  CLI::App* bench = AddFamily(grove, "bench", "Reproduce the paper's figures; measure scaling");
   return {
       AddCommand<PaperCli>(
           bench, "paper", "Run time and memory against walk time (paper Figs. 9, 10) for each map"),

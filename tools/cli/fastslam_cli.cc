@@ -1,5 +1,5 @@
-#include "tools/cli/fastslam_cli.h"
-
+// `grove fastslam run|victoria-park|evaluate|simulate|montecarlo`: their options and what runs
+// them.
 #include <fmt/format.h>
 
 #include <memory>
@@ -7,6 +7,7 @@
 
 #include "grove/fastslam.h"
 #include "tools/cli/across_ranks.h"
+#include "tools/cli/command.h"
 #include "tools/cli/mpi_world.h"
 #include "tools/cli/run_flags.h"
 #include "tools/cli/typed_flags.h"
@@ -202,8 +203,7 @@ class MonteCarloCli {
 }  // namespace
 
 std::vector<Command> AddFastSlamCommands(CLI::App* grove) {
-  CLI::App* fastslam = grove->add_subcommand("fastslam", "Landmark FastSLAM");
-  fastslam->require_subcommand(1);
+  CLI::App* fastslam = AddFamily(grove, "fastslam", "Landmark FastSLAM");
   return {
       AddCommand<FastSlamRunCli>(fastslam, "run",
                                  "Run FastSLAM 1.0 or 2.0 on controls.csv and observations.csv"),

@@ -1,5 +1,4 @@
-#include "tools/cli/footslam_cli.h"
-
+// `grove footslam run|steps|batch|simulate|evaluate|render`: their options and what runs them.
 #include <limits>
 #include <memory>
 #include <string>
@@ -8,6 +7,7 @@
 #include "grove/foot_imu.h"
 #include "grove/footslam.h"
 #include "tools/cli/across_ranks.h"
+#include "tools/cli/command.h"
 #include "tools/cli/config_flags.h"
 #include "tools/cli/mpi_world.h"
 #include "tools/cli/run_flags.h"
@@ -278,8 +278,7 @@ Command AddEvaluate(CLI::App* footslam) {
 }  // namespace
 
 std::vector<Command> AddFootSlamCommands(CLI::App* grove) {
-  CLI::App* footslam = grove->add_subcommand("footslam", "Pedestrian SLAM from step odometry");
-  footslam->require_subcommand(1);
+  CLI::App* footslam = AddFamily(grove, "footslam", "Pedestrian SLAM from step odometry");
   return {
       AddCommand<FootSlamRunCli>(footslam, "run",
                                  "Run FootSLAM on a step file or a foot-mounted IMU recording"),

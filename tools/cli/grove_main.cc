@@ -1,6 +1,7 @@
 // grove: the command-line front end. Subcommands:
 //   grove footslam run|batch|simulate|evaluate|render ...
 //   grove fastslam run|victoria-park|evaluate|simulate|montecarlo ...
+//   grove tracking run|simulate ...
 //   grove bench paper|scaling|fastslam-accuracy|fastslam-speed|victoria-park ...
 #include <CLI/CLI.hpp>
 #include <cstdio>
@@ -8,10 +9,7 @@
 #include <vector>
 
 #include "grove/version.h"
-#include "tools/cli/bench_cli.h"
 #include "tools/cli/command.h"
-#include "tools/cli/fastslam_cli.h"
-#include "tools/cli/footslam_cli.h"
 #include "tools/cli/help_formatter.h"
 #include "tools/cli/parse_errors.h"
 #include "tools/run/run_loop.h"
@@ -28,7 +26,8 @@ int Main(int argc, char** argv) {
       "The version, commit, compiler and SIMD targets of this build");
   app.require_subcommand(1);
   std::vector<gt::Command> commands;
-  for (auto add : {gt::AddFootSlamCommands, gt::AddFastSlamCommands, gt::AddBenchCommands}) {
+  for (auto add : {gt::AddFootSlamCommands, gt::AddFastSlamCommands, gt::AddTrackingCommands,
+                   gt::AddBenchCommands}) {
     for (gt::Command& c : add(&app)) commands.push_back(std::move(c));
   }
   try {

@@ -19,6 +19,7 @@
 #include "grove/config_json.h"
 #include "tools/io/fastslam_inputs.h"
 #include "tools/io/filter_outputs.h"
+#include "tools/io/id_points.h"
 #include "tools/io/victoria_park.h"
 #include "tools/report/map_render.h"
 
@@ -52,30 +53,6 @@ StatusOr<std::map<double, Pose2>> ReadPoses(const std::string& path) {
       }));
   if (poses.empty()) return InvalidArgumentError(fmt::format("{}: no poses", path));
   return poses;
-}
-
-struct TruthLandmark {
-  double x_m, y_m;
-};
-
-// landmarks_truth.csv: `id,x,y`.
-StatusOr<std::map<int64_t, TruthLandmark>> ReadTruthLandmarks(const std::string& path) {
-  StatusOr<CsvTableReader> table = CsvTableReader::Open(path, {{"id", "x", "y"}});
-  if (!table.ok()) return table.status();
-  std::map<int64_t, TruthLandmark> out;
-  GROVE_RETURN_IF_ERROR(
-      table->ForEachRow([&](const std::vector<CsvField>& f, int64_t line) -> Status {
-        int32_t id = 0;
-        GROVE_RETURN_IF_ERROR(ParseCsvId(path, line, f[0], "id", &id));
-        TruthLandmark l{};
-        GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[1], "x", &l.x_m));
-        GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f[2], "y", &l.y_m));
-        if (!out.emplace(id, l).second) {
-          return LineError(path, line, f[0].column, fmt::format("id {} appears twice", id));
-        }
-        return Status::Ok();
-      }));
-  return out;
 }
 
 // An integer field in [lo, 2^63).
@@ -130,7 +107,7 @@ nlohmann::json PoseErrorsJson(const PoseErrors& e) {
 // detection that created them (source_id): then several estimates of one true landmark are
 // duplicates (associations the filter missed) and true landmarks without one are missing.
 nlohmann::json LandmarkErrorsJson(const std::vector<LandmarkEstimate>& estimates,
-                                  const std::map<int64_t, TruthLandmark>& truth) {
+                                  const std::map<int64_t, IdPoint>& truth) {
   int64_t matched = 0, unknown = 0;
   double sq = 0, worst = 0;
   const bool by_source = std::any_of(estimates.begin(), estimates.end(),
@@ -290,8 +267,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
       truth_ = std::move(truth).value();
     }
     if (!options_.landmarks_truth_path.empty()) {
-      StatusOr<std::map<int64_t, TruthLandmark>> l =
-          ReadTruthLandmarks(options_.landmarks_truth_path);
+      StatusOr<std::map<int64_t, IdPoint>> l = ReadIdPoints(options_.landmarks_truth_path);
       if (!l.ok()) return l.status();
       landmarks_truth_ = std::move(l).value();
     }
@@ -465,7 +441,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
   int64_t steps_ = 0;                          // controls and scans: the events Read() returns
   FastSlamEvent event_;
   std::map<double, Pose2> truth_;
-  std::map<int64_t, TruthLandmark> landmarks_truth_;
+  std::map<int64_t, IdPoint> landmarks_truth_;
 };
 
 }  // namespace
@@ -537,7 +513,7 @@ int FastSlamEvaluateCommand(const std::string& truth_path, const std::string& tr
     }
     StatusOr<std::vector<LandmarkEstimate>> l = ReadLandmarkEstimates(landmarks_path);
     if (!l.ok()) return Fail(kExitInput, l.status().message());
-    StatusOr<std::map<int64_t, TruthLandmark>> t = ReadTruthLandmarks(landmarks_truth_path);
+    StatusOr<std::map<int64_t, IdPoint>> t = ReadIdPoints(landmarks_truth_path);
     if (!t.ok()) return Fail(kExitInput, t.status().message());
     report["landmarks"] = LandmarkErrorsJson(*l, *t);
   }

@@ -15,6 +15,7 @@
 #include "tools/io/atomic_file.h"
 #include "tools/io/csv_reader.h"
 #include "tools/run/run_loop.h"
+#include "tools/sim/normal_source.h"
 
 namespace grove::tools {
 namespace {
@@ -34,25 +35,6 @@ double WrapAngle(double a) {
   }
   return a;
 }
-
-// Standard normal deviates from the raw output of std::mt19937_64 (Box-Muller, one of the pair),
-// so that they do not depend on the standard library's distributions.
-class NormalSource {
- public:
-  NormalSource(uint64_t seed, uint32_t purpose) {
-    std::seed_seq seq{static_cast<uint32_t>(seed), static_cast<uint32_t>(seed >> 32), purpose};
-    engine_.seed(seq);
-  }
-  double Next() {
-    const double u1 = 1.0 - Uniform();  // in (0, 1], so the log is finite
-    const double u2 = Uniform();
-    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
-  }
-
- private:
-  double Uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
-  std::mt19937_64 engine_;
-};
 
 // "field = value: rule".
 Status RangeError(std::string_view field, double value, std::string_view rule) {

@@ -1,16 +1,12 @@
-// The C API of the foot IMU front end (grove/c_api_foot_imu.h) over grove::FootImu. As in
-// c_api.cc, every entry point catches everything: no exception crosses into C.
-#include <algorithm>
-#include <cstring>
-#include <exception>
+// The C API of the foot IMU front end (grove/c_api_foot_imu.h) over grove::FootImu, on the
+// generic layer's handle, error slot and guards (c_handle.h): no exception crosses into C.
 #include <memory>
-#include <new>
 #include <string>
-#include <string_view>
 #include <type_traits>
 #include <utility>
 #include <vector>
 
+#include "engine/bindings/c/c_handle.h"
 #include "grove/c_api_foot_imu.h"
 #include "grove/config_json.h"
 #include "grove/foot_imu.h"
@@ -22,17 +18,12 @@ static_assert(GROVE_DETECTOR_MV == static_cast<int>(grove::ZeroVelocityDetector:
 static_assert(GROVE_DETECTOR_MAG == static_cast<int>(grove::ZeroVelocityDetector::kMag));
 static_assert(std::is_same_v<std::underlying_type_t<grove::ZeroVelocityDetector>, int>);
 
-struct grove_foot_imu {
-  std::unique_ptr<grove::FootImu> imu;
+struct grove_foot_imu : grove::capi::Handle<grove::FootImu> {
   // Steps finished and not yet handed out (the size-query rule keeps them until a fill).
   std::vector<grove::FootStep> pending;
-  std::string error;
-  bool error_lost = false;  // the message could not be copied (out of memory)
 };
 
 namespace {
-
-constexpr const char* kOutOfMemory = "out of memory";
 
 // grove_foot_imu_config's fields, in the order of grove::FootImuConfig, as member pointer pairs:
 // one list converts both ways.
@@ -99,74 +90,22 @@ grove_foot_step ToC(const grove::FootStep& s) {
   return o;
 }
 
-void WriteError(std::string_view message, char* error, size_t error_size) noexcept {
-  if (error == nullptr || error_size == 0) return;
-  const size_t n = std::min(message.size(), error_size - 1);
-  if (n > 0) std::memcpy(error, message.data(), n);
-  error[n] = '\0';
-}
-
-grove_status Record(grove_foot_imu* h, grove_status code, std::string_view message) noexcept {
-  try {
-    h->error.assign(message.data(), message.size());
-    h->error_lost = false;
-  } catch (...) {
-    h->error.clear();
-    h->error_lost = true;
-  }
-  return code;
-}
-
-grove_status Record(grove_foot_imu* h, const grove::Status& s) noexcept {
-  return Record(h, static_cast<grove_status>(s.code()), s.ok() ? "" : s.message());
-}
-
-// Runs `f` (-> grove::Status): on the handle `h` when given, recording the message there, else
-// writing it into the caller's buffer.
-template <typename F>
-grove_status Guard(grove_foot_imu* h, char* error, size_t error_size, F&& f) noexcept {
-  grove::Status s;
-  try {
-    s = f();
-  } catch (const std::bad_alloc&) {
-    s = grove::ResourceExhaustedError(kOutOfMemory);
-  } catch (const std::exception& e) {
-    try {
-      s = grove::InternalError(std::string("unexpected exception: ") + e.what());
-    } catch (...) {
-      s = grove::Status(grove::StatusCode::kInternal, "");
-    }
-  } catch (...) {
-    s = grove::Status(grove::StatusCode::kInternal, "");
-  }
-  if (h != nullptr) return Record(h, s);
-  WriteError(s.ok() ? std::string_view() : std::string_view(s.message()), error, error_size);
-  return static_cast<grove_status>(s.code());
-}
-
+// Runs f() -> grove::Status on the handle, recording its message there.
 template <typename F>
 grove_status OnHandle(grove_foot_imu* h, F&& f) noexcept {
-  if (h == nullptr) return GROVE_INVALID_ARGUMENT;  // no handle to record the error in
-  return Guard(h, nullptr, 0, std::forward<F>(f));
+  if (h == nullptr) return grove::capi::kNullHandle;
+  return grove::capi::Guard(h, [&] {
+    const grove::Status s = f();
+    return s.ok() ? h->Ok() : h->Fail(s);
+  });
 }
 
 grove::Status ConfigFromJson(const char* json, grove::FootImuConfig* config) {
-  if (json == nullptr) return grove::InvalidArgumentError("json is NULL");
-  grove::FootImuConfig result = *config;
-  GROVE_RETURN_IF_ERROR(
-      grove::ApplyConfigJson(grove::FootImuConfigFields(), "config", json, &result));
-  GROVE_RETURN_IF_ERROR(result.Validate());
-  *config = result;
-  return grove::Status::Ok();
+  return grove::capi::ApplyJson(grove::FootImuConfigFields(), json, config);
 }
 
 grove::Status Make(const grove::FootImuConfig& config, grove_foot_imu** out) {
-  grove::StatusOr<std::unique_ptr<grove::FootImu>> made = grove::FootImu::Create(config);
-  if (!made.ok()) return made.status();
-  auto handle = std::make_unique<grove_foot_imu>();
-  handle->imu = std::move(*made);
-  *out = handle.release();
-  return grove::Status::Ok();
+  return grove::capi::Adopt(grove::FootImu::Create(config), out);
 }
 
 grove::Status AddOne(grove_foot_imu* h, const grove_imu_sample& c) {
@@ -176,8 +115,8 @@ grove::Status AddOne(grove_foot_imu* h, const grove_imu_sample& c) {
     s.accel_mps2[i] = c.accel_mps2[i];
     s.gyro_radps[i] = c.gyro_radps[i];
   }
-  GROVE_RETURN_IF_ERROR(h->imu->AddSample(s));
-  for (grove::FootStep& step : h->imu->TakeSteps()) h->pending.push_back(step);
+  GROVE_RETURN_IF_ERROR(h->engine->AddSample(s));
+  for (grove::FootStep& step : h->engine->TakeSteps()) h->pending.push_back(step);
   return grove::Status::Ok();
 }
 
@@ -189,7 +128,7 @@ void grove_foot_imu_config_default(grove_foot_imu_config* config) {
 
 grove_status grove_foot_imu_config_from_json(const char* json, grove_foot_imu_config* config,
                                              char* error, size_t error_size) {
-  return Guard(nullptr, error, error_size, [&]() -> grove::Status {
+  return grove::capi::GuardCreate(error, error_size, [&]() -> grove::Status {
     if (config == nullptr) return grove::InvalidArgumentError("config is NULL");
     grove::FootImuConfig c = ToCpp(*config);
     GROVE_RETURN_IF_ERROR(ConfigFromJson(json, &c));
@@ -200,7 +139,7 @@ grove_status grove_foot_imu_config_from_json(const char* json, grove_foot_imu_co
 
 grove_status grove_foot_imu_create(const grove_foot_imu_config* config, grove_foot_imu** out,
                                    char* error, size_t error_size) {
-  return Guard(nullptr, error, error_size, [&]() -> grove::Status {
+  return grove::capi::GuardCreate(error, error_size, [&]() -> grove::Status {
     if (out == nullptr) return grove::InvalidArgumentError("out is NULL");
     *out = nullptr;
     if (config == nullptr) return grove::InvalidArgumentError("config is NULL");
@@ -210,7 +149,7 @@ grove_status grove_foot_imu_create(const grove_foot_imu_config* config, grove_fo
 
 grove_status grove_foot_imu_create_json(const char* json, grove_foot_imu** out, char* error,
                                         size_t error_size) {
-  return Guard(nullptr, error, error_size, [&]() -> grove::Status {
+  return grove::capi::GuardCreate(error, error_size, [&]() -> grove::Status {
     if (out == nullptr) return grove::InvalidArgumentError("out is NULL");
     *out = nullptr;
     grove::FootImuConfig c;
@@ -219,17 +158,10 @@ grove_status grove_foot_imu_create_json(const char* json, grove_foot_imu** out, 
   });
 }
 
-void grove_foot_imu_destroy(grove_foot_imu* imu) {
-  try {
-    delete imu;
-  } catch (...) {
-    // A destructor that throws is a bug in the engine; it must not reach C.
-  }
-}
+void grove_foot_imu_destroy(grove_foot_imu* imu) { grove::capi::Destroy(imu); }
 
 const char* grove_foot_imu_last_error(const grove_foot_imu* imu) {
-  if (imu == nullptr) return "";
-  return imu->error_lost ? kOutOfMemory : imu->error.c_str();
+  return grove::capi::LastError(imu);
 }
 
 grove_status grove_foot_imu_add_sample(grove_foot_imu* imu, const grove_imu_sample* sample) {
@@ -256,8 +188,8 @@ grove_status grove_foot_imu_add_samples(grove_foot_imu* imu, const grove_imu_sam
 
 grove_status grove_foot_imu_finish(grove_foot_imu* imu) {
   return OnHandle(imu, [&]() -> grove::Status {
-    GROVE_RETURN_IF_ERROR(imu->imu->Finish());
-    for (grove::FootStep& step : imu->imu->TakeSteps()) imu->pending.push_back(step);
+    GROVE_RETURN_IF_ERROR(imu->engine->Finish());
+    for (grove::FootStep& step : imu->engine->TakeSteps()) imu->pending.push_back(step);
     return grove::Status::Ok();
   });
 }
@@ -286,7 +218,7 @@ grove_status grove_foot_imu_take_steps(grove_foot_imu* imu, grove_foot_step* out
 grove_status grove_foot_imu_get_state(grove_foot_imu* imu, grove_foot_imu_state* out) {
   return OnHandle(imu, [&]() -> grove::Status {
     if (out == nullptr) return grove::InvalidArgumentError("out is NULL");
-    const grove::FootImuState s = imu->imu->State();
+    const grove::FootImuState s = imu->engine->State();
     grove_foot_imu_state o{};
     o.t_s = s.t_s;
     for (int i = 0; i < 3; ++i) {
@@ -307,7 +239,7 @@ grove_status grove_foot_imu_get_state(grove_foot_imu* imu, grove_foot_imu_state*
 grove_status grove_foot_imu_get_summary(grove_foot_imu* imu, grove_foot_imu_summary* out) {
   return OnHandle(imu, [&]() -> grove::Status {
     if (out == nullptr) return grove::InvalidArgumentError("out is NULL");
-    const grove::FootImuSummary s = imu->imu->Summary();
+    const grove::FootImuSummary s = imu->engine->Summary();
     grove_foot_imu_summary o{};
     o.samples = s.samples;
     o.processed_samples = s.processed_samples;

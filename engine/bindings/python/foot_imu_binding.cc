@@ -2,9 +2,8 @@
 // configuration tables (a dict is dumped by Python's json module), so its messages name the key,
 // the value and the rule exactly as the grove command's --imu-config does.
 //
-// Thread safety: as the filters of grove_module.cc, a mutex per object, taken with the GIL
-// released. grove_module.cc declares BindFootImu() and lends it its error raising (the bindings
-// include public headers only, so the two files share no header).
+// Thread safety: as the filters (filter_binding.h), a mutex per object, taken with the GIL
+// released. Errors raise through the shared layer (python_values.h).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -17,22 +16,14 @@
 #include <utility>
 #include <vector>
 
+#include "engine/bindings/python/model_bindings.h"
+#include "engine/bindings/python/python_values.h"
 #include "grove/config_json.h"
 #include "grove/foot_imu.h"
 #include "grove/status.h"
 
 namespace grove::python {
 namespace {
-
-namespace py = pybind11;
-
-// Raises the module's exception of `status`'s code, the message prefixed with `context`.
-using RaiseStatusFn = void (*)(const Status& status, const std::string& context);
-RaiseStatusFn g_raise = nullptr;
-
-void ThrowIfError(const Status& status, const std::string& context = "") {
-  if (!status.ok()) g_raise(status, context);
-}
 
 // The columns of take_steps()'s array.
 const char* const kStepColumns[] = {"t",
@@ -193,8 +184,7 @@ py::dict StateDict(const FootImuState& s) {
 
 }  // namespace
 
-void BindFootImu(py::module_& m, RaiseStatusFn raise) {
-  g_raise = raise;
+void BindFootImu(py::module_& m) {
   py::tuple columns(kStepColumnCount);
   for (py::ssize_t k = 0; k < kStepColumnCount; ++k) columns[k] = kStepColumns[k];
   const std::string doc =

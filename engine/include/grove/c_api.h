@@ -1,5 +1,6 @@
-/* grove's C API: FootSLAM and landmark FastSLAM behind opaque handles, for C and for any
- * language with a C foreign-function interface. C99; the same header compiles as C++.
+/* grove's C API: FootSLAM, landmark FastSLAM and the beacon tracker behind opaque handles, for
+ * C and for any language with a C foreign-function interface. C99; the same header compiles as
+ * C++.
  *
  *   grove_footslam_config config;
  *   grove_footslam_config_default(&config);
@@ -76,7 +77,7 @@
 extern "C" {
 #endif
 
-/* ---- Status and version ---- */
+/* Status and version */
 
 /* Mirrors grove::StatusCode value for value. */
 typedef enum grove_status {
@@ -99,7 +100,7 @@ GROVE_EXPORT const char* grove_version(void);
 /* The library's version numbers; any pointer may be NULL. */
 GROVE_EXPORT void grove_version_numbers(int* major, int* minor, int* patch);
 
-/* ---- Shared value types ---- */
+/* Shared value types */
 
 /* A pose in the map frame at time t_s (seconds). */
 typedef struct grove_pose {
@@ -147,7 +148,7 @@ enum {
   GROVE_RESAMPLING_MULTINOMIAL = 3
 };
 
-/* ---- FootSLAM ---- */
+/* FootSLAM */
 
 typedef struct grove_footslam grove_footslam;
 
@@ -321,7 +322,7 @@ GROVE_EXPORT grove_status grove_footslam_resume(const grove_footslam_config* con
                                                 const void* data, size_t size, grove_footslam** out,
                                                 char* error, size_t error_size);
 
-/* ---- Landmark FastSLAM ---- */
+/* Landmark FastSLAM */
 
 typedef struct grove_fastslam grove_fastslam;
 
@@ -480,6 +481,96 @@ GROVE_EXPORT grove_status grove_fastslam_checkpoint(grove_fastslam* slam, void* 
 GROVE_EXPORT grove_status grove_fastslam_resume(const grove_fastslam_config* config,
                                                 const void* data, size_t size, grove_fastslam** out,
                                                 char* error, size_t error_size);
+
+/* Range-only beacon tracking (grove/tracking.h) */
+
+typedef struct grove_tracker grove_tracker;
+
+/* Every field of grove::TrackerConfig (grove/tracking.h gives each one's meaning, unit, range and
+ * default). Start from grove_tracker_config_default(). */
+typedef struct grove_tracker_config {
+  /* Options that change results. */
+  int64_t particles;
+  uint64_t seed;
+  double start_x_m;
+  double start_y_m;
+  double start_vx_mps;
+  double start_vy_mps;
+  double initial_position_sigma_m;
+  double initial_velocity_sigma_mps;
+  double acceleration_sigma_mps2;
+  double range_sigma_m;
+  int resampling; /* GROVE_RESAMPLING_* */
+  double resample_threshold;
+  /* Options that change only speed. */
+  int threads; /* 0: one per hardware thread */
+  int64_t batch;
+} grove_tracker_config;
+
+/* One range: the beacon's position (m) and the measured distance to it (m, >= 0). */
+typedef struct grove_range_measurement {
+  double beacon_x_m;
+  double beacon_y_m;
+  double range_m;
+} grove_range_measurement;
+
+/* The target's weighted mean position (m) and velocity (m/s) at time t_s. */
+typedef struct grove_target_state {
+  double t_s;
+  double x_m;
+  double y_m;
+  double vx_mps;
+  double vy_mps;
+} grove_target_state;
+
+typedef struct grove_tracker_summary {
+  grove_filter_summary filter;
+  int64_t measurements; /* ranges over all updates */
+} grove_tracker_summary;
+
+/* The calls every model has, declared for the model whose handle is `prefix` and whose
+ * configuration and summary are prefix##_config and prefix##_summary: config_default,
+ * config_from_json, create, create_json, destroy, last_error, step_count, get_config,
+ * mean_pose, heaviest_pose, mean_trajectory, get_summary, checkpoint and resume, each as
+ * grove_footslam's (which documents them). */
+#define GROVE_C_MODEL_API(prefix)                                                                 \
+  GROVE_EXPORT void prefix##_config_default(prefix##_config* config);                             \
+  GROVE_EXPORT grove_status prefix##_config_from_json(const char* json, prefix##_config* config,  \
+                                                      char* error, size_t error_size);            \
+  GROVE_EXPORT grove_status prefix##_create(const prefix##_config* config, prefix** out,          \
+                                            char* error, size_t error_size);                      \
+  GROVE_EXPORT grove_status prefix##_create_json(const char* json, prefix** out, char* error,     \
+                                                 size_t error_size);                              \
+  GROVE_EXPORT void prefix##_destroy(prefix* h);                                                  \
+  GROVE_EXPORT const char* prefix##_last_error(const prefix* h);                                  \
+  GROVE_EXPORT grove_status prefix##_step_count(prefix* h, int64_t* steps);                       \
+  GROVE_EXPORT grove_status prefix##_get_config(prefix* h, prefix##_config* config);              \
+  GROVE_EXPORT grove_status prefix##_mean_pose(prefix* h, grove_pose* pose);                      \
+  GROVE_EXPORT grove_status prefix##_heaviest_pose(prefix* h, grove_pose* pose);                  \
+  GROVE_EXPORT grove_status prefix##_mean_trajectory(prefix* h, grove_pose* out, size_t capacity, \
+                                                     size_t* count);                              \
+  GROVE_EXPORT grove_status prefix##_get_summary(prefix* h, prefix##_summary* summary);           \
+  GROVE_EXPORT grove_status prefix##_checkpoint(prefix* h, void* buffer, size_t capacity,         \
+                                                size_t* size);                                    \
+  GROVE_EXPORT grove_status prefix##_resume(const prefix##_config* config, const void* data,      \
+                                            size_t size, prefix** out, char* error,               \
+                                            size_t error_size);
+
+/* grove_tracker_config_default ... grove_tracker_resume. The poses' heading is the direction of
+ * motion; step_count counts updates. */
+GROVE_C_MODEL_API(grove_tracker)
+
+/* Moves every particle to t_s, then weights it by the n ranges (z may be NULL only when n == 0;
+ * copied). GROVE_INVALID_ARGUMENT, tracker unchanged, for a time not finite or not after the
+ * previous one, or a range not finite or negative (named by its index);
+ * GROVE_FAILED_PRECONDITION when the filter degenerated or an earlier error stopped it. */
+GROVE_EXPORT grove_status grove_tracker_update(grove_tracker* tracker, double t_s,
+                                               const grove_range_measurement* z, size_t n);
+/* The time of the prior, before the first update (grove_footslam_set_start_time's rules). */
+GROVE_EXPORT grove_status grove_tracker_set_start_time(grove_tracker* tracker, double t_s);
+/* The weighted mean position and velocity after the last update. */
+GROVE_EXPORT grove_status grove_tracker_mean_state(grove_tracker* tracker,
+                                                   grove_target_state* state);
 
 #ifdef __cplusplus
 } /* extern "C" */

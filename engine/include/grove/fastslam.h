@@ -36,6 +36,7 @@
 
 #include "grove/config_fields.h"
 #include "grove/export.h"
+#include "grove/filter_config.h"
 #include "grove/resampling.h"
 #include "grove/status.h"
 #include "grove/types.h"
@@ -109,13 +110,19 @@ enum class FastSlamGateUnit {
 
 enum class FastSlamEvidence { kOff, kOn };
 
-struct GROVE_EXPORT FastSlamConfig {
-  // ---- Options that change results ----
+// The filter's fields come from FilterConfig (grove/filter_config.h): particles (Default: 100,
+// Bailey's NPARTICLES), seed, resampling, resample_threshold (resample after a scan when ESS / N
+// is below it; Default: 0.75, Bailey's NEFFECTIVE = 0.75 * NPARTICLES), threads and batch
+// (Default: 64).
+struct GROVE_EXPORT FastSlamConfig : FilterConfig {
+  FastSlamConfig() {
+    particles = 100;
+    resample_threshold = 0.75;
+    batch = 64;
+  }
 
-  // Number of particles. Range: 1..2^31. Default: 100 (Bailey's NPARTICLES).
-  int64_t particles = 100;
-  // Seed of every random stream. Same seed, same result at any thread count. Default: 1.
-  uint64_t seed = 1;
+  // Options that change results
+
   // The filter. Default: kFastSlam2.
   FastSlamFilter filter = FastSlamFilter::kFastSlam2;
   // The vehicle model. Default: kBailey.
@@ -141,13 +148,8 @@ struct GROVE_EXPORT FastSlamConfig {
   double start_x_m = 0;
   double start_y_m = 0;
   double start_heading_rad = 0;
-  // Resampling scheme. Default: systematic.
-  ResamplingScheme resampling = ResamplingScheme::kSystematic;
-  // Resample after a scan when ESS / N < threshold. Range: (0, 1]. Default: 0.75 (Bailey's
-  // NEFFECTIVE = 0.75 * NPARTICLES).
-  double resample_threshold = 0.75;
 
-  // ---- The seed's family (filter kUnscented ... kDeSrcd) ----
+  // The seed's family (filter kUnscented ... kDeSrcd)
 
   // U-FastSLAM's scaled unscented transform. Ranges: alpha (0, 10], beta [0, 100],
   // kappa (-4, 100]. Defaults: Kim's 0.9, 2, 0.
@@ -165,7 +167,7 @@ struct GROVE_EXPORT FastSlamConfig {
   double de_crossover = 0.8;
   int64_t de_generations = 10;
 
-  // ---- Unknown data association (association != kKnown) ----
+  // Unknown data association (association != kKnown)
 
   // Default: kKnown.
   FastSlamAssociation association = FastSlamAssociation::kKnown;
@@ -189,14 +191,6 @@ struct GROVE_EXPORT FastSlamConfig {
   // Side of the spatial index's cells, metres (at most 8 landmarks a cell: a ninth is dropped
   // and counted). Range: [0.05, 1e4]. Default: 5.
   double index_cell_m = 5;
-
-  // ---- Options that change only speed ----
-
-  // Worker threads; 0 means one per hardware thread. Range: 0..256. Default: 0.
-  int threads = 0;
-  // Particles per parallel batch, at most (batches shrink to leave each thread at least 4).
-  // Range: >= 1. Default: 64.
-  int64_t batch = 64;
 
   // Checks every field; the message names the field, its value and the rule it breaks.
   Status Validate() const;
@@ -320,7 +314,7 @@ class GROVE_EXPORT FastSlam {
   // Walks every shared map node and path entry and checks its reference count (tests).
   Status CheckInvariants() const;
 
-  // ---- Checkpoints (as FootSlam's) ----
+  // Checkpoints (as FootSlam's)
   StatusOr<std::string> Checkpoint(std::string_view user_data = {}) const;
   static StatusOr<std::unique_ptr<FastSlam>> Resume(const FastSlamConfig& config,
                                                     std::string_view checkpoint,
@@ -336,11 +330,6 @@ class GROVE_EXPORT FastSlam {
 
  private:
   explicit FastSlam(std::unique_ptr<Impl> impl);
-  // Resume()'s work on one rank.
-  static StatusOr<std::unique_ptr<FastSlam>> ResumeShare(const FastSlamConfig& config,
-                                                         std::string_view checkpoint,
-                                                         const std::string& name,
-                                                         std::string* user_data, Collective* ranks);
   std::unique_ptr<Impl> impl_;
 };
 

@@ -33,6 +33,7 @@
 
 #include "grove/config_fields.h"
 #include "grove/export.h"
+#include "grove/filter_config.h"
 #include "grove/resampling.h"
 #include "grove/status.h"
 #include "grove/types.h"
@@ -66,13 +67,16 @@ enum class FootSlamGrid {
   kFixed,
 };
 
-struct GROVE_EXPORT FootSlamConfig {
-  // ---- Options that change results ----
+// The filter's fields come from FilterConfig (grove/filter_config.h): particles (Default:
+// 30000), seed, resampling, resample_threshold (Default: 0.5), threads and batch (Default: 512);
+// island mode's from IslandConfig (islands, island_exchange_steps, island_exchange_fraction:
+// above 1 island the particles form islands of whole blocks of 4,096, each resampled from its
+// own weights; systematic resampling only).
+struct GROVE_EXPORT FootSlamConfig : FilterConfig, IslandConfig {
+  FootSlamConfig() { particles = 30000; }
 
-  // Number of particles. Range: 1..2^31. Default: 30000.
-  int64_t particles = 30000;
-  // Seed of every random stream. Same seed, same result at any thread count. Default: 1.
-  uint64_t seed = 1;
+  // Options that change results
+
   // Circumradius of the pointy-top hexagons, metres. Range: (0, 1000]. Default: 0.5.
   double hex_radius_m = 0.5;
   // Prior count a added to every edge counter (Dirichlet prior). Range: (0, 1e6]. Default: 0.8.
@@ -117,22 +121,6 @@ struct GROVE_EXPORT FootSlamConfig {
   // White noise on each step's end position, per axis, metres. Range: [0, 100]. Default: 0.
   double position_sigma_m = 0;
 
-  // Resampling scheme. Default: systematic.
-  ResamplingScheme resampling = ResamplingScheme::kSystematic;
-  // Resample when ESS / N < threshold. Range: (0, 1]; 1 resamples every step. Default: 0.5.
-  double resample_threshold = 0.5;
-  // Island mode (FilterOptions::islands): above 1, the particles form this many islands of whole
-  // blocks of 4,096, each resampled from its own weights (systematic resampling only); across
-  // MPI ranks a multiple of the ranks. Range: 1..65536, at most ceil(particles / 4096).
-  // Default: 1 (one population, resampled as a whole).
-  int islands = 1;
-  // Island mode: every this many steps the islands resample and each sends the next a sample of
-  // island_exchange_fraction of its particles. Range: >= 1. Default: 10.
-  int64_t island_exchange_steps = 10;
-  // Island mode: the share of the smallest island's particles an island sends at an exchange.
-  // Range: [0, 0.5]. Default: 0.1.
-  double island_exchange_fraction = 0.1;
-
   // Map representation. Default: kHTree.
   FootSlamMapKind map = FootSlamMapKind::kHTree;
   // H-tree degree s = s_x * s_y. One of 4, 16, 64, 256. Default: 16.
@@ -145,15 +133,6 @@ struct GROVE_EXPORT FootSlamConfig {
   // Alphabet bound T (paper §V): leaves hold one 16-bit symbol while every counter is <= T.
   // Range: 0..5; 0 switches the alphabet off. Default: 5. H-tree maps only; results identical.
   int alphabet = 5;
-
-  // ---- Options that change only speed ----
-
-  // Worker threads. 0 means one per hardware thread. Range: 0..256 (more threads than cores
-  // only add overhead; oneTBB runs at most as many as the process may use). Default: 0.
-  int threads = 0;
-  // Particles per parallel batch, at most (batches shrink to leave each thread at least 4).
-  // Range: >= 1. Default: 512.
-  int64_t batch = 512;
 
   // Checks every field; the message names the field, its value and the rule it breaks.
   Status Validate() const;
@@ -289,7 +268,7 @@ class GROVE_EXPORT FootSlam {
   // state); for tests and debugging.
   Status CheckInvariants() const;
 
-  // ---- Checkpoints ----
+  // Checkpoints
 
   // The whole state after the last step as the bytes of a checkpoint file (format in
   // tools/io/FORMATS.md, "Checkpoints"): every particle's pose, error states, weight, map and path,
@@ -322,11 +301,6 @@ class GROVE_EXPORT FootSlam {
 
  private:
   explicit FootSlam(std::unique_ptr<Impl> impl);
-  // Resume()'s work on one rank.
-  static StatusOr<std::unique_ptr<FootSlam>> ResumeShare(const FootSlamConfig& config,
-                                                         std::string_view checkpoint,
-                                                         const std::string& name,
-                                                         std::string* user_data, Collective* ranks);
   std::unique_ptr<Impl> impl_;
 };
 

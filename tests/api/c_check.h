@@ -1,8 +1,13 @@
-/* CHECK and CHECK_STATUS_MSG for the C API's C tests: checks that cannot be compiled out, and a
- * status check that prints the call, both statuses and a message. Needs stdio.h, stdlib.h and
- * grove/c_api.h (grove_status_name). */
-#ifndef GROVE_TESTS_API_C_CHECKS_H_
-#define GROVE_TESTS_API_C_CHECKS_H_
+/* Checks for the C API's tests (C99): each failure prints the file, line and what failed, and
+ * exits; the checks cannot be compiled out. */
+#ifndef GROVE_TESTS_API_C_CHECK_H_
+#define GROVE_TESTS_API_C_CHECK_H_
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "grove/c_api.h"
 
 #define CHECK(cond)                                                            \
   do {                                                                         \
@@ -22,5 +27,10 @@
       exit(1);                                                                                \
     }                                                                                         \
   } while (0)
+#define CHECK_STATUS(call, expected) CHECK_STATUS_MSG(call, expected, "")
 
-#endif /* GROVE_TESTS_API_C_CHECKS_H_ */
+static inline int Contains(const char* text, const char* part) {
+  return strstr(text, part) != NULL;
+}
+
+#endif /* GROVE_TESTS_API_C_CHECK_H_ */
