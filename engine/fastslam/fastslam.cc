@@ -5,9 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <climits>
 #include <cmath>
-#include <numbers>
 #include <thread>
 
 #include "concurrency/worker_pool.h"
@@ -15,6 +13,7 @@
 #include "engine/filter/filter_driver.h"
 #include "engine/io/checkpoint_io.h"
 #include "engine/ranks/collective.h"
+#include "grove/input_rules.h"
 
 namespace grove {
 
@@ -48,28 +47,12 @@ struct StepRecord {
   uint8_t unused[7] = {};
 };
 
+// Observation k of a scan against grove/input_rules.h.
 Status CheckObservation(size_t k, const LandmarkObservation& z, bool known) {
-  if (!std::isfinite(z.range_m) || !std::isfinite(z.bearing_rad)) {
-    return InvalidArgumentError(fmt::format(
-        "observation {}: range = {}, bearing = {}: must be finite", k, z.range_m, z.bearing_rad));
-  }
-  if (z.range_m < 0) {
-    return InvalidArgumentError(
-        fmt::format("observation {}: range = {}: must be >= 0", k, z.range_m));
-  }
-  if (!(z.bearing_rad > -std::numbers::pi && z.bearing_rad <= std::numbers::pi)) {
-    return InvalidArgumentError(
-        fmt::format("observation {}: bearing = {}: must be in (-pi, pi]", k, z.bearing_rad));
-  }
-  if (known && z.id < 0) {
-    return InvalidArgumentError(
-        fmt::format("observation {}: id = {}: must be >= 0 under known association", k, z.id));
-  }
-  if (!known && !(z.id >= -1 && z.id <= INT32_MAX)) {
-    return InvalidArgumentError(fmt::format(
-        "observation {}: id = {}: must be -1 (none) or in [0, 2^31) under unknown association", k,
-        z.id));
-  }
+  Status s = CheckInput(InputField::kRange, z.range_m);
+  if (s.ok()) s = CheckInput(InputField::kBearing, z.bearing_rad);
+  if (s.ok()) s = CheckLandmarkId(z.id, known);
+  if (!s.ok()) return InvalidArgumentError(fmt::format("observation {}: {}", k, s.message()));
   return Status::Ok();
 }
 
@@ -93,15 +76,13 @@ class FastSlam::Impl {
   }
 
   Status Control(double t_s, double v, double g) {
-    if (!std::isfinite(t_s) || !std::isfinite(v) || !std::isfinite(g)) {
-      return InvalidArgumentError(fmt::format(
-          "control at t = {}: v = {}, steer = {}: every value must be finite", t_s, v, g));
+    if (Status s = CheckInput(InputField::kTime, t_s); !s.ok()) {
+      return InvalidArgumentError("control: " + s.message());
     }
-    if (!fastslam::SteeringUsable(geometry_, g)) {
-      return InvalidArgumentError(
-          fmt::format("control at t = {}: steer = {}: the {} model needs |steer| < pi/2 and "
-                      "1 - tan(steer) H / L > 0",
-                      t_s, g, FastSlamVehicleName(config_.vehicle)));
+    Status s = CheckInput(InputField::kSpeed, v);
+    if (s.ok()) s = CheckSteering(config_, g);
+    if (!s.ok()) {
+      return InvalidArgumentError(fmt::format("control at t = {}: {}", t_s, s.message()));
     }
     GROVE_RETURN_IF_ERROR(driver_.CheckNotFailed("cannot take another control"));
     if (controls_ == 0) {
@@ -127,8 +108,8 @@ class FastSlam::Impl {
   }
 
   Status Scan(double t_s, std::span<const LandmarkObservation> z) {
-    if (!std::isfinite(t_s)) {
-      return InvalidArgumentError(fmt::format("scan at t = {}: must be finite", t_s));
+    if (Status s = CheckInput(InputField::kTime, t_s); !s.ok()) {
+      return InvalidArgumentError("scan: " + s.message());
     }
     if (controls_ == 0) {
       return InvalidArgumentError(

@@ -245,7 +245,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
   Status Open() {
     if (!options_.victoria_park_dir.empty()) {
       StatusOr<VictoriaParkData> data =
-          ReadVictoriaPark(options_.victoria_park_dir, options_.until_s);
+          ReadVictoriaPark(options_.victoria_park_dir, options_.until_s, config_);
       if (!data.ok()) return data.status();
       park_ = std::make_unique<VictoriaParkData>(std::move(data).value());
       park_events_ = new VictoriaParkEvents(park_.get());
@@ -256,7 +256,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
       return Status::Ok();
     }
     StatusOr<FastSlamInputReader> reader =
-        FastSlamInputReader::Open(options_.controls_path, options_.observations_path);
+        FastSlamInputReader::Open(options_.controls_path, options_.observations_path, config_);
     if (!reader.ok()) return reader.status();
     if (!reader->has_ids() && config_.association == FastSlamAssociation::kKnown) {
       if (ranks_ == nullptr || ranks_->rank() == 0) {  // one line, not one per rank
@@ -271,7 +271,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
     if (records_ > 0) {
       // Regular files: read them once more to count the scans among the rows.
       StatusOr<FastSlamInputReader> events =
-          FastSlamInputReader::Open(options_.controls_path, options_.observations_path);
+          FastSlamInputReader::Open(options_.controls_path, options_.observations_path, config_);
       if (events.ok()) steps_ = CountRecords<FastSlamEvent>(*events);
     }
     if (!options_.truth_path.empty()) {

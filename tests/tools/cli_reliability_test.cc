@@ -1,0 +1,111 @@
+// Regressions of the `grove` command found by hostile use: values outside the input rules
+// (grove/input_rules.h) named at their file, line and column.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tests/tools/cli_testing.h"
+
+namespace {
+
+using grove::testing::CliTest;
+using grove::testing::Outcome;
+using grove::testing::Slurp;
+namespace fs = std::filesystem;
+
+// The lines of `text`.
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+std::string Joined(const std::vector<std::string>& lines) {
+  std::string text;
+  for (const std::string& l : lines) text += l + "\n";
+  return text;
+}
+
+class CliInputRulesTest : public CliTest {
+ protected:
+  // The webmap's first 50 s: controls rows 2..2001 and the observations up to t = 50.
+  void SetUp() override {
+    CliTest::SetUp();
+    ASSERT_EQ(Grove("fastslam simulate --out " + (dir_ / "sim").string()).exit_code, 0);
+    std::vector<std::string> c = Lines(Slurp(dir_ / "sim" / "controls.csv"));
+    c.resize(2001);
+    controls_ = c;
+    for (const std::string& line : Lines(Slurp(dir_ / "sim" / "observations.csv"))) {
+      if (observations_.empty() || std::stod(line.substr(0, line.find(','))) <= 50) {
+        observations_.push_back(line);
+      }
+    }
+  }
+
+  // Runs FastSLAM on the controls and observations given; expects exit 3 with `where` (after
+  // the file's path) and `what` in the error, and no output directory.
+  void ExpectRefused(const std::vector<std::string>& controls,
+                     const std::vector<std::string>& observations, const std::string& file,
+                     const std::string& where, const std::string& what) {
+    const std::string c = Write("c.csv", Joined(controls));
+    const std::string o = Write("o.csv", Joined(observations));
+    const fs::path out = dir_ / "out";
+    Outcome r = Grove("fastslam run --no-progress --particles 20 --controls " + c +
+                      " --observations " + o + " --out " + out.string());
+    SCOPED_TRACE(what);
+    EXPECT_EQ(r.exit_code, 3) << r.err;
+    EXPECT_NE(r.err.find((dir_ / file).string() + ":" + where + ": " + what), std::string::npos)
+        << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+
+  std::vector<std::string> controls_, observations_;
+};
+
+// A huge finite range made a landmark of infinite covariance: the run went on and failed later
+// at a valid line (or after the whole run, naming no line). It is refused at its own field.
+TEST_F(CliInputRulesTest, AHugeRangeIsRefusedAtItsField) {
+  const int line = static_cast<int>(observations_.size()) + 1;
+  for (const auto& [range, shown] :
+       {std::pair{"1e300", "1e+300"}, std::pair{"1e12", "1000000000000"},
+        std::pair{"1000000.5", "1000000.5"}}) {
+    std::vector<std::string> o = observations_;
+    o.push_back(std::string("50,") + range + ",0.1,99");
+    o.push_back("50.2,10,0.1,99");
+    ExpectRefused(controls_, o, "o.csv", std::to_string(line) + ":4",
+                  std::string("range = ") + shown + ": must be in [0, 1e6] m");
+  }
+}
+
+// A control's speed of 1e300 (or 1e30) was named nowhere: the run failed at a later scan's
+// observation. Steering was unbounded (4 rad and 1e10 rad accepted); a time of 1e300 too.
+TEST_F(CliInputRulesTest, AControlOutsideTheRulesIsRefusedAtItsRow) {
+  auto with_row_101 = [&](const std::string& row) {
+    std::vector<std::string> c = controls_;
+    c[100] = row;
+    return c;
+  };
+  const std::string t = controls_[100].substr(0, controls_[100].find(','));
+  const int steer_column = static_cast<int>(t.size() + std::string(",3,").size()) + 1;
+  ExpectRefused(with_row_101(t + ",1e300,0"), observations_, "c.csv",
+                "101:" + std::to_string(t.size() + 2), "speed = 1e+300: must be within +-1000 m/s");
+  ExpectRefused(with_row_101(t + ",1e30,0"), observations_, "c.csv",
+                "101:" + std::to_string(t.size() + 2), "speed = 1e+30: must be within +-1000 m/s");
+  ExpectRefused(with_row_101(t + ",3,4"), observations_, "c.csv",
+                "101:" + std::to_string(steer_column),
+                "steering = 4: must be in (-pi/2, pi/2) rad");
+  ExpectRefused(with_row_101(t + ",3,1e10"), observations_, "c.csv",
+                "101:" + std::to_string(steer_column),
+                "steering = 10000000000: must be in (-pi/2, pi/2) rad");
+  std::vector<std::string> c = controls_;
+  c.push_back("1e300,3,0");
+  ExpectRefused(c, observations_, "c.csv", "2002:1", "t = 1e+300: must be within +-1e12 s");
+}
+
+}  // namespace
