@@ -1,5 +1,5 @@
 // Regressions of the `grove` command found by hostile use: values outside the input rules
-// (grove/input_rules.h) named at their file, line and column.
+// (grove/input_rules.h) named at their file, line and column; bytes after a JSON document.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -106,6 +106,40 @@ TEST_F(CliInputRulesTest, AControlOutsideTheRulesIsRefusedAtItsRow) {
   std::vector<std::string> c = controls_;
   c.push_back("1e300,3,0");
   ExpectRefused(c, observations_, "c.csv", "2002:1", "t = 1e+300: must be within +-1e12 s");
+}
+
+// The JSON parser takes a NUL byte for the end of its input: a configuration, a Monte Carlo
+// scenario or a batch manifest line followed by a NUL and anything was accepted.
+TEST_F(CliTest, BytesAfterANulInJsonAreRefused) {
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name, std::ios::binary) << text;
+    return (dir_ / name).string();
+  };
+  const std::string nul(1, '\0');
+  std::string config = write("c.json", "{\"particles\": 30}" + nul + "garbage");
+  Outcome o = Grove("footslam run --print-config --config " + config);
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+  EXPECT_NE(o.err.find(config + ":1:18: invalid JSON: a NUL byte"), std::string::npos) << o.err;
+  o = Grove("fastslam run --print-config --config " + config);
+  EXPECT_EQ(o.exit_code, 2) << o.out;
+
+  std::string scenario =
+      write("s.json", "{\"preset\": \"sim3\", \"association\": \"known\"}" + nul + "x");
+  o = Grove("fastslam montecarlo --scenario " + scenario + " --filters fastslam2 --runs 1 --out " +
+            (dir_ / "mc").string());
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_NE(o.err.find(scenario + ":1:43: invalid JSON: a NUL byte"), std::string::npos) << o.err;
+  EXPECT_FALSE(fs::exists(dir_ / "mc"));
+
+  ASSERT_EQ(
+      Grove("footslam simulate --minutes 1 --seed 1 --out " + (dir_ / "w").string()).exit_code, 0);
+  std::string manifest =
+      write("walks.jsonl", "{\"name\": \"a\", \"steps\": \"w/steps.csv\"}" + nul + "junk\n");
+  o = Grove("footslam batch --manifest " + manifest + " --out " + (dir_ / "b").string());
+  EXPECT_EQ(o.exit_code, 2) << o.err;
+  EXPECT_NE(o.err.find(manifest + ":1:38: not a JSON object: a NUL byte"), std::string::npos)
+      << o.err;
+  EXPECT_FALSE(fs::exists(dir_ / "b"));
 }
 
 }  // namespace

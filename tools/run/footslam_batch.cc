@@ -105,6 +105,10 @@ StatusOr<std::vector<Walk>> ReadManifest(const std::string& path, const FootSlam
     auto error = [&](size_t column, const std::string& message) {
       return InvalidArgumentError(fmt::format("{}:{}:{}: {}", path, number, column, message));
     };
+    // The parser takes a NUL byte for the end of the input: what follows one would be ignored.
+    if (const size_t nul = line.find('\0'); nul != std::string::npos) {
+      return error(nul + 1, "not a JSON object: a NUL byte (JSON text has none)");
+    }
     nlohmann::json j;
     std::string duplicate;
     try {
