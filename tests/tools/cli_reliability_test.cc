@@ -1,5 +1,7 @@
 // Regressions of the `grove` command found by hostile use: values outside the input rules
-// (grove/input_rules.h) named at their file, line and column; bytes after a JSON document.
+// (grove/input_rules.h) named at their file, line and column; checkpoints at least every N steps
+// and never twice at one; failed runs leaving no directory they made; bytes after a JSON
+// document.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -106,6 +108,61 @@ TEST_F(CliInputRulesTest, AControlOutsideTheRulesIsRefusedAtItsRow) {
   std::vector<std::string> c = controls_;
   c.push_back("1e300,3,0");
   ExpectRefused(c, observations_, "c.csv", "2002:1", "t = 1e+300: must be within +-1e12 s");
+}
+
+// `--checkpoint-every N` checkpointed when steps % N == 0: a scan takes two steps, so multiples
+// were skipped (12 checkpoints for 14,701 steps at N = 1000; 59 for 198 at N = 3), and a record
+// that takes no step (the first control) checkpointed the same step twice (3 on the webmap at
+// N = 7000). A record takes at most 2 steps, so for N > 2 each multiple gives one checkpoint.
+TEST_F(CliTest, PeriodicCheckpointsComeAtLeastEveryNStepsAndNeverTwiceAtOne) {
+  struct Case {
+    std::string command;
+    int64_t every;
+  };
+  ASSERT_EQ(Grove("fastslam simulate --out " + (dir_ / "sim").string()).exit_code, 0);
+  const std::string sim = (dir_ / "sim").string();
+  for (const Case& c : {Case{"fastslam victoria-park --until 300", 1000},
+                        Case{"fastslam run --controls " + sim + "/controls.csv --observations " +
+                                 sim + "/observations.csv",
+                             7000},
+                        Case{"fastslam victoria-park --until 5", 3}}) {
+    SCOPED_TRACE(c.command);
+    const fs::path out = dir_ / "out";
+    fs::remove_all(out);
+    Outcome o = Grove(c.command + " --no-progress --particles 5 --checkpoint-every " +
+                      std::to_string(c.every) + " --out " + out.string());
+    ASSERT_EQ(o.exit_code, 0) << o.err;
+    const nlohmann::json s = nlohmann::json::parse(Slurp(out / "summary.json"));
+    const int64_t steps = s["steps"].get<int64_t>();
+    EXPECT_EQ(s["checkpoints"]["written"].get<int64_t>(), steps / c.every) << steps << " steps";
+  }
+}
+
+// A run whose checkpoint could not be written (a full disk: here a file size limit) left the
+// directories it had made: the output directory's parents and the checkpoint's directory.
+TEST_F(CliTest, AFailedRunLeavesNoDirectoryItMade) {
+  ASSERT_EQ(
+      Grove("footslam simulate --minutes 1 --seed 1 --out " + (dir_ / "w").string()).exit_code, 0);
+  const fs::path out = dir_ / "n1" / "n2" / "n3", checkpoint = dir_ / "ck" / "sub" / "ck.grove";
+  const std::string cmd = "sh -c \"trap '' XFSZ; ulimit -f 1; exec " + std::string(GROVE_BINARY) +
+                          " footslam run --no-progress --particles 2000 --checkpoint-every 10" +
+                          " --steps " + (dir_ / "w" / "steps.csv").string() + " --out " +
+                          out.string() + " --checkpoint " + checkpoint.string() + "\" 2>" +
+                          (dir_ / "err").string();
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 5) << Slurp(dir_ / "err");
+  EXPECT_NE(Slurp(dir_ / "err").find("File too large"), std::string::npos) << Slurp(dir_ / "err");
+  EXPECT_FALSE(fs::exists(dir_ / "n1")) << "the output directory's parents were left";
+  EXPECT_FALSE(fs::exists(dir_ / "ck")) << "the checkpoint's directory was left";
+  // A path too long to make (ENAMETOOLONG after 20 levels) left the levels it had made.
+  std::string deep = (dir_ / "r").string();
+  for (int k = 0; k < 25; ++k) deep += "/" + std::string(200, 'd');
+  Outcome o = Grove("footslam run --no-progress --particles 50 --steps " +
+                    (dir_ / "w" / "steps.csv").string() + " --out " + deep);
+  EXPECT_EQ(o.exit_code, 5) << o.err;
+  EXPECT_NE(o.err.find("File name too long"), std::string::npos) << o.err;
+  EXPECT_FALSE(fs::exists(dir_ / "r")) << "the levels made were left";
 }
 
 // The JSON parser takes a NUL byte for the end of its input: a configuration, a Monte Carlo

@@ -434,6 +434,11 @@ TEST_F(CliTest, ABatchStoppedBySigtermResumesWhereItStopped) {
   ASSERT_EQ(std::system(("kill -TERM " + Slurp(pid_file)).c_str()), 0);
   while (!fs::exists(rc) || Slurp(rc).empty()) std::system("sleep 0.01");
   EXPECT_EQ(std::stoi(Slurp(rc)), 143) << Slurp(err);
+  // Regression: the advice was "--resume", which batch does not take.
+  EXPECT_NE(Slurp(err).find("run the same batch command again: it resumes this walk"),
+            std::string::npos)
+      << Slurp(err);
+  EXPECT_EQ(Slurp(err).find("--resume"), std::string::npos) << Slurp(err);
   const std::string stopped = Slurp(out / "batch_summary.jsonl");
   EXPECT_NE(stopped.find("\"name\":\"x\",\"out\""), std::string::npos) << stopped;
   EXPECT_NE(stopped.find("\"status\":\"stopped\""), std::string::npos) << stopped;

@@ -229,6 +229,8 @@ WalkResult RunWalk(const Walk& w, const FootSlamBatchOptions& options, int64_t m
   run.run.handle_signals = false;
   run.run.memory_budget_bytes = memory_budget;
   run.run.checkpoint_every = options.checkpoint_every;
+  // A batch has no --resume: it resumes a stopped walk by itself.
+  run.run.resume_advice = "run the same batch command again: it resumes this walk";
   result.resumed = same && FileExists(dir + "/checkpoint.grove");
   if (result.resumed) {
     run.run.resume_path = dir + "/checkpoint.grove";  // it holds the prior map

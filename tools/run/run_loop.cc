@@ -86,9 +86,10 @@ std::string DirectoryOf(const std::string& path) {
 }
 
 // Every path the run will write is checked before the first step: none is an input, none is
-// a directory, the checkpoint's directory exists (or is made) and takes a file.
+// a directory, the checkpoint's directory exists (or is made: *created gets what was made) and
+// takes a file.
 Status CheckOutputPaths(const RunJob& job, const std::string& out_dir,
-                        const std::string& checkpoint_path) {
+                        const std::string& checkpoint_path, std::vector<std::string>* created) {
   struct Input {
     std::string path;
     struct stat st;
@@ -123,7 +124,7 @@ Status CheckOutputPaths(const RunJob& job, const std::string& out_dir,
     }
   }
   // The checkpoint's directory must take a file now, not after hours of running.
-  GROVE_RETURN_IF_ERROR(EnsureDirectory(DirectoryOf(checkpoint_path)));
+  GROVE_RETURN_IF_ERROR(EnsureDirectory(DirectoryOf(checkpoint_path), created));
   StatusOr<AtomicFileWriter> probe = AtomicFileWriter::Create(checkpoint_path);
   if (!probe.ok()) return probe.status();
   return Status::Ok();  // the probe's temporary is removed here
@@ -388,6 +389,11 @@ class RunLoop {
             options.resume_path.empty() ? "" : RankCheckpointPath(options.resume_path, rank())) {
     position_.input_name = job->InputName();
   }
+  // A run that did not succeed leaves no directory it made: those of the checkpoint here, the
+  // output directory's in OutputDirectory (only empty ones go: one holding a checkpoint stays).
+  ~RunLoop() {
+    if (!succeeded_) RemoveCreatedDirectories(checkpoint_dirs_made_);
+  }
 
   // Every output path is checked, and the output directory locked, before any work.
   int OpenOutputs() {
@@ -396,7 +402,8 @@ class RunLoop {
       StatusOr<OutputDirectory> opened = OutputDirectory::Open(options_.out_dir);
       if (opened.ok()) {
         out_dir_.emplace(std::move(opened).value());
-        paths_ok = CheckOutputPaths(*job_, options_.out_dir, checkpoint_path_);
+        paths_ok =
+            CheckOutputPaths(*job_, options_.out_dir, checkpoint_path_, &checkpoint_dirs_made_);
       } else {
         paths_ok = opened.status();
       }
@@ -455,6 +462,7 @@ class RunLoop {
     StatusOr<InputPosition> at = InputPosition::FromJson(user, my_resume_path_);
     if (Status s = Agree(at.status()); !s.ok()) return Fail(kExitInput, s.message());
     resumed_at_ = *at;
+    last_checkpoint_steps_ = job_->steps();
     return -1;
   }
 
@@ -493,7 +501,7 @@ class RunLoop {
                     s.message());
       }
       if (show_progress && !HangupSeen()) progress.Update(position_.records);
-      if (options_.checkpoint_every > 0 && job_->steps() % options_.checkpoint_every == 0) {
+      if (CheckpointDue()) {
         if (Status s = WriteCheckpoint(); !s.ok()) return Fail(ExitCodeOf(s), s.message());
       }
     }
@@ -539,6 +547,7 @@ class RunLoop {
       return Fail(kExitOutput, s.message());
     }
     const std::string brief = job_->BriefReport();  // collective across ranks: every rank
+    succeeded_ = true;
     if (!lead_) return kExitOk;
     out_dir_->Keep();
     std::string names;
@@ -573,6 +582,14 @@ class RunLoop {
     return -1;
   }
 
+  // --checkpoint-every N: a checkpoint at the first record after which the step count has
+  // reached the next multiple of N, however many steps a record takes (a scan takes two, a
+  // control before the first none), so one at least every N steps and never two at one step.
+  bool CheckpointDue() const {
+    const int64_t n = options_.checkpoint_every;
+    return n > 0 && job_->steps() / n > last_checkpoint_steps_ / n;
+  }
+
   // Across ranks every rank writes its own file and the ranks agree on the outcome; a crash
   // between two ranks' renames leaves files of two steps, which a resume refuses.
   Status WriteCheckpoint() {
@@ -582,6 +599,7 @@ class RunLoop {
     if (s.ok()) s = WriteFileAtomically(my_checkpoint_path_, *bytes);
     GROVE_RETURN_IF_ERROR(Agree(s));
     if (out_dir_) out_dir_->Keep();  // it holds a checkpoint now (the default path)
+    last_checkpoint_steps_ = job_->steps();
     ++checkpoints_written_;
     checkpoint_bytes_ = static_cast<int64_t>(bytes->size());
     checkpoint_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -600,13 +618,14 @@ class RunLoop {
     Status s = WriteCheckpoint();
     if (!s.ok()) return Fail(kExitOutput, s.message());
     if (lead_) {
-      std::fprintf(stderr,
-                   "\ngrove: stopped by %s after step %lld: wrote %s%s; continue with the same "
-                   "command and --resume %s\n",
-                   strsignal(signal), static_cast<long long>(job_->steps()),
-                   checkpoint_path_.c_str(),
-                   ranks_ == nullptr ? "" : " (and one file per further rank beside it)",
-                   checkpoint_path_.c_str());
+      const std::string advice =
+          options_.resume_advice.empty()
+              ? "continue with the same command and --resume " + checkpoint_path_
+              : options_.resume_advice;
+      std::fprintf(
+          stderr, "\ngrove: stopped by %s after step %lld: wrote %s%s; %s\n", strsignal(signal),
+          static_cast<long long>(job_->steps()), checkpoint_path_.c_str(),
+          ranks_ == nullptr ? "" : " (and one file per further rank beside it)", advice.c_str());
     }
     return kExitSignalBase + signal;
   }
@@ -640,6 +659,9 @@ class RunLoop {
   int64_t predicted_ = 0;
   InputPosition resumed_at_;
   InputPosition position_;
+  bool succeeded_ = false;
+  int64_t last_checkpoint_steps_ = 0;              // the step count of the last checkpoint
+  std::vector<std::string> checkpoint_dirs_made_;  // the checkpoint's directories this run made
   int64_t checkpoints_written_ = 0, checkpoint_bytes_ = 0;
   double checkpoint_s_ = 0;
 };

@@ -1,7 +1,8 @@
 // The run loop of every model's `grove ... run` command, written once: output and checkpoint
 // paths checked before the first step, the output directory locked, the memory budget, create
 // or resume (with the input digest), the step loop with progress, periodic and signal
-// checkpoints, and the outputs written as a set (OutputSet) with summary.json last.
+// checkpoints, and the outputs written as a set (OutputSet) with summary.json last. A run that
+// does not succeed leaves no directory it made but those holding a checkpoint.
 //
 // Signals: SIGINT and SIGTERM stop the run at the next step boundary, or during the writing of
 // the outputs before anything is renamed into place; it writes a checkpoint and exits with
@@ -66,6 +67,9 @@ struct RunOptions {
   int64_t checkpoint_every = 0;     // steps between checkpoints; 0: only when stopped by a signal
   std::string checkpoint_path;      // empty: out_dir + "/checkpoint.grove"
   std::string resume_path;          // continue from this checkpoint
+  // What the message after a stop by a signal tells the user to do; empty: "continue with the
+  // same command and --resume CHECKPOINT".
+  std::string resume_advice;
   // Install SignalHandlers for the run; false when the caller has (runs side by side).
   bool handle_signals = true;
   // One filter across these ranks (null: one process). Rank 0 checks the output paths, writes
