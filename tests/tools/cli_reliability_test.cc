@@ -1,7 +1,7 @@
 // Regressions of the `grove` command found by hostile use: values outside the input rules
 // (grove/input_rules.h) named at their file, line and column; checkpoints at least every N steps
 // and never twice at one; failed runs leaving no directory they made; bytes after a JSON
-// document.
+// document; Monte Carlo's failed jobs, memory budget and signals.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -197,6 +197,127 @@ TEST_F(CliTest, BytesAfterANulInJsonAreRefused) {
   EXPECT_NE(o.err.find(manifest + ":1:38: not a JSON object: a NUL byte"), std::string::npos)
       << o.err;
   EXPECT_FALSE(fs::exists(dir_ / "b"));
+}
+
+// Monte Carlo had no memory prediction: 10 million particles ran 16 s to 4.5 GB and then
+// reported out of memory with exit 0. It is refused before any job, as `run` refuses, and
+// without making its output directory.
+TEST_F(CliTest, MonteCarloOverTheMemoryBudgetIsRefusedBeforeAnyJob) {
+  const fs::path out = dir_ / "m";
+  const std::string mc =
+      "fastslam montecarlo --no-progress --scenario sim3 --filters fastslam2 "
+      "--loops 1 --out " +
+      out.string();
+  Outcome o = Grove(mc + " --runs 1 --particles 10000000 --memory-budget 1G");
+  EXPECT_EQ(o.exit_code, 6) << o.err;
+  EXPECT_NE(o.err.find("the run is predicted to need"), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("more than the --memory-budget of 1024.0 MiB"), std::string::npos) << o.err;
+  EXPECT_FALSE(fs::exists(out));
+  // The jobs that run side by side are budgeted together: a budget that one job fits refuses
+  // two side by side.
+  auto predicted_mib = [](const std::string& err) {
+    const std::string key = "predicted to need ";
+    const size_t at = err.find(key);
+    return at == std::string::npos ? -1.0 : std::stod(err.substr(at + key.size()));
+  };
+  o = Grove(mc + " --runs 1 --particles 100000 --memory-budget 1M");
+  EXPECT_NE(o.err.find("(1 job side by side, the largest with 100000 particles)"),
+            std::string::npos)
+      << o.err;
+  const double one = predicted_mib(o.err);
+  ASSERT_GT(one, 1) << o.err;
+  const std::string budget = std::to_string(static_cast<int>(one) + 1) + "M";
+  o = Grove(mc + " --runs 2 --threads 2 --particles 100000 --memory-budget " + budget);
+  EXPECT_EQ(o.exit_code, 6) << o.err;
+  EXPECT_NE(o.err.find("(2 jobs side by side"), std::string::npos) << o.err;
+  EXPECT_GT(predicted_mib(o.err), one + 1) << o.err;
+  EXPECT_FALSE(fs::exists(out));
+  // Without --memory-budget: the address-space limit.
+  const std::string cmd = "sh -c \"ulimit -v 6000000; exec " + std::string(GROVE_BINARY) + " " +
+                          mc + " --runs 1 --particles 10000000\" 2>" + (dir_ / "err").string();
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 6) << Slurp(dir_ / "err");
+  EXPECT_NE(Slurp(dir_ / "err").find("address-space limit"), std::string::npos)
+      << Slurp(dir_ / "err");
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// A job that failed (out of memory here) counted as finished for ever and the command exited 0.
+// Now it exits non-zero with the count, and the same command runs the job again.
+TEST_F(CliTest, MonteCarloFailedJobsExitNonZeroAndRunAgain) {
+  const fs::path out = dir_ / "m";
+  const std::string cmd = "sh -c \"ulimit -v 3000000; exec " + std::string(GROVE_BINARY) +
+                          " fastslam montecarlo --no-progress --scenario sim3 --filters "
+                          "fastslam2 --runs 1 --loops 1 --threads 1 --particles 3000000 "
+                          "--memory-budget 1T --out " +
+                          out.string() + "\" >/dev/null 2>" + (dir_ / "err").string();
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    SCOPED_TRACE(attempt);
+    const int status = std::system(cmd.c_str());
+    const std::string err = Slurp(dir_ / "err");
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 6) << err;
+    EXPECT_NE(err.find("grove: error: 1 of 1 jobs failed (first: fastslam2_p3000000 run 0: "),
+              std::string::npos)
+        << err;
+    EXPECT_NE(err.find("out of memory"), std::string::npos) << err;
+    EXPECT_NE(err.find("run the same command again to run them again"), std::string::npos) << err;
+    EXPECT_NE(err.find("0 reused from an earlier invocation, 1 to run"), std::string::npos) << err;
+  }
+  const nlohmann::json record =
+      nlohmann::json::parse(Slurp(out / "runs" / "fastslam2_p3000000" / "run_0.json"));
+  EXPECT_EQ(record["status_code"], "resource exhausted");
+}
+
+// montecarlo installed no signal handling: a closed pipe on stderr killed it (exit 141) at the
+// next progress line, and SIGTERM killed it outright. Now SIGPIPE is ignored, and SIGTERM stops
+// it between jobs with the finished ones kept (exit 143); the same command finishes the rest.
+TEST_F(CliTest, MonteCarloSurvivesAClosedPipeAndStopsBetweenJobsOnSigterm) {
+  const fs::path out = dir_ / "m";
+  const std::string mc = std::string(GROVE_BINARY) +
+                         " fastslam montecarlo --scenario sim3 --filters fastslam2 --loops 1 "
+                         "--particles 30 --threads 1 --out " +
+                         out.string();
+  const fs::path rc = dir_ / "rc";
+  std::string cmd =
+      "sh -c '(" + mc + " --runs 12 2>&1; echo $? >" + rc.string() + ") | head -c 10 >/dev/null'";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  EXPECT_EQ(std::stoi(Slurp(rc)), 0);
+  EXPECT_TRUE(fs::exists(out / "table.md"));
+
+  fs::remove_all(out);
+  fs::remove(rc);
+  const fs::path pid_file = dir_ / "pid", err = dir_ / "err";
+  cmd = "sh -c '" + mc + " --runs 200 >/dev/null 2>" + err.string() + " & echo $! >" +
+        pid_file.string() + "; wait $!; echo $? >" + rc.string() + "' &";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  const fs::path first = out / "runs" / "fastslam2_p30" / "run_0.json";
+  while (!fs::exists(first) || !fs::exists(pid_file) || Slurp(pid_file).empty()) {
+    ASSERT_FALSE(fs::exists(rc)) << "it ended before it was signalled: " << Slurp(err);
+    std::system("sleep 0.01");
+  }
+  ASSERT_EQ(std::system(("kill -TERM " + Slurp(pid_file)).c_str()), 0);
+  while (!fs::exists(rc) || Slurp(rc).empty()) std::system("sleep 0.01");
+  EXPECT_EQ(std::stoi(Slurp(rc)), 143) << Slurp(err);
+  EXPECT_NE(Slurp(err).find("stopped by Terminated; the jobs finished so far are kept"),
+            std::string::npos)
+      << Slurp(err);
+  EXPECT_FALSE(fs::exists(out / "table.md"));
+  int64_t kept = 0;
+  for (const auto& e : fs::directory_iterator(out / "runs" / "fastslam2_p30")) {
+    kept += e.path().extension() == ".json";
+  }
+  EXPECT_GE(kept, 1);
+  EXPECT_LT(kept, 200);
+  Outcome o = Grove(
+      "fastslam montecarlo --no-progress --scenario sim3 --filters fastslam2 "
+      "--loops 1 --particles 30 --threads 1 --runs 200 --out " +
+      out.string());
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.err.find(std::to_string(kept) + " reused from an earlier invocation"),
+            std::string::npos)
+      << o.err;
 }
 
 }  // namespace

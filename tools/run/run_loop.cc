@@ -29,15 +29,6 @@
 namespace grove::tools {
 namespace {
 
-// The signal that asked the run to stop (0: none), and whether the terminal went away. A
-// signal handler may only store to lock-free atomics; the loop reads them between steps.
-std::atomic<int> g_stop_signal{0};
-std::atomic<bool> g_hangup{false};
-static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free);
-
-extern "C" void OnStopSignal(int signal) { g_stop_signal.store(signal, std::memory_order_relaxed); }
-extern "C" void OnHangup(int) { g_hangup.store(true, std::memory_order_relaxed); }
-
 // Where the run stands in its input: kept in each checkpoint so that a resumed run can check
 // that it reads the same records.
 struct InputPosition {
@@ -141,15 +132,6 @@ StatusOr<std::string> ReadCheckpointFile(const std::string& path) {
   return ReadWholeFile(path);
 }
 
-int64_t ReadCgroupValue(const std::string& path) {
-  std::ifstream in(path);
-  std::string text;
-  if (!(in >> text) || text == "max") return -1;
-  int64_t v = -1;
-  auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-  return ec == std::errc() ? v : -1;
-}
-
 }  // namespace
 
 int Fail(int code, std::string_view message) {
@@ -180,122 +162,6 @@ int UsableCpus() {
   if (sched_getaffinity(0, sizeof(set), &set) == 0) return std::max(1, CPU_COUNT(&set));
   return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
 }
-
-int64_t PeakRssBytes() {
-  struct rusage usage;
-  getrusage(RUSAGE_SELF, &usage);
-  return static_cast<int64_t>(usage.ru_maxrss) * 1024;  // Linux reports KiB
-}
-
-StatusOr<int64_t> ParseMemorySize(const std::string& text) {
-  double value = 0;
-  const char* begin = text.data();
-  const char* end = begin + text.size();
-  auto [ptr, ec] = std::from_chars(begin, end, value);
-  double scale = 1;
-  if (ec == std::errc() && ptr + 1 == end) {
-    switch (*ptr) {
-      case 'K':
-      case 'k':
-        scale = 1024.0;
-        break;
-      case 'M':
-      case 'm':
-        scale = 1024.0 * 1024;
-        break;
-      case 'G':
-      case 'g':
-        scale = 1024.0 * 1024 * 1024;
-        break;
-      case 'T':
-      case 't':
-        scale = 1024.0 * 1024 * 1024 * 1024;
-        break;
-      default:
-        ec = std::errc::invalid_argument;
-    }
-  } else if (ptr != end) {
-    ec = std::errc::invalid_argument;
-  }
-  double bytes = value * scale;
-  if (ec != std::errc() || !std::isfinite(bytes) || bytes < 1 || bytes > 9.0e18) {
-    return InvalidArgumentError(
-        fmt::format("--memory-budget = {}: must be a size such as 512M, 8G or 1073741824",
-                    QuoteForMessage(text)));
-  }
-  return static_cast<int64_t>(bytes);
-}
-
-int64_t AvailableMemoryBytes(std::string* source) {
-  int64_t best = 0;
-  auto consider = [&](int64_t bytes, const char* what) {
-    if (bytes < 0) return;
-    if (best == 0 || bytes < best) {
-      best = std::max<int64_t>(bytes, 1);
-      if (source != nullptr) *source = what;
-    }
-  };
-  {
-    std::ifstream meminfo("/proc/meminfo");
-    std::string key, unit;
-    int64_t kib = 0;
-    while (meminfo >> key >> kib >> unit) {
-      if (key == "MemAvailable:") consider(kib * 1024, "memory available");
-    }
-  }
-  struct rlimit limit;
-  if (getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY) {
-    std::ifstream statm("/proc/self/statm");
-    int64_t pages = 0;
-    statm >> pages;
-    consider(static_cast<int64_t>(limit.rlim_cur) - pages * sysconf(_SC_PAGESIZE),
-             "address-space limit (ulimit -v)");
-  }
-  {
-    // cgroup v2: the process's own group, "0::/path".
-    std::ifstream cgroup("/proc/self/cgroup");
-    std::string line;
-    while (std::getline(cgroup, line)) {
-      if (line.rfind("0::", 0) != 0) continue;
-      const std::string dir = "/sys/fs/cgroup" + line.substr(3);
-      const int64_t max = ReadCgroupValue(dir + "/memory.max");
-      const int64_t current = ReadCgroupValue(dir + "/memory.current");
-      if (max >= 0 && current >= 0) consider(max - current, "cgroup memory limit");
-    }
-  }
-  return best;
-}
-
-SignalHandlers::SignalHandlers() {
-  g_stop_signal.store(0);
-  g_hangup.store(false);
-  struct sigaction stop = {};
-  stop.sa_handler = OnStopSignal;
-  sigemptyset(&stop.sa_mask);
-  stop.sa_flags = SA_RESETHAND | SA_RESTART;  // interrupted reads and writes resume
-  sigaction(SIGINT, &stop, &old_int_);
-  sigaction(SIGTERM, &stop, &old_term_);
-  struct sigaction hup = {};
-  hup.sa_handler = OnHangup;
-  sigemptyset(&hup.sa_mask);
-  hup.sa_flags = SA_RESTART;
-  sigaction(SIGHUP, &hup, &old_hup_);
-  struct sigaction pipe = {};
-  pipe.sa_handler = SIG_IGN;
-  sigemptyset(&pipe.sa_mask);
-  sigaction(SIGPIPE, &pipe, &old_pipe_);
-}
-
-SignalHandlers::~SignalHandlers() {
-  sigaction(SIGINT, &old_int_, nullptr);
-  sigaction(SIGTERM, &old_term_, nullptr);
-  sigaction(SIGHUP, &old_hup_, nullptr);
-  sigaction(SIGPIPE, &old_pipe_, nullptr);
-}
-
-bool StopRequested() { return g_stop_signal.load(std::memory_order_relaxed) != 0; }
-int StopSignal() { return g_stop_signal.load(std::memory_order_relaxed); }
-bool HangupSeen() { return g_hangup.load(std::memory_order_relaxed); }
 
 // Every rank's `mine`, in rank order (collective).
 template <typename T>
@@ -417,17 +283,10 @@ class RunLoop {
   // Refuses a run that would not fit, before building anything.
   int CheckMemory() {
     const int64_t records = job_->ExpectedRecords();
-    budget_ = options_.memory_budget_bytes > 0 ? options_.memory_budget_bytes
-                                               : AvailableMemoryBytes(&budget_source_);
+    budget_ = MemoryBudget::Of(options_.memory_budget_bytes);
     predicted_ = job_->PredictPeakBytes(records);
-    Status fits;
-    if (budget_ > 0 && predicted_ > budget_) {
-      fits = ResourceExhaustedError(
-          fmt::format("the run is predicted to need {:.1f} MiB ({}), more than the {} of "
-                      "{:.1f} MiB; use fewer particles or raise --memory-budget",
-                      predicted_ / 1048576.0, job_->DescribePrediction(records), budget_source_,
-                      budget_ / 1048576.0));
-    }
+    Status fits = budget_.Check(predicted_, job_->DescribePrediction(records),
+                                "use fewer particles or raise --memory-budget");
     if (Status s = Agree(fits); !s.ok()) return Fail(kExitMemory, s.message());
     return -1;
   }
@@ -637,7 +496,7 @@ class RunLoop {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     s["peak_rss_bytes"] = PeakRssBytes();
     s["predicted_peak_bytes"] = predicted_;
-    s["memory_budget"] = {{"bytes", budget_}, {"source", budget_source_}};
+    s["memory_budget"] = {{"bytes", budget_.bytes}, {"source", budget_.source}};
     s["checkpoints"] = {{"written", checkpoints_written_},
                         {"seconds", checkpoint_s_},
                         {"last_bytes", checkpoint_bytes_},
@@ -654,8 +513,7 @@ class RunLoop {
   const std::string my_checkpoint_path_;
   const std::string my_resume_path_;
   std::optional<OutputDirectory> out_dir_;
-  std::string budget_source_ = "--memory-budget";
-  int64_t budget_ = 0;
+  MemoryBudget budget_;
   int64_t predicted_ = 0;
   InputPosition resumed_at_;
   InputPosition position_;

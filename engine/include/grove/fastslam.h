@@ -263,6 +263,13 @@ struct GROVE_EXPORT FastSlamSummary : FilterSummary {
   std::string BriefReport() const;
 };
 
+// What a run will give an engine: the figures FastSlam::EstimatePeakBytes() predicts from.
+struct FastSlamWorkload {
+  int64_t controls = 0;      // Control() calls
+  int64_t scans = 0;         // Scan() calls
+  int64_t observations = 0;  // detections over all scans
+};
+
 class Collective;
 
 class GROVE_EXPORT FastSlam {
@@ -280,6 +287,13 @@ class GROVE_EXPORT FastSlam {
                                                     Collective* ranks);
   // What Create(config, ranks) checks of a configuration for `ranks` ranks beyond Validate().
   static Status CheckAcrossRanks(const FastSlamConfig& config, int ranks);
+  // A prediction of the peak memory, in bytes, of a process running an engine of `config` fed
+  // `work`: a fixed part, the particles' state and the map paths each scan copies (in two
+  // generations, growing with the detections a scan holds), and the per-step records. It stays
+  // above the peak RSS of `grove fastslam victoria-park` and of the webmap's `run`
+  // (engine/fastslam/README.md gives the runs). Across ranks, of a rank holding
+  // config.particles particles. REQUIRES: config.Validate() is ok.
+  static int64_t EstimatePeakBytes(const FastSlamConfig& config, const FastSlamWorkload& work);
   virtual ~FastSlam();
 
   // A control (speed m/s, steering angle rad) from time t_s on: predicts from the last time to
