@@ -5,8 +5,8 @@
 // node pools' slabs are, so two threads differ from one only by what the cores share (the L3, the
 // memory controller, the host). One more case shares on purpose: locked increments on one set
 // that every thread uses, the price of a line that moves between the cores. No engine code runs
-// here: the figures say what the machine gives a second thread (issue 13's target 2 asks 2
-// threads for 1.85x one at equal total CPU time).
+// here: the figures say what the machine gives a second thread, the ceiling for the engine's own
+// 2-thread scaling.
 //
 // Rates are accesses per second summed over threads (items_per_second); the CPU column is the
 // whole process's CPU time per iteration (MeasureProcessCPUTime).

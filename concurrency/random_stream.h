@@ -54,6 +54,7 @@ enum StreamPurpose : uint32_t {
   // Differential evolution's draws for a particle's trial in generation g use
   // kDifferentialEvolution + 256 g (g < 256; the low byte keeps them apart from the others).
   kDifferentialEvolution = 4,
+  kAssociation = 5,    // a particle's sampled data associations at a scan (landmark FastSLAM)
   kResample = 0x5E5A,  // the resampling draws of a step
   // Island mode's draws of a step: particle = 2 * island + d, d = 0 for the island's own next
   // generation and 1 for the particles it sends its neighbour.

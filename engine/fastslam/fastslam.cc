@@ -31,7 +31,8 @@ constexpr char kCheckpointKind[] = "grove fastslam";
 // Version 4: the rank and rank count of the share it holds.
 constexpr uint32_t kFastSlamFormatVersion = 4;
 
-// The landmark trees' degree, 2^kLog2Degree (see the README for the measurement behind it).
+// The landmark trees' degree, 2^kLog2Degree (engine/fastslam/README.md, "FastSLAM 1.0 and 2.0:
+// accuracy and speed", has the measurement).
 constexpr int kLog2Degree = 3;
 
 // What each filter step was: the replay of paths and the reported trajectory need it.

@@ -68,9 +68,11 @@ const std::vector<ConfigField<FastSlamConfig>>& FastSlamConfigFields() {
                 "de_srcd: differential evolution's crossover probability Cr"),
       IntegerField("de_generations", &C::de_generations, 0, 255, kChangesResults,
                    "de_srcd: differential evolution's generations per scan"),
-      ChoiceField("association", &C::association, {"known", "ml", "ml_exclusive"}, kChangesResults,
+      ChoiceField("association", &C::association, {"known", "ml", "ml_exclusive", "sampled"},
+                  kChangesResults,
                   "Data association: known (observation ids), ml (maximum likelihood with "
-                  "gates), ml_exclusive (ml, one landmark per detection in a scan)"),
+                  "gates), ml_exclusive (ml, one landmark per detection in a scan), sampled "
+                  "(each particle draws its associations, a new landmark included)"),
       RealField("reject_gate", &C::reject_gate, I::LeftOpen(0, 1e6), kChangesResults,
                 "ml: associate inside this gate (gate_unit)"),
       RealField("augment_gate", &C::augment_gate, I::LeftOpen(0, 1e6), kChangesResults,

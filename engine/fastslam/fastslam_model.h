@@ -47,6 +47,7 @@
 #include "engine/fastslam/filter_steps.h"
 #include "engine/fastslam/filter_traits.h"
 #include "engine/fastslam/landmark_math.h"
+#include "engine/fastslam/landmark_updates.h"
 #include "engine/fastslam/particle_poses.h"
 #include "engine/fastslam/unknown_association.h"
 #include "engine/fastslam/vehicle_model.h"
@@ -97,6 +98,7 @@ class FastSlamModel {
                VehiclePose{config.start_x_m, config.start_y_m, WrapAngle(config.start_heading_rad)},
                steps_.restart_covariance(), steps_.traits().draws_after_resampling),
         association_(config, steps_.traits(), n_, first_, slots),
+        updates_(slots),
         evolution_(config, steps_.traits().evolution, n_, first_, ranks) {}
 
   size_t size() const { return n_; }
@@ -121,6 +123,9 @@ class FastSlamModel {
   // The prediction of particles [begin, end) over control c (FilterSteps::PredictPose() redoes
   // one of them).
   Status Predict(const ControlStep& c, uint64_t step, size_t begin, size_t end, int slot) {
+    if (traits().pose == FilterTraits::Pose::kSampledMotion) {
+      return PredictSampled(c, step, begin, end, slot);
+    }
     const bool ekf = traits().pose == FilterTraits::Pose::kEkf;
     const bool sigma_points = traits().draws_every_scan();
     const VehicleGeometry& geometry = steps_.geometry();
@@ -134,15 +139,9 @@ class FastSlamModel {
       shared = ControlTermsOf(geometry, c.v_mps, c.steer_rad, c.dt_s);
       turn = HeadingUnit{std::cos(shared.turn_rad), std::sin(shared.turn_rad)};
     }
+    if (segment_start_) GROVE_RETURN_IF_ERROR(StartSegments(step, begin, end, slot));
     for (size_t i = begin; i < end; ++i) {
       const VehiclePose p = poses_.pose(i);
-      if (segment_start_) {
-        SegmentStart s{p.x_m, p.y_m, p.heading_rad, static_cast<uint32_t>(first_ + i), 0};
-        SegmentHistory::Node* node =
-            history_.Append(paths_[i], static_cast<uint32_t>(step), s, slot);
-        if (node == nullptr) return NoMemoryError(first_ + i, "path");
-        paths_[i] = node;
-      }
       VehiclePose next;
       if (sigma_points) {
         Eigen::Vector3d mean = ToVector(p);
@@ -152,25 +151,16 @@ class FastSlamModel {
         next = ToPose(mean);
         poses_.cov(i) = steps_.Store(m);
       } else {
-        ControlTerms own;
-        if (!ekf && !steps_.NoisyTerms(c, step, static_cast<uint32_t>(first_ + i), &own)) {
-          return BadSteering(i);
-        }
-        const ControlTerms& u = ekf ? shared : own;
         StepTrig trig;
-        next = MoveVehicle(geometry, u, p, &trig);
-        if (ekf) {
-          Eigen::Matrix3d gv;
-          Eigen::Matrix<double, 3, 2> gu;
-          VehicleJacobians(geometry, u, trig, &gv, &gu);
-          steps_.PropagateCovariance(gv, gu, &poses_.cov(i));
-        }
+        next = MoveVehicle(geometry, shared, p, &trig);
+        Eigen::Matrix3d gv;
+        Eigen::Matrix<double, 3, 2> gu;
+        VehicleJacobians(geometry, shared, trig, &gv, &gu);
+        steps_.PropagateCovariance(gv, gu, &poses_.cov(i));
       }
       if (!std::isfinite(next.x_m) || !std::isfinite(next.y_m) ||
           !std::isfinite(next.heading_rad)) {
-        return FailedPreconditionError(fmt::format("particle {}'s pose ({}, {}, {}) is not finite",
-                                                   first_ + i, next.x_m, next.y_m,
-                                                   next.heading_rad));
+        return PoseNotFinite(i, next);
       }
       poses_.pose(i) = next;
       if (ekf) {
@@ -193,29 +183,29 @@ class FastSlamModel {
                  double* log_w) {
     if (association_.active()) return AdvanceUnknown(scan, step, begin, end, slot, log_w);
     if (scan.observations.empty() && !traits().draws_every_scan()) return Status::Ok();
+    if (traits().pose == FilterTraits::Pose::kSampledMotion) {
+      return updates_.Apply(steps_, &trie_, &maps_[begin], &poses_.pose(begin), first_ + begin,
+                            scan, end - begin, slot, log_w + begin);
+    }
     for (size_t i = begin; i < end; ++i) {
       double lw = 0;
-      if (traits().pose == FilterTraits::Pose::kSampledMotion) {
-        GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &lw));
+      Eigen::Vector3d mu = ToVector(poses_.pose(i));
+      Eigen::Matrix3d sigma = steps_.Stored(poses_.cov(i));
+      for (const LandmarkObservation& z : scan.observations) {
+        const Landmark* l = trie_.Find(maps_[i], static_cast<uint64_t>(z.id));
+        if (l == nullptr) continue;
+        double w = 0;
+        GROVE_RETURN_IF_ERROR(ProposalStepOf(i, z, *l, &mu, &sigma, &w));
+        lw += w;
+      }
+      if (traits().draws_after_resampling) {
+        poses_.proposal_mu(i) = mu;
+        poses_.proposal_sigma(i) = steps_.Store(sigma);
       } else {
-        Eigen::Vector3d mu = ToVector(poses_.pose(i));
-        Eigen::Matrix3d sigma = steps_.Stored(poses_.cov(i));
-        for (const LandmarkObservation& z : scan.observations) {
-          const Landmark* l = trie_.Find(maps_[i], static_cast<uint64_t>(z.id));
-          if (l == nullptr) continue;
-          double w = 0;
-          GROVE_RETURN_IF_ERROR(ProposalStepOf(i, z, *l, &mu, &sigma, &w));
-          lw += w;
-        }
-        if (traits().draws_after_resampling) {
-          poses_.proposal_mu(i) = mu;
-          poses_.proposal_sigma(i) = steps_.Store(sigma);
-        } else {
-          // The importance ratio replaces the predictive likelihood.
-          GROVE_RETURN_IF_ERROR(DrawAndWeigh(scan, step, i, nullptr, mu, sigma, &lw));
-          double unused = 0;
-          GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &unused));
-        }
+        // The importance ratio replaces the predictive likelihood.
+        GROVE_RETURN_IF_ERROR(DrawAndWeigh(scan, step, i, nullptr, mu, sigma, &lw));
+        double unused = 0;
+        GROVE_RETURN_IF_ERROR(UpdateLandmarks(scan, i, slot, &unused));
       }
       log_w[i] += lw;
     }
@@ -438,6 +428,35 @@ class FastSlamModel {
     return Status::Ok();
   }
 
+  // FastSLAM 1.0's Predict(): every particle of [begin, end) at once (MoveSampled()).
+  Status PredictSampled(const ControlStep& c, uint64_t step, size_t begin, size_t end, int slot) {
+    if (segment_start_) GROVE_RETURN_IF_ERROR(StartSegments(step, begin, end, slot));
+    const MotionResult r =
+        steps_.PredictSampled(c, step, static_cast<uint32_t>(first_ + begin), segment_start_,
+                              &poses_.pose(begin), &poses_.unit(begin), end - begin);
+    if (r.first_failed == end - begin) return Status::Ok();
+    const size_t i = begin + r.first_failed;
+    if (r.why == MotionFailure::kSteering) return BadSteering(i);
+    return PoseNotFinite(i, poses_.pose(i));
+  }
+
+  // Particles [begin, end) start a path segment at `step` from their poses now.
+  Status StartSegments(uint64_t step, size_t begin, size_t end, int slot) {
+    for (size_t i = begin; i < end; ++i) {
+      const VehiclePose& p = poses_.pose(i);
+      const SegmentStart s{p.x_m, p.y_m, p.heading_rad, static_cast<uint32_t>(first_ + i), 0};
+      SegmentHistory::Node* node = history_.Append(paths_[i], static_cast<uint32_t>(step), s, slot);
+      if (node == nullptr) return NoMemoryError(first_ + i, "path");
+      paths_[i] = node;
+    }
+    return Status::Ok();
+  }
+
+  Status PoseNotFinite(size_t i, const VehiclePose& p) const {
+    return FailedPreconditionError(fmt::format("particle {}'s pose ({}, {}, {}) is not finite",
+                                               first_ + i, p.x_m, p.y_m, p.heading_rad));
+  }
+
   Status BadSteering(size_t i) const {
     return FailedPreconditionError(fmt::format(
         "particle {}'s steering angle is outside what the {} model can use (|G| < pi/2 and "
@@ -505,13 +524,13 @@ class FastSlamModel {
       // Nothing to weigh or draw; the evidence of what is in view still falls.
       if (!association_.evidence()) return Status::Ok();
       for (size_t i = begin; i < end; ++i) {
-        GROVE_RETURN_IF_ERROR(DecideScan(scan, i, &sc));
+        GROVE_RETURN_IF_ERROR(DecideScan(scan, step, i, &sc));
         GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
       }
       return Status::Ok();
     }
     for (size_t i = begin; i < end; ++i) {
-      GROVE_RETURN_IF_ERROR(DecideScan(scan, i, &sc));
+      GROVE_RETURN_IF_ERROR(DecideScan(scan, step, i, &sc));
       double lw = 0;
       Eigen::Vector3d mu = ToVector(poses_.pose(i));
       Eigen::Matrix3d sigma = steps_.Stored(poses_.cov(i));
@@ -543,14 +562,15 @@ class FastSlamModel {
         GROVE_RETURN_IF_ERROR(DrawAndWeigh(scan, step, i, &sc.decisions, mu, sigma, &lw));
         GROVE_RETURN_IF_ERROR(ApplyScan(scan, i, slot, &sc));
       }
+      if (association_.sampled()) lw += sc.log_correction;
       log_w[i] += lw;
     }
     return Status::Ok();
   }
 
   // Unknown association: particle i's query and decisions from its pose now, into sc.
-  Status DecideScan(const ScanStep& scan, size_t i, Scratch* sc) const {
-    return association_.DecideScan(trie_, maps_[i], scan, i, poses_.pose(i), sc);
+  Status DecideScan(const ScanStep& scan, uint64_t step, size_t i, Scratch* sc) const {
+    return association_.DecideScan(trie_, maps_[i], scan, step, i, poses_.pose(i), sc);
   }
   // Unknown association: applies particle i's decisions in sc from its pose now.
   Status ApplyScan(const ScanStep& scan, size_t i, int slot, Scratch* sc) {
@@ -601,6 +621,7 @@ class FastSlamModel {
   ParticlePoses poses_;
   bool segment_start_ = true;
   UnknownAssociation<Trie> association_;
+  LandmarkUpdates<Trie> updates_;
   DifferentialEvolution evolution_;
   std::vector<Status> batch_status_;  // RunInBatches' scratch
 };

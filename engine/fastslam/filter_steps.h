@@ -17,13 +17,16 @@
 #include <fmt/format.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <span>
 
+#include "concurrency/normal_pairs.h"
 #include "concurrency/random_stream.h"
 #include "engine/fastslam/filter_traits.h"
 #include "engine/fastslam/landmark_math.h"
+#include "engine/fastslam/sampled_motion.h"
 #include "engine/fastslam/sigma_point_filters.h"
 #include "engine/fastslam/vehicle_model.h"
 #include "grove/fastslam.h"
@@ -112,9 +115,11 @@ class FilterSteps {
                           uint64_t step, uint32_t index, bool* usable) const {
     switch (traits_.pose) {
       case FilterTraits::Pose::kSampledMotion: {
-        ControlTerms u;
-        *usable = NoisyTerms(c, step, index, &u);
-        return *usable ? MoveVehicle(geometry_, u, p) : p;
+        // The unit vector is SinCos of the heading (sampled_motion.h): recomputed, not stored.
+        VehiclePose q = p;
+        HeadingUnit unit;
+        *usable = PredictSampled(c, step, index, true, &q, &unit, 1).first_failed == 1;
+        return *usable ? q : p;
       }
       case FilterTraits::Pose::kEkf:
         *usable = SteeringUsable(geometry_, c.steer_rad);
@@ -165,16 +170,33 @@ class FilterSteps {
                                     cd_step_, mean, m);
   }
 
-  // FastSLAM 1.0: particle `index`'s own control for step `step`, drawn from N(u, Q); false
-  // when the vehicle model cannot use the drawn steering angle.
-  bool NoisyTerms(const ControlStep& c, uint64_t step, uint32_t index, ControlTerms* u) const {
-    double v = c.v_mps, g = c.steer_rad;
-    RandomStream rs(seed_, step + 1, index, StreamPurpose::kMotion);
-    if (control_noise_.sigma_speed_mps > 0) v += control_noise_.sigma_speed_mps * rs.NextNormal();
-    if (control_noise_.sigma_steer_rad > 0) g += control_noise_.sigma_steer_rad * rs.NextNormal();
-    if (!SteeringUsable(geometry_, g)) return false;
-    *u = ControlTermsOf(geometry_, v, g, c.dt_s);
-    return true;
+  // FastSLAM 1.0: the predictions of the filter's particles first, first + 1, ... at
+  // poses[0, n) and units[0, n) by `step`'s control c (MoveSampled()), each with its own pair of
+  // normals from its stream for the step (DrawNormalPairs(): the speed's first when both sigmas
+  // are above 0). units_from_headings: as MoveSampled()'s.
+  MotionResult PredictSampled(const ControlStep& c, uint64_t step, uint32_t first,
+                              bool units_from_headings, VehiclePose* poses, HeadingUnit* units,
+                              size_t n) const {
+    const SampledControl u{geometry_,
+                           c.v_mps,
+                           c.steer_rad,
+                           c.dt_s,
+                           control_noise_.sigma_speed_mps,
+                           control_noise_.sigma_steer_rad};
+    constexpr size_t kBlock = 256;
+    double noise[2][kBlock];
+    double* const rows[2] = {noise[0], noise[1]};
+    for (size_t b = 0; b < n; b += kBlock) {
+      const size_t m = std::min(kBlock, n - b);
+      if (u.normals() > 0) {
+        const uint32_t at = first + static_cast<uint32_t>(b);
+        DrawNormalPairs(seed_, step + 1, StreamPurpose::kMotion, at, at + static_cast<uint32_t>(m),
+                        noise[0], noise[1]);
+      }
+      const MotionResult r = MoveSampled(u, rows, units_from_headings, poses + b, units + b, m);
+      if (r.first_failed < m) return {b + r.first_failed, r.why};
+    }
+    return {n, MotionFailure::kNone};
   }
 
   // The covariance reading of a leaf.

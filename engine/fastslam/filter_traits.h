@@ -15,7 +15,8 @@
 
 namespace grove::fastslam {
 
-// How a filter of FastSlamFilter moves, weights and maps (fastslam.h, README).
+// How a filter of FastSlamFilter moves, weights and maps (fastslam.h; engine/fastslam/README.md,
+// "The filters").
 struct FilterTraits {
   enum class Pose { kSampledMotion, kEkf, kUnscented, kCentralDifference };
   enum class Map { kEkf, kUnscented, kCentralDifference };

@@ -9,6 +9,8 @@
 #include <string>
 #include <string_view>
 
+#include "engine/fastslam/landmark_batch.h"
+
 // Structure: each public function validates its inputs once, then runs an unchecked core
 // (Linearize, KalmanCore, ProposalCore) that checks only what the arithmetic itself can break
 // (a factorisation failing, a result overflowing). These run once per observation and particle,
@@ -34,6 +36,10 @@ std::string FormatMatrix(const Eigen::MatrixBase<Derived>& m) {
     out += "]";
   }
   return out + "]";
+}
+
+Eigen::Matrix2d Matrix2Of(double a, double b, double c) {
+  return (Eigen::Matrix2d() << a, b, b, c).finished();
 }
 
 Status NotFinite(std::string_view name, double value) {
@@ -131,15 +137,22 @@ Status DescribeBadInputs(const VehiclePose& pose, const RangeBearing& z, const S
 
 // Finite pose, z, noise and landmark; range and sigmas >= 0; landmark covariance positive
 // semi-definite.
+bool InputsUsable(const VehiclePose& pose, const RangeBearing& z, const SensorNoise& noise,
+                  const Landmark& l) {
+  // x * 0 is 0 for a finite x and NaN otherwise, and a NaN survives the sum: one test for all.
+  const double zeros = (pose.x_m * 0 + pose.y_m * 0 + pose.heading_rad * 0) +
+                       (z.range_m * 0 + z.bearing_rad * 0) +
+                       (noise.sigma_range_m * 0 + noise.sigma_bearing_rad * 0) +
+                       (l.x_m * 0 + l.y_m * 0 + l.xx * 0 + l.xy * 0 + l.yy * 0);
+  // Positive definite (leading minors above 0: the usual case) without a factorisation, else
+  // the semi-definite test.
+  return zeros == 0 && z.range_m >= 0 && noise.sigma_range_m >= 0 && noise.sigma_bearing_rad >= 0 &&
+         ((l.xx > 0 && l.xx * l.yy - l.xy * l.xy > 0) || PsdSquareRoot<2>(Covariance(l), nullptr));
+}
+
 Status ValidateInputs(const VehiclePose& pose, const RangeBearing& z, const SensorNoise& noise,
                       const Landmark& l) {
-  const bool finite = Finite(pose) && std::isfinite(z.range_m) && std::isfinite(z.bearing_rad) &&
-                      std::isfinite(noise.sigma_range_m) &&
-                      std::isfinite(noise.sigma_bearing_rad) && std::isfinite(l.x_m) &&
-                      std::isfinite(l.y_m) && std::isfinite(l.xx) && std::isfinite(l.xy) &&
-                      std::isfinite(l.yy);
-  if (finite && z.range_m >= 0 && noise.sigma_range_m >= 0 && noise.sigma_bearing_rad >= 0 &&
-      PsdSquareRoot<2>(Covariance(l), nullptr)) [[likely]] {
+  if (InputsUsable(pose, z, noise, l)) [[likely]] {
     return Status::Ok();
   }
   return DescribeBadInputs(pose, z, noise, l);
@@ -181,41 +194,88 @@ Status Linearize(const VehiclePose& pose, double lx, double ly, ObservationLinea
   return Status::Ok();
 }
 
-// S = H P H^T + R (symmetric), its LLT, or why not. REQUIRES: finite inputs.
-Status InnovationFactor(const Eigen::Matrix2d& h, const Eigen::Matrix2d& p,
-                        const Eigen::Matrix2d& r, Eigen::Matrix2d* s, Llt2* llt) {
-  *s = Symmetric(h * p * h.transpose() + r);
-  if (!s->allFinite()) [[unlikely]] {
-    return FailedPreconditionError(
-        fmt::format("innovation covariance S = {} is not finite", FormatMatrix(*s)));
+// The innovation S = H P H^T + R of a 2x2 Kalman update, in closed form: the symmetric
+// entries, the determinant, and the products H P that the gain reuses.
+struct Innovation2 {
+  double hp00, hp01, hp10, hp11;  // H P
+  double s00, s01, s11;           // S
+  double det;                     // det S
+};
+
+// S and its determinant, or why S is unusable (not finite, not positive definite). REQUIRES:
+// finite inputs, p and r symmetric (only their upper triangles are read).
+Status InnovationOf(const Eigen::Matrix2d& h, const Eigen::Matrix2d& p, const Eigen::Matrix2d& r,
+                    Innovation2* out) {
+  const double h00 = h(0, 0), h01 = h(0, 1), h10 = h(1, 0), h11 = h(1, 1);
+  const double a = p(0, 0), b = p(0, 1), c = p(1, 1);
+  Innovation2& n = *out;
+  n.hp00 = h00 * a + h01 * b;
+  n.hp01 = h00 * b + h01 * c;
+  n.hp10 = h10 * a + h11 * b;
+  n.hp11 = h10 * b + h11 * c;
+  n.s00 = n.hp00 * h00 + n.hp01 * h01 + r(0, 0);
+  n.s01 = n.hp00 * h10 + n.hp01 * h11 + r(0, 1);
+  n.s11 = n.hp10 * h10 + n.hp11 * h11 + r(1, 1);
+  n.det = n.s00 * n.s11 - n.s01 * n.s01;
+  if (!std::isfinite(n.s00) || !std::isfinite(n.s01) || !std::isfinite(n.s11)) [[unlikely]] {
+    return FailedPreconditionError(fmt::format("innovation covariance S = {} is not finite",
+                                               FormatMatrix(Matrix2Of(n.s00, n.s01, n.s11))));
   }
-  llt->compute(*s);
-  if (llt->info() != Eigen::Success) [[unlikely]] {
-    return NotPositiveDefinite("innovation covariance S", *s);
+  if (!(n.s00 > 0 && n.det > 0) || !std::isfinite(n.det)) [[unlikely]] {
+    return NotPositiveDefinite("innovation covariance S", Matrix2Of(n.s00, n.s01, n.s11));
   }
   return Status::Ok();
 }
 
-// Kalman update in Joseph form; writes nothing on error. REQUIRES: finite inputs, cov and r
-// symmetric.
+// v^T S^-1 v through S = L D L^T (never negative for a positive definite S).
+double Mahalanobis2(const Innovation2& n, double v0, double v1) {
+  const double t = v1 - (n.s01 / n.s00) * v0;
+  return v0 * v0 / n.s00 + t * t * (n.s00 / n.det);
+}
+
+// log N(v; 0, S) from S's determinant and v^T S^-1 v.
+double LogDensity2(const Innovation2& n, double m2) {
+  return -0.5 * m2 - kLogTwoPi - 0.5 * std::log(n.det);
+}
+
+// Kalman update in Joseph form, in closed form for 2x2; writes nothing on error. REQUIRES:
+// finite inputs, cov and r symmetric.
 Status KalmanCore(const Eigen::Vector2d& v, const Eigen::Matrix2d& h, const Eigen::Matrix2d& r,
                   Eigen::Vector2d* mean, Eigen::Matrix2d* cov, double* log_likelihood) {
-  const Eigen::Matrix2d& p = *cov;
-  Eigen::Matrix2d s;
-  Llt2 llt;
-  GROVE_RETURN_IF_ERROR(InnovationFactor(h, p, r, &s, &llt));
-  // K = P H^T S^-1, from K^T = S^-1 H P (P and S symmetric).
-  const Eigen::Matrix2d k = SolveColumns<2, 2>(llt, h * p).transpose();
-  const Eigen::Vector2d new_mean = *mean + k * v;
-  const Eigen::Matrix2d a = Eigen::Matrix2d::Identity() - k * h;
-  const Eigen::Matrix2d new_cov = Symmetric(a * p * a.transpose() + k * r * k.transpose());
-  const double ll = LogDensity<2>(llt, v);
-  if (!new_mean.allFinite() || !new_cov.allFinite() || !std::isfinite(ll)) [[unlikely]] {
+  Innovation2 n;
+  GROVE_RETURN_IF_ERROR(InnovationOf(h, *cov, r, &n));
+  const double h00 = h(0, 0), h01 = h(0, 1), h10 = h(1, 0), h11 = h(1, 1);
+  const double a = (*cov)(0, 0), b = (*cov)(0, 1), c = (*cov)(1, 1);
+  const double r00 = r(0, 0), r01 = r(0, 1), r11 = r(1, 1);
+  // K = P H^T S^-1 = (H P)^T S^-1.
+  const double inv = 1 / n.det;
+  const double k00 = (n.hp00 * n.s11 - n.hp10 * n.s01) * inv;
+  const double k01 = (n.hp10 * n.s00 - n.hp00 * n.s01) * inv;
+  const double k10 = (n.hp01 * n.s11 - n.hp11 * n.s01) * inv;
+  const double k11 = (n.hp11 * n.s00 - n.hp01 * n.s01) * inv;
+  const double m0 = (*mean)(0) + (k00 * v(0) + k01 * v(1));
+  const double m1 = (*mean)(1) + (k10 * v(0) + k11 * v(1));
+  // P' = A P A^T + K R K^T, A = I - K H.
+  const double a00 = 1 - (k00 * h00 + k01 * h10), a01 = -(k00 * h01 + k01 * h11);
+  const double a10 = -(k10 * h00 + k11 * h10), a11 = 1 - (k10 * h01 + k11 * h11);
+  const double ap00 = a00 * a + a01 * b, ap01 = a00 * b + a01 * c;
+  const double ap10 = a10 * a + a11 * b, ap11 = a10 * b + a11 * c;
+  const double kr00 = k00 * r00 + k01 * r01, kr01 = k00 * r01 + k01 * r11;
+  const double kr10 = k10 * r00 + k11 * r01, kr11 = k10 * r01 + k11 * r11;
+  const double p00 = ap00 * a00 + ap01 * a01 + (kr00 * k00 + kr01 * k01);
+  const double p11 = ap10 * a10 + ap11 * a11 + (kr10 * k10 + kr11 * k11);
+  const double p01 = 0.5 * ((ap00 * a10 + ap01 * a11 + (kr00 * k10 + kr01 * k11)) +
+                            (ap10 * a00 + ap11 * a01 + (kr10 * k00 + kr11 * k01)));
+  const double ll = LogDensity2(n, Mahalanobis2(n, v(0), v(1)));
+  if (!std::isfinite(m0 + m1) || !std::isfinite(p00 + p01 + p11) || !std::isfinite(ll))
+      [[unlikely]] {
     return FailedPreconditionError(
-        fmt::format("Kalman update is not finite (innovation covariance S = {})", FormatMatrix(s)));
+        fmt::format("Kalman update is not finite (innovation covariance S = {})",
+                    FormatMatrix(Matrix2Of(n.s00, n.s01, n.s11))));
   }
-  *mean = new_mean;
-  *cov = new_cov;
+  (*mean)(0) = m0;
+  (*mean)(1) = m1;
+  *cov << p00, p01, p01, p11;
   if (log_likelihood != nullptr) *log_likelihood = ll;
   return Status::Ok();
 }
@@ -315,11 +375,22 @@ Status LogGaussianDensityImpl(const Eigen::Matrix<double, N, 1>& v,
   return Status::Ok();
 }
 
+// Why the landmark update (or likelihood) of UpdateLandmarkBatch() failed for usable inputs: the
+// same steps with their checks, for the message.
+Status WhyUpdateFailed(const VehiclePose& pose, const RangeBearing& z, const SensorNoise& noise,
+                       const Landmark& landmark) {
+  ObservationLinearization lin;
+  GROVE_RETURN_IF_ERROR(Linearize(pose, landmark.x_m, landmark.y_m, &lin));
+  Eigen::Vector2d mean = Mean(landmark);
+  Eigen::Matrix2d cov = Covariance(landmark);
+  GROVE_RETURN_IF_ERROR(KalmanCore(Innovation(z, lin.z_pred), lin.h_landmark,
+                                   SensorCovariance(noise), &mean, &cov, nullptr));
+  return FailedPreconditionError("the landmark update is not finite");
+}
+
 }  // namespace
 
-double WrapAngle(double angle) {
-  if (angle > -kPi && angle <= kPi) [[likely]]
-    return angle;
+double WrapAngleFar(double angle) {
   // remainder() is exact and returns r in [-kPi, kPi] with angle - r a multiple of kTwoPi.
   const double r = std::remainder(angle, kTwoPi);
   return r == -kPi ? kPi : r;
@@ -397,41 +468,37 @@ Status KalmanUpdate(const Eigen::Vector2d& innovation, const Eigen::Matrix2d& h,
 
 Status UpdateLandmark(const VehiclePose& pose, const RangeBearing& z, const SensorNoise& noise,
                       Landmark* landmark, double* log_likelihood) {
-  GROVE_RETURN_IF_ERROR(ValidateInputs(pose, z, noise, *landmark));
-  ObservationLinearization lin;
-  GROVE_RETURN_IF_ERROR(Linearize(pose, landmark->x_m, landmark->y_m, &lin));
-  Eigen::Vector2d mean = Mean(*landmark);
-  Eigen::Matrix2d cov = Covariance(*landmark);
+  if (!InputsUsable(pose, z, noise, *landmark)) [[unlikely]] {
+    return DescribeBadInputs(pose, z, noise, *landmark);
+  }
+  const double sr = std::max(noise.sigma_range_m, kMinSigma);
+  const double sb = std::max(noise.sigma_bearing_rad, kMinSigma);
+  Landmark* const leaf = landmark;
   double ll = 0;
-  GROVE_RETURN_IF_ERROR(KalmanCore(Innovation(z, lin.z_pred), lin.h_landmark,
-                                   SensorCovariance(noise), &mean, &cov, &ll));
-  landmark->x_m = mean(0);
-  landmark->y_m = mean(1);
-  SetCovariance(cov, landmark);
-  if (log_likelihood != nullptr) *log_likelihood = ll;
-  return Status::Ok();
+  if (UpdateLandmarkBatch(&pose, &leaf, z, sr * sr, sb * sb, &ll, 1) == 1) [[likely]] {
+    if (log_likelihood != nullptr) *log_likelihood = ll;
+    return Status::Ok();
+  }
+  return WhyUpdateFailed(pose, z, noise, *landmark);
 }
 
 Status ObservationLogLikelihood(const VehiclePose& pose, const RangeBearing& z,
                                 const SensorNoise& noise, const Landmark& landmark,
                                 double* log_likelihood, double* mahalanobis_sq) {
-  GROVE_RETURN_IF_ERROR(ValidateInputs(pose, z, noise, landmark));
-  ObservationLinearization lin;
-  GROVE_RETURN_IF_ERROR(Linearize(pose, landmark.x_m, landmark.y_m, &lin));
-  // The S and factorisation KalmanCore forms, so the value equals UpdateLandmark's.
-  Eigen::Matrix2d s;
-  Llt2 llt;
-  GROVE_RETURN_IF_ERROR(
-      InnovationFactor(lin.h_landmark, Covariance(landmark), SensorCovariance(noise), &s, &llt));
-  double m2 = 0;
-  const double ll = LogDensity<2>(llt, Innovation(z, lin.z_pred), &m2);
-  if (!std::isfinite(ll)) [[unlikely]] {
-    return FailedPreconditionError(fmt::format(
-        "log-likelihood is not finite (innovation covariance S = {})", FormatMatrix(s)));
+  if (!InputsUsable(pose, z, noise, landmark)) [[unlikely]] {
+    return DescribeBadInputs(pose, z, noise, landmark);
   }
-  if (log_likelihood != nullptr) *log_likelihood = ll;
-  if (mahalanobis_sq != nullptr) *mahalanobis_sq = m2;
-  return Status::Ok();
+  const double sr = std::max(noise.sigma_range_m, kMinSigma);
+  const double sb = std::max(noise.sigma_bearing_rad, kMinSigma);
+  // The innovation UpdateLandmark() forms, so the value equals its log-likelihood.
+  const Landmark* const leaf = &landmark;
+  double ll = 0, m2 = 0;
+  if (LandmarkLikelihoodBatch(&pose, &leaf, z, sr * sr, sb * sb, &ll, &m2, 1) == 1) [[likely]] {
+    if (log_likelihood != nullptr) *log_likelihood = ll;
+    if (mahalanobis_sq != nullptr) *mahalanobis_sq = m2;
+    return Status::Ok();
+  }
+  return WhyUpdateFailed(pose, z, noise, landmark);
 }
 
 Status ProposalUpdate(const Eigen::Vector2d& innovation, const Matrix23d& h_pose,

@@ -40,6 +40,7 @@
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
 #include <cstdint>
+#include <numbers>
 #include <type_traits>
 
 #include "grove/status.h"
@@ -109,7 +110,7 @@ bool PsdSquareRoot(const Eigen::Matrix<double, N, N>& a, Eigen::Matrix<double, N
 // one map uses the same reading, so no tag is stored):
 //   - covariance (FastSLAM 1.0/2.0, U-FastSLAM): P = [xx xy; xy yy], m^2. Covariance() and
 //     SetCovariance() read and write it; every function below uses this reading.
-//   - square root (the SRCD filters of issue 12): the lower Cholesky factor L of P = L L^T,
+//   - square root (the SRCD filters of Ankışhan et al.): the lower Cholesky factor L of P = L L^T,
 //     L = [xx 0; xy yy], m. CholeskyFactor() and SetCholeskyFactor() read and write it.
 struct Landmark {
   double x_m = 0;
@@ -156,8 +157,20 @@ inline VehiclePose ToPose(const Eigen::Vector3d& v) { return {v(0), v(1), v(2)};
 // `angle` reduced to (-pi, pi]: pi stays pi, -pi becomes pi. Exact: the result is
 // angle - k * 2pi for an integer k, computed without rounding (std::remainder), where 2pi is the
 // double nearest 2pi; it therefore differs from the reduction by the true 2pi by at most about
-// 4e-17 * |angle| (4e-11 at 1e6 rad). Non-finite input gives NaN.
-double WrapAngle(double angle);
+// 4e-17 * |angle| (4e-11 at 1e6 rad). Non-finite input gives NaN. Inline for an angle within
+// one turn of the interval; WrapAngleFar() (std::remainder) beyond.
+double WrapAngleFar(double angle);
+inline double WrapAngle(double angle) {
+  constexpr double kPi = std::numbers::pi;
+  if (angle > -kPi && angle <= kPi) [[likely]] {
+    return angle;
+  }
+  // One turn off (a difference of two wrapped angles): angle -+ 2 pi is exact there (Sterbenz)
+  // and is what the remainder gives.
+  if (angle > kPi && angle < 9.0) return angle - 2 * kPi;
+  if (angle <= -kPi && angle > -9.0) return angle + 2 * kPi;
+  return WrapAngleFar(angle);
+}
 
 // The range-bearing observation of landmark (lx, ly) from `pose`. At zero distance the range is 0
 // and the bearing, atan2 of two zeros less the heading, carries no information.

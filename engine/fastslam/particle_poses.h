@@ -16,16 +16,12 @@
 #include "concurrency/worker_pool.h"
 #include "engine/fastslam/filter_steps.h"
 #include "engine/fastslam/landmark_math.h"
+#include "engine/fastslam/sampled_motion.h"
 #include "engine/filter/generation.h"
 #include "engine/io/checkpoint_io.h"
 #include "grove/status.h"
 
 namespace grove::fastslam {
-
-// The heading's unit vector (cos, sin).
-struct HeadingUnit {
-  double c, s;
-};
 
 class ParticlePoses {
  public:

@@ -1,6 +1,7 @@
-// The per-particle steps of the sigma-point landmark filters (issue 12): U-FastSLAM's unscented
-// steps (Kim, Sakthivel, Chung, "Unscented FastSLAM", IEEE T-RO 24(4), 2008) and the square-root
-// central-difference steps of SRCD-FastSLAM (Ankışhan et al., the seed paper 003, §3.1), built on
+// The per-particle steps of the sigma-point landmark filters: U-FastSLAM's unscented steps (Kim,
+// Sakthivel, Chung, "Unscented FastSLAM", IEEE T-RO 24(4), 2008) and the square-root
+// central-difference steps of SRCD-FastSLAM (Ankışhan et al., "Square root central
+// difference-based FastSLAM approach improved by differential evolution", 2016, §3.1), built on
 // sigma_points.h. Conventions (poses, sensor, wrapping, Landmark) as landmark_math.h.
 //
 // U-FastSLAM, as Kim's released implementation (OpenSLAM ufastslam: predictACFRu,
@@ -32,7 +33,8 @@
 //                 diag(P, R)): S_y, Ply = S_l D^T, K, mean += K v, S_l downdated by K S_y.
 //   new landmark  Eqs. 24-25: the points z, z +- h sqrt(R)_k through the inverse model; their
 //                 mean, and the factor of their central-difference covariance.
-// Readings of the seed (its equations lost their layout in extraction; see also the README):
+// Readings of the seed (its equations lost their layout in extraction; see also
+// engine/fastslam/README.md, "Readings of the seed paper's text"):
 //   - Eq. 16 predicts each observation from the landmark's mean only, while Eq. 26's weight
 //     covariance B = (P^{x,L})^T S^-1 P^{x,L} + S_y adds the landmark's innovation covariance S_y
 //     to the vehicle's part. grove puts the landmark into the proposal's sigma points (as Kim's

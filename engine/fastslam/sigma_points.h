@@ -1,4 +1,4 @@
-// Sigma-point transforms for the landmark filters of the seed's family (issue 12): the scaled
+// Sigma-point transforms for the landmark filters of the seed's family: the scaled
 // unscented transform of U-FastSLAM and the central-difference (Stirling) transform of the
 // square-root central difference Kalman filter (SR-CDKF), with the factorisations they need.
 //

@@ -3,15 +3,16 @@
 //
 // The map is keyed by SpatialKey (a landmark's cell and a slot in it) instead of by id. At a
 // scan each particle finds the candidates of every detection with a range query of its own trie,
-// decides with the gates (data_association.h; Decide()), adds the associated detections'
-// likelihoods and p0 for the others (FastSlamModel), and then (FastSLAM 1.0 in Advance, 2.0 in
-// Complete from the drawn pose; Apply()) updates the associated landmarks, lowers the evidence
-// of those in view and not seen (removing the ones below the threshold; the view is found by the
-// same range query as the candidates, so it is judged from the pose the decisions were made
-// from: for FastSLAM 2.0 the predicted mean), moves an updated landmark whose mean left its cell
-// to a slot of its new cell, and adds the new landmarks. FastSLAM 2.0 decides from the predicted
-// pose mean (Bailey's order); the query Advance() made is kept per particle (KeepQuery()) and
-// gathered with it for Complete() (ApplyPending()).
+// decides with the gates (data_association.h; Decide()) or, under `sampled`, draws the
+// decisions (association_sampling.h; kept with the query, since a draw is not redone), adds the
+// associated detections' likelihoods and p0 for the others (FastSlamModel), and then (FastSLAM 1.0
+// in Advance, 2.0 in Complete from the drawn pose; Apply()) updates the associated landmarks,
+// lowers the evidence of those in view and not seen (removing the ones below the threshold; the
+// view is found by the same range query as the candidates, so it is judged from the pose the
+// decisions were made from: for FastSLAM 2.0 the predicted mean), moves an updated landmark whose
+// mean left its cell to a slot of its new cell, and adds the new landmarks. FastSLAM 2.0 decides
+// from the predicted pose mean (Bailey's order); the query Advance() made is kept per particle
+// (KeepQuery()) and gathered with it for Complete() (ApplyPending()).
 //
 // Thread safety: the per-particle methods touch particle i's entries and the scratch of the
 // worker slot they are given; distinct particles may run on distinct slots at once.
@@ -27,7 +28,9 @@
 #include <vector>
 
 #include "alloc/cache_line.h"
+#include "concurrency/random_stream.h"
 #include "concurrency/worker_pool.h"
+#include "engine/fastslam/association_sampling.h"
 #include "engine/fastslam/data_association.h"
 #include "engine/fastslam/filter_steps.h"
 #include "engine/fastslam/filter_traits.h"
@@ -48,6 +51,9 @@ class UnknownAssociation {
   struct ScanQuery {
     std::vector<Match> matches;
     std::vector<uint64_t> in_view;  // increasing
+    // Sampled association: the decisions drawn at Advance(), one per detection (a draw cannot
+    // be redone from the matches after resampling renumbers the particle).
+    std::vector<Decision> drawn;
   };
   // A worker slot's buffers, reused from particle to particle.
   struct alignas(kFalseSharingBytes) Scratch {
@@ -55,6 +61,9 @@ class UnknownAssociation {
     std::vector<Decision> decisions;
     std::vector<uint64_t> keys;
     std::vector<DetectionProbe> probes;
+    // Sampled association: the scan's log T - log L_drawn summed over detections
+    // (association_sampling.h), to add to the particle's log-weight.
+    double log_correction = 0;
   };
 
   // The association state of `n` particles, the first of them the filter's particle `first`,
@@ -72,6 +81,8 @@ class UnknownAssociation {
                 traits.square_root_map(),
                 traits.map == FilterTraits::Map::kCentralDifference ? config.cd_step : 0},
         log_p0_(NewLandmarkLogLikelihood(params_.noise, params_.augment_gate)),
+        sampled_(config.association == FastSlamAssociation::kSampled),
+        seed_(config.seed),
         evidence_(config.evidence == FastSlamEvidence::kOn),
         evidence_threshold_(config.evidence_threshold),
         view_{config.sensor_range_m, config.sensor_fov_rad},
@@ -81,6 +92,7 @@ class UnknownAssociation {
 
   bool active() const { return active_; }
   bool evidence() const { return evidence_; }
+  bool sampled() const { return sampled_; }
   // log p0, the weight of a detection that updates no landmark.
   double log_p0() const { return log_p0_; }
   const AssociationCounts& counts(size_t i) const { return counts_[i]; }
@@ -95,16 +107,24 @@ class UnknownAssociation {
     scan_size_ = scan.observations.size();
   }
 
-  // The query and decisions of particle i's scan against its map `root` seen from `pose`,
-  // into sc.
-  Status DecideScan(const Trie& trie, const Node* root, const ScanStep& scan, size_t i,
-                    const VehiclePose& pose, Scratch* sc) const {
+  // The query and decisions of particle i's scan (filter step `step`) against its map `root`
+  // seen from `pose`, into sc; sampled association draws them (and keeps the draw in sc.query).
+  Status DecideScan(const Trie& trie, const Node* root, const ScanStep& scan, uint64_t step,
+                    size_t i, const VehiclePose& pose, Scratch* sc) const {
     sc->query.matches.clear();
     sc->query.in_view.clear();
     Status s = FindMatches(trie, root, pose, scan.observations, params_, max_range_,
                            /*use_index=*/true, &sc->query.matches, &sc->probes,
                            evidence_ ? &view_ : nullptr, &sc->query.in_view);
     if (!s.ok()) return Status(s.code(), fmt::format("particle {}, {}", first_ + i, s.message()));
+    if (sampled_) {
+      RandomStream rs(seed_, step + 1, static_cast<uint32_t>(first_ + i),
+                      StreamPurpose::kAssociation);
+      SampleDecisions(sc->query.matches, scan.observations.size(), log_p0_, &rs, &sc->query.drawn,
+                      &sc->log_correction);
+      sc->decisions = sc->query.drawn;
+      return Status::Ok();
+    }
     Decide(sc->query.matches, scan.observations.size(), params_, &sc->decisions);
     return Status::Ok();
   }
@@ -116,6 +136,7 @@ class UnknownAssociation {
   // mean; a copy has its parent's), in the scratch of `slot`.
   const std::vector<Decision>& PendingDecisions(const ScanStep& scan, size_t i, int slot) const {
     Scratch& sc = scratch_[slot];
+    if (sampled_) return pending_[i].drawn;
     sc.query.matches = pending_[i].matches;  // Decide() reorders them
     Decide(sc.query.matches, scan.observations.size(), params_, &sc.decisions);
     return sc.decisions;
@@ -126,7 +147,11 @@ class UnknownAssociation {
                       size_t i, VehiclePose pose, int slot) {
     Scratch& sc = scratch_[slot];
     sc.query = pending_[i];
-    Decide(sc.query.matches, scan.observations.size(), params_, &sc.decisions);
+    if (sampled_) {
+      sc.decisions = sc.query.drawn;
+    } else {
+      Decide(sc.query.matches, scan.observations.size(), params_, &sc.decisions);
+    }
     return ApplyScan(steps, trie, root, scan, i, pose, slot, &sc);
   }
 
@@ -224,6 +249,13 @@ class UnknownAssociation {
       }
       w->Put<uint64_t>(q.in_view.size());
       w->PutBytes(q.in_view.data(), q.in_view.size() * sizeof(uint64_t));
+      if (!sampled_) continue;
+      w->Put<uint64_t>(q.drawn.size());
+      for (const Decision& d : q.drawn) {
+        w->Put<uint8_t>(d.kind);
+        w->Put<uint64_t>(d.key);
+        w->Put<double>(d.log_likelihood);
+      }
     }
   }
 
@@ -256,6 +288,11 @@ class UnknownAssociation {
       }
       for (uint64_t key : q.in_view) {
         if (!known(key)) s = r->Error("view", "a landmark in view is not in the map");
+      }
+      for (const Decision& d : q.drawn) {
+        if (d.kind == Decision::kAssociated && !known(d.key)) {
+          s = r->Error("decisions", "a drawn association names a landmark not in the map");
+        }
       }
     }
     return s;
@@ -291,6 +328,25 @@ class UnknownAssociation {
     GROVE_RETURN_IF_ERROR(r->GetBytes("view", q->in_view.data(), count * sizeof(uint64_t)));
     for (size_t k = 1; k < count; ++k) {
       if (q->in_view[k] <= q->in_view[k - 1]) return r->Error("view", "keys not increasing");
+    }
+    q->drawn.clear();
+    if (!sampled_) return Status::Ok();
+    constexpr size_t kDecisionBytes = sizeof(uint8_t) + sizeof(uint64_t) + sizeof(double);
+    GROVE_RETURN_IF_ERROR(r->GetCount("decision count", kDecisionBytes, &count));
+    if (count != 0 && count != scan_size_) {
+      return r->Error("decisions", "not one decision per detection of the scan");
+    }
+    q->drawn.resize(count);
+    for (Decision& d : q->drawn) {
+      uint8_t kind = 0;
+      GROVE_RETURN_IF_ERROR(r->Get("decision kind", &kind));
+      GROVE_RETURN_IF_ERROR(r->Get("decision key", &d.key));
+      GROVE_RETURN_IF_ERROR(r->Get("decision likelihood", &d.log_likelihood));
+      if (kind != Decision::kAssociated && kind != Decision::kNew) {
+        return r->Error("decisions", "a drawn decision is neither associated nor new");
+      }
+      d.kind = static_cast<Decision::Kind>(kind);
+      if (std::isnan(d.log_likelihood)) return r->Error("decisions", "a bad likelihood");
     }
     return Status::Ok();
   }
@@ -382,6 +438,8 @@ class UnknownAssociation {
   const uint64_t first_;  // the filter's index of particle 0 here
   const AssociationParams params_;
   const double log_p0_;
+  const bool sampled_;   // association = sampled
+  const uint64_t seed_;  // the random streams' (sampled association)
   const bool evidence_;
   const int64_t evidence_threshold_;
   const SensorView view_;

@@ -3,7 +3,8 @@
 //
 // Bailey (his vehicle_model.m; sin(G) / B, not sin(G / B)):
 //   x' = x + V dt cos(G + phi),  y' = y + V dt sin(G + phi),  phi' = phi + V dt sin(G) / B.
-// Guivant-Nebot (the Victoria Park vehicle; ../shared/data/README.md): with the axle-centre
+// Guivant-Nebot (the Victoria Park vehicle; Guivant and Nebot 2001, and engine/fastslam/README.md,
+// "Victoria Park"): with the axle-centre
 // speed v_c = V / (1 - tan(G) H / L),
 //   x' = x + dt (v_c cos phi - (v_c / L) tan G (a sin phi + b cos phi)),
 //   y' = y + dt (v_c sin phi + (v_c / L) tan G (a cos phi - b sin phi)),

@@ -95,6 +95,7 @@ class FilterDriver {
   // A weighting step on `input` at time t_s.
   template <typename Input>
   Status Update(double t_s, const Input& input) {
+    weights_current_ = false;
     return Step(t_s, [&] { return filter_.Update(input); });
   }
   // A predict-only step on `input` at time t_s.
@@ -238,6 +239,7 @@ class FilterDriver {
     if (unset > 1 || (unset == 1 && steps > 0)) return r->Error("start time unset", "invalid");
     times_.swap(times);
     mean_.swap(mean);
+    weights_current_ = false;
     bookkeeping_s_ = bookkeeping_s;
     start_time_unset_ = unset == 1;
     return Status::Ok();
@@ -304,30 +306,35 @@ class FilterDriver {
   }
 
   // Weighted mean pose over fixed blocks (circular mean for the heading); across ranks, every
-  // rank's blocks in rank order, which is block order.
+  // rank's blocks in rank order, which is block order. The weights exp(log w_i) are kept from one
+  // step to the next until a weighting step changes them (a prediction does not).
   StatusOr<Pose2> ComputeMeanPose() {
     auto lw = filter_.log_weights();
     struct Sum {
       double w = 0, x = 0, y = 0, c = 0, s = 0;
     };
-    std::vector<Sum> sums = workers_->template MapBlocks<Sum>(model_->size(), kSumBlock,
-                                                              [&](size_t, size_t b, size_t e) {
-                                                                Sum s;
-                                                                double w = 0;
-                                                                for (size_t i = b; i < e; ++i) {
-                                                                  // After resampling every weight
-                                                                  // is the same: one exp, not one
-                                                                  // per particle.
-                                                                  if (i == b || lw[i] != lw[i - 1])
-                                                                    w = std::exp(lw[i]);
-                                                                  s.w += w;
-                                                                  s.x += w * model_->x(i);
-                                                                  s.y += w * model_->y(i);
-                                                                  s.c += w * model_->cos_heading(i);
-                                                                  s.s += w * model_->sin_heading(i);
-                                                                }
-                                                                return s;
-                                                              });
+    const bool current = weights_current_ && weights_.size() == lw.size();
+    weights_.resize(lw.size());
+    std::vector<Sum> sums = workers_->template MapBlocks<Sum>(
+        model_->size(), kSumBlock, [&](size_t, size_t b, size_t e) {
+          if (!current) {
+            // After resampling every weight is the same: one exp, not one per particle.
+            for (size_t i = b; i < e; ++i) {
+              weights_[i] = i == b || lw[i] != lw[i - 1] ? std::exp(lw[i]) : weights_[i - 1];
+            }
+          }
+          Sum s;
+          for (size_t i = b; i < e; ++i) {
+            const double w = weights_[i];
+            s.w += w;
+            s.x += w * model_->x(i);
+            s.y += w * model_->y(i);
+            s.c += w * model_->cos_heading(i);
+            s.s += w * model_->sin_heading(i);
+          }
+          return s;
+        });
+    weights_current_ = true;
     if (Collective* ranks = filter_.options().collective; ranks != nullptr) {
       std::vector<Sum> all;
       GROVE_RETURN_IF_ERROR(AllGatherValues<Sum>(*ranks, sums, &all));
@@ -352,6 +359,8 @@ class FilterDriver {
   std::vector<double> times_;  // times_[k]: time of the state after step k (k = 0: the start)
   std::vector<StampedPose> mean_;
   double bookkeeping_s_ = 0;
+  std::vector<double> weights_;   // exp of the log weights, for the mean pose
+  bool weights_current_ = false;  // weights_ holds the filter's weights now
   bool start_time_unset_ = true;
   bool failed_ = false;
 };

@@ -51,7 +51,7 @@ int64_t PathBytesFor(const FootSlamConfig& config, int height) {
 int64_t FootSlam::EstimatePeakBytes(const FootSlamConfig& config, int64_t steps) {
   const int64_t n = config.particles;
   // Calibrated on `grove footslam run` over the paper walk (13 minutes; s = 16, T = 5; 2
-  // threads; bench/results/2026-12-05-AMD-EPYC-2c-session27/memory_prediction.md): at 30,000,
+  // threads; bench/results/amd-epyc-2c/paper_targets/memory_prediction.md): at 30,000,
   // 300,000 and 1,000,000 particles the pools reserved 1,398, 909 and 826 bytes of map and
   // 1,258, 783 and 797 bytes of path history per particle; the rest of the peak RSS was 30 MiB
   // at 30,000 particles and about 18 MiB plus 410 to 417 bytes per particle at the others.

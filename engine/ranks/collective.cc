@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <barrier>
 
 #include "engine/filter/resampler.h"
@@ -16,10 +17,13 @@ ParticleShare ShareOf(uint64_t total, const Collective* ranks) {
 Status CheckRankShares(uint64_t total, int ranks, uint64_t block) {
   const uint64_t k = static_cast<uint64_t>(ranks);
   if (ranks < 1 || (total + block - 1) / block >= k) return Status::Ok();
-  return InvalidArgumentError(
-      fmt::format("particles = {}: across {} ranks every rank needs a block of {} particles (at "
-                  "least {})",
-                  total, ranks, block, block * (k - 1) + 1));
+  const uint64_t fit = std::max<uint64_t>(1, (total + block - 1) / block);
+  return InvalidArgumentError(fmt::format(
+      "particles = {}: across {} ranks every rank needs a block of {} particles, because the "
+      "sums are taken block by block, as one process takes them, so that a seed gives the same "
+      "result at any rank count; {} ranks need particles >= {} ({} particles run on at most {} "
+      "rank{})",
+      total, ranks, block, ranks, block * (k - 1) + 1, total, fit, fit == 1 ? "" : "s"));
 }
 
 Status CheckIslands(uint64_t total, int islands, int ranks, uint64_t block) {

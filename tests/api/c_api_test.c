@@ -9,24 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define CHECK(cond)                                                            \
-  do {                                                                         \
-    if (!(cond)) {                                                             \
-      fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
-      exit(1);                                                                 \
-    }                                                                          \
-  } while (0)
+#include "tests/api/c_checks.h"
 
-/* Checks that `call` returns `expected`; on failure prints both and `message`. */
-#define CHECK_STATUS_MSG(call, expected, message)                                             \
-  do {                                                                                        \
-    grove_status status_ = (call);                                                            \
-    if (status_ != (expected)) {                                                              \
-      fprintf(stderr, "%s:%d: %s returned %s, expected %s (%s)\n", __FILE__, __LINE__, #call, \
-              grove_status_name(status_), grove_status_name(expected), (message));            \
-      exit(1);                                                                                \
-    }                                                                                         \
-  } while (0)
 #define CHECK_STATUS(call, expected) CHECK_STATUS_MSG(call, expected, "")
 /* For calls on a handle: the message is the handle's last error. */
 #define CHECK_FOOT(h, call, expected) CHECK_STATUS_MSG(call, expected, grove_footslam_last_error(h))

@@ -235,6 +235,24 @@ TEST(DistributedFilterTest, RankSharesAreWholeBlocksInOrder) {
   }
 }
 
+// Too few particles for the ranks: the refusal says why blocks exist and what count works.
+TEST(DistributedFilterTest, TooFewParticlesForTheRanksNameTheSmallestCountThatWorks) {
+  Status s = CheckRankShares(2000, 2, kSumBlock);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("same result at any rank count"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("2 ranks need particles >= 4097 (2000 particles run on at most 1 "
+                             "rank)"),
+            std::string::npos)
+      << s.message();
+  s = CheckRankShares(8192, 3, kSumBlock);
+  EXPECT_NE(s.message().find("3 ranks need particles >= 8193 (8192 particles run on at most 2 "
+                             "ranks)"),
+            std::string::npos)
+      << s.message();
+  EXPECT_TRUE(CheckRankShares(4097, 2, kSumBlock).ok());
+  EXPECT_TRUE(CheckRankShares(2000, 1, kSumBlock).ok());
+}
+
 // A failure on one rank reaches every rank as the same error, and no rank is left waiting.
 TEST(DistributedFilterTest, AFailureOnOneRankStopsEveryRank) {
   FootSlamConfig config = TestConfig();

@@ -128,6 +128,10 @@ FastSlamConfig ConfigOf(FastSlamFilter filter, FastSlamAssociation association, 
 }
 
 using FilterAndAssociation = std::tuple<FastSlamFilter, FastSlamAssociation>;
+std::string ParamName(const FilterAndAssociation& p) {
+  const char* names[] = {"_known", "_ml", "_ml_exclusive", "_sampled"};
+  return std::string(FastSlamFilterName(std::get<0>(p))) + names[static_cast<int>(std::get<1>(p))];
+}
 class AcrossRanks : public ::testing::TestWithParam<FilterAndAssociation> {};
 INSTANTIATE_TEST_SUITE_P(
     Filters, AcrossRanks,
@@ -136,11 +140,9 @@ INSTANTIATE_TEST_SUITE_P(
                                          FastSlamFilter::kSrcdAided, FastSlamFilter::kSrcdParticle,
                                          FastSlamFilter::kDeSrcd),
                        ::testing::Values(FastSlamAssociation::kKnown,
-                                         FastSlamAssociation::kMaximumLikelihood)),
-    [](const auto& info) {
-      return std::string(FastSlamFilterName(std::get<0>(info.param))) +
-             (std::get<1>(info.param) == FastSlamAssociation::kKnown ? "_known" : "_ml");
-    });
+                                         FastSlamAssociation::kMaximumLikelihood,
+                                         FastSlamAssociation::kSampled)),
+    [](const auto& info) { return ParamName(info.param); });
 
 // 4,100 particles on 2 ranks: the second holds 4, so every resampling moves particles.
 TEST_P(AcrossRanks, TwoRanksGiveOneProcessesBits) {

@@ -175,7 +175,7 @@ std::vector<double> Fingerprint(const FastSlam& slam) {
 }
 
 std::string FilterAndAssociationName(const std::tuple<FastSlamFilter, FastSlamAssociation>& p) {
-  const char* names[] = {"known", "ml", "ml_exclusive"};
+  const char* names[] = {"known", "ml", "ml_exclusive", "sampled"};
   return std::string(FastSlamFilterName(std::get<0>(p))) + "_" +
          names[static_cast<int>(std::get<1>(p))];
 }
@@ -194,7 +194,8 @@ INSTANTIATE_TEST_SUITE_P(
     Filters, ByFilterAndAssociation,
     ::testing::Combine(kAllFilters, ::testing::Values(FastSlamAssociation::kKnown,
                                                       FastSlamAssociation::kMaximumLikelihood,
-                                                      FastSlamAssociation::kExclusive)),
+                                                      FastSlamAssociation::kExclusive,
+                                                      FastSlamAssociation::kSampled)),
     [](const auto& info) { return FilterAndAssociationName(info.param); });
 
 TEST_P(ByFilterAndAssociation, SameResultAtAnyThreadCount) {

@@ -229,7 +229,7 @@ TEST(HexGridTest, HexAtIsExactUpToTheEdgeOfItsRange) {
   }
 }
 
-// Regression (issue 17, item 13): past about 1.86e9 m (R = 0.5) the rounded axial coordinate did
+// Regression: past about 1.86e9 m (R = 0.5) the rounded axial coordinate did
 // not fit the int32 it was cast to, which is undefined behaviour (GROVE_SANITIZE builds have
 // -fsanitize=float-cast-overflow to catch it). Such points now saturate at +-kMaxAxial.
 TEST(HexGridTest, HexAtFarOutsideItsRangeSaturates) {

@@ -18,6 +18,12 @@ cmake --install "$build" --prefix "$prefix" >"$log" 2>&1
 echo "installed into $prefix:"
 (cd "$prefix" && find . -type f -o -type l | sort | sed 's/^/  /')
 
+# The installed command reads its bundled data from the prefix, not from the source tree.
+"$prefix/bin/grove" fastslam victoria-park --no-progress --particles 5 --until 5 \
+  --out "$work/park" >"$log" 2>&1
+grep -q "\"$prefix/share/grove/victoria_park/inputs.dat.gz\"" "$work/park/summary.json" ||
+  { echo "FAIL: the installed grove did not read $prefix/share/grove" >&2; exit 1; }
+
 # The installed headers name only installed headers.
 if grep -rhoE '#include "[^"]+"' "$prefix/include/grove" | grep -v '"grove/'; then
   echo "FAIL: an installed header includes a private one" >&2

@@ -9,7 +9,11 @@ path relative to this file is used.
 import math
 import os
 import pickle
+import shutil
 import signal
+import subprocess
+import sys
+import tempfile
 import threading
 import time
 import unittest
@@ -680,6 +684,30 @@ class FastSlamTest(unittest.TestCase):
         np.testing.assert_array_equal(f.mean_trajectory(), before)
         f.control(0.15, 3.0, 0.1)  # not stopped: the next good calls work
         f.scan(0.2, np.array([[5.0, 0.1, 0]]))
+
+
+class InterpreterErrorTest(unittest.TestCase):
+    """An interpreter that cannot use the module is told which one it was built for."""
+
+    def built_for(self):
+        return "built for Python %d.%d (" % sys.version_info[:2]
+
+    def test_without_numpy_the_import_error_names_the_interpreter_built_for(self):
+        code = ("import sys; sys.path = [p for p in sys.path if 'packages' not in p]; "
+                "sys.path.insert(0, %r); import grove" % os.path.dirname(grove.__file__))
+        r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("numpy cannot be imported", r.stderr)
+        self.assertIn(self.built_for(), r.stderr)
+
+    def test_another_abi_gets_the_fallback_naming_the_interpreter_built_for(self):
+        fallback = os.path.join(os.path.dirname(grove.__file__), "grove.py")
+        with tempfile.TemporaryDirectory() as d:
+            shutil.copy(fallback, d)  # the module beside it is what another ABI cannot load
+            r = subprocess.run([sys.executable, "-B", "-c", "import grove"], cwd=d,
+                               capture_output=True, text=True)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("the extension module in this directory was " + self.built_for(), r.stderr)
 
 
 if __name__ == "__main__":

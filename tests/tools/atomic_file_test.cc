@@ -186,7 +186,7 @@ void WriteRawFile(const std::string& path, const std::string& contents) {
   ASSERT_TRUE(out.good()) << path;
 }
 
-// Regression (issue 17, item 3): temporaries were named PATH.tmp-<pid>-<n> and created with
+// Regression: temporaries were named PATH.tmp-<pid>-<n> and created with
 // O_EXCL, so one left by a killed process whose pid came back (a PID namespace restarts at 1)
 // made every later write of PATH fail with "File exists", naming PATH.
 TEST(AtomicFileWriterTest, StaleTemporariesOfDeadWritersDoNotBlockAWriteAndAreRemoved) {
@@ -404,7 +404,7 @@ TEST(WriteFileAtomicallyTest, SyncsTheTemporaryThenTheDirectory) {
   EXPECT_EQ(synced[1], dir);
 }
 
-// Regression (issue 17, item 6): mkdir was never followed by an fsync of the parent, so after a
+// Regression: mkdir was never followed by an fsync of the parent, so after a
 // crash the new output directory, and every file in it, could be gone.
 TEST(EnsureDirectoryTest, SyncsEachNewDirectoryAndThenItsParent) {
   if (!fs::exists("/proc/self/fd")) GTEST_SKIP() << "no /proc/self/fd to name descriptors";

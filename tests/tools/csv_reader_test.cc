@@ -48,7 +48,7 @@ TEST(ReadWholeFileTest, DirectoryIsAnIoError) {
   EXPECT_EQ(read.status().message().rfind(dir + ": ", 0), 0u) << read.status().message();
 }
 
-// Regression (issue 17, "Messages"): a file that exists but cannot be opened gave "cannot open
+// Regression: a file that exists but cannot be opened gave "cannot open
 // for reading" without the reason. A socket cannot be opened even by root (ENXIO).
 TEST(LineReaderTest, OpenFailureNamesTheReason) {
   const std::string path = TempPath("socket");

@@ -196,7 +196,7 @@ TEST_F(OutputReadersTest, LongBadFieldIsShortenedInTheMessage) {
   EXPECT_NE(message.find("...\" is not a number"), std::string::npos) << message;
 }
 
-// Regression (issue 17, "Messages"): header and field text was echoed raw, control bytes, escape
+// Regression: header and field text was echoed raw, control bytes, escape
 // sequences and NULs included.
 TEST_F(OutputReadersTest, ControlBytesInHeaderAndFieldsAreEscaped) {
   EXPECT_EQ(PathError(std::string("t,x,\x1b[2J\0\n", 9)),

@@ -142,7 +142,7 @@ TEST(StepReaderTest, AcceptsCrlfCommentsBlankLinesPaddingBomAndPlusSign) {
   EXPECT_EQ((*steps)[1].line, 8);
 }
 
-// Regression (issue 17, "Messages"): a step file caught while being written ends in a partial line,
+// Regression: a step file caught while being written ends in a partial line,
 // which was read as a step with a cut number (here 0.7 for 0.7312).
 TEST(StepReaderTest, LastLineWithoutLineEndIsAnError) {
   const std::string kError =
@@ -375,7 +375,7 @@ bool Printable(std::string_view text) {
   return true;
 }
 
-// Regression (issue 17, "Messages"): the unknown-header message echoed the whole header line,
+// Regression: the unknown-header message echoed the whole header line,
 // raw: up to 4 KB, terminal escape sequences and NULs included.
 TEST(StepReaderTest, UnknownHeaderIsEscapedAndCut) {
   const std::string header =

@@ -244,7 +244,7 @@ TEST(TrajectoryMetricsTest, ReadErrorsGiveFileLineAndColumn) {
   EXPECT_EQ(missing.status().code(), StatusCode::kNotFound);
 }
 
-// Regression (issue 17, "Messages"): the unknown-header message echoed the line raw and whole.
+// Regression: the unknown-header message echoed the line raw and whole.
 TEST(TrajectoryMetricsTest, UnknownHeaderIsEscapedAndCut) {
   const std::string path =
       WriteTempFile("\x1b[1;31mtime\x7f,x,y" + std::string(4000, 'z') + "\n0,0,0\n");

@@ -192,5 +192,48 @@ TEST(CompareWithGpsTest, AlignsRigidlyAndCountsTheGpsJumps) {
   EXPECT_EQ(e->jumps, 0);
 }
 
+// PHD-SLAM's score: scans at 0.2 s, a GPS fix every 0.5 s shifted by 10 ms (kept) or 40 ms
+// (dropped); the path's estimate at a scan is its last pose at that time, and the estimate sits
+// (0, 1) m from the GPS frame's point but for the scan at t = 3, off by 3 m more.
+TEST(CompareWithGpsAtScansTest, KeepsFixesWithin25MsOfAScanEstimate) {
+  std::vector<StampedPose> path;
+  std::vector<double> scans;
+  std::vector<TimedPoint> gps;
+  auto truth_x = [](double t) { return 2 * t; };
+  for (int k = 0; k <= 50; ++k) {
+    const double t = 0.2 * k;
+    scans.push_back(t);
+    scans.push_back(t);                                  // two detections of one scan
+    path.push_back({t, Pose2{truth_x(t) + 100, 7, 0}});  // the prediction to the scan
+    const double off = std::abs(t - 3.0) < 1e-9 ? 3 : 0;
+    path.push_back({t, Pose2{truth_x(t), 1 + off, 0}});  // after its update
+  }
+  for (int k = 0; k <= 20; ++k) {
+    const double t = 0.5 * k + (k % 2 == 0 ? 0.010 : 0.040);  // 0.01, 0.54, 1.01, 1.54, ...
+    gps.push_back({t, truth_x(t - (k % 2 == 0 ? 0.010 : 0.040)), 0});
+  }
+  StatusOr<GpsScanErrors> e = CompareWithGpsAtScans(path, scans, gps);
+  ASSERT_TRUE(e.ok()) << e.status().message();
+  EXPECT_EQ(e->scans, 51);
+  // Kept: the fixes near t = 0, 1, 2, ..., 10 (11 of them); the ones 40 ms off a scan are not.
+  EXPECT_EQ(e->pairs, 11);
+  // After the best rigid alignment of the 11 pairs what is left is the one 3 m outlier: the
+  // shift alone (of y by the mean offset) leaves `shifted`; the rotation takes a little more.
+  const double mean_y = (11 * 1.0 + 3) / 11;
+  const double shifted = std::sqrt((10 * std::pow(1 - mean_y, 2) + std::pow(4 - mean_y, 2)) / 11);
+  EXPECT_LE(e->rmse_m, shifted + 1e-9);
+  EXPECT_GT(e->rmse_m, 0.8 * shifted);
+  // Without the outlier the pairs align exactly.
+  for (StampedPose& p : path) {
+    if (std::abs(p.t_s - 3.0) < 1e-9 && p.pose.x_m < 50) p.pose.y_m = 1;
+  }
+  e = CompareWithGpsAtScans(path, scans, gps);
+  ASSERT_TRUE(e.ok());
+  EXPECT_LT(e->rmse_m, 1e-9);
+  EXPECT_NEAR(e->alignment.translation_y_m, -1, 1e-9);
+  // Fewer than two pairs: an error.
+  EXPECT_FALSE(CompareWithGpsAtScans(path, scans, {gps[0]}).ok());
+}
+
 }  // namespace
 }  // namespace grove::tools

@@ -1,5 +1,5 @@
 // The input files of `grove fastslam run` (formats fixed so that other simulators can feed
-// grove; README "Landmark FastSLAM"):
+// grove; tools/io/FORMATS.md, "FastSLAM inputs"):
 //   controls.csv      `t,v,steer`: time (s, strictly increasing), speed (m/s), steering angle
 //                     (rad); the control of row k holds from t_k until t_{k+1}.
 //   observations.csv  `t,range,bearing` or `t,range,bearing,id`: one detection a row, rows with

@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <memory>
 #include <sstream>
 #include <string_view>
@@ -14,6 +16,11 @@ namespace grove::tools {
 namespace {
 
 constexpr std::string_view kExpectedHeader = "expected a header \"t,dx,dy\" or \"t,x,y\"";
+// The columns a deltas-form file may add after t,dx,dy (the foot IMU front end writes them);
+// checked, not used.
+constexpr std::string_view kOptionalColumns[] = {
+    "dz",     "dheading",        "var_dx",          "cov_dx_dy",
+    "var_dy", "cov_dx_dheading", "cov_dy_dheading", "var_dheading"};
 
 }  // namespace
 
@@ -65,8 +72,27 @@ StatusOr<StepReader> StepReader::Start(LineReader lines, const StepReaderOptions
     const auto& f = reader.fields_;
     return f.size() == 3 && f[0].text == a && f[1].text == b && f[2].text == c;
   };
+  const auto& f = reader.fields_;
+  const bool deltas_with_extras =
+      f.size() > 3 && f[0].text == "t" && f[1].text == "dx" && f[2].text == "dy";
   if (header_is("t", "dx", "dy")) {
     reader.positions_form_ = false;
+  } else if (deltas_with_extras) {
+    reader.positions_form_ = false;
+    for (size_t c = 3; c < f.size(); ++c) {
+      const bool known = std::find(std::begin(kOptionalColumns), std::end(kOptionalColumns),
+                                   f[c].text) != std::end(kOptionalColumns);
+      const bool repeated = std::find(reader.extra_columns_.begin(), reader.extra_columns_.end(),
+                                      f[c].text) != reader.extra_columns_.end();
+      if (!known || repeated) {
+        return LineError(path, reader.lines_.line_number(), f[c].column,
+                         fmt::format("{} column {}: after t,dx,dy a step file may have dz, "
+                                     "dheading, var_dx, cov_dx_dy, var_dy, cov_dx_dheading, "
+                                     "cov_dy_dheading and var_dheading, each once",
+                                     repeated ? "repeated" : "unknown", QuotedField(f[c].text)));
+      }
+      reader.extra_columns_.emplace_back(f[c].text);
+    }
   } else if (header_is("t", "x", "y")) {
     reader.positions_form_ = true;
   } else {
@@ -109,8 +135,19 @@ StatusOr<bool> StepReader::ReadRow(Row* row) {
   const std::string& path = lines_.path();
   const int64_t number = lines_.line_number();
   SplitCsvLine(line, &fields_);
-  if (fields_.size() != 3) {
-    return LineError(path, number, 1, fmt::format("expected 3 fields, found {}", fields_.size()));
+  const size_t columns = 3 + extra_columns_.size();
+  if (fields_.size() != columns) {
+    return LineError(path, number, 1,
+                     fmt::format("expected {} fields, found {}", columns, fields_.size()));
+  }
+  for (size_t c = 3; c < columns; ++c) {
+    double value = 0;
+    const std::string& name = extra_columns_[c - 3];
+    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, number, fields_[c], name, &value));
+    if (name.starts_with("var_") && value < 0) {
+      return LineError(path, number, fields_[c].column,
+                       fmt::format("{} = {}: a variance must be >= 0", name, value));
+    }
   }
   Row parsed{0, 0, 0, number};
   GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, number, fields_[0], "t", &parsed.t_s));

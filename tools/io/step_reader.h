@@ -4,6 +4,9 @@
 //   t,dx,dy  each row is one step vector (metres, odometry frame) that ends at time t (seconds);
 //   t,x,y    each row is a cumulative odometry position; the first row is the start and every
 //            later row gives one step, its difference from the row before.
+// The deltas form may add columns after t,dx,dy, as the foot IMU front end writes them: dz,
+// dheading, var_dx, cov_dx_dy, var_dy, cov_dx_dheading, cov_dy_dheading, var_dheading (each at
+// most once, in any order; finite, variances >= 0). They are checked and not used.
 // Fields may be padded with spaces or tabs; lines end in "\n" or "\r\n"; blank lines and lines
 // whose first non-blank character is '#' are skipped (before the header too); a UTF-8 byte order
 // mark is ignored. Numbers are decimal as std::from_chars reads them (no locale, no hex), with an
@@ -112,6 +115,7 @@ class StepReader {
   double previous_x_m_ = 0;  // positions form: the row before the next step
   double previous_y_m_ = 0;
   int64_t steps_read_ = 0;
+  std::vector<std::string> extra_columns_;  // after t,dx,dy
   Status error_;
   std::vector<CsvField> fields_;  // scratch, reused across rows
 };

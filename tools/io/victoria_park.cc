@@ -9,6 +9,7 @@
 
 #include "grove/checksum.h"
 #include "grove/input_rules.h"
+#include "tools/io/bundled_data.h"
 #include "tools/io/csv_reader.h"
 #include "tools/io/gzip_line_reader.h"
 
@@ -90,7 +91,7 @@ StatusOr<InputFile> DescribeFile(const std::string& path) {
 
 }  // namespace
 
-const char* BundledVictoriaParkDir() { return GROVE_VICTORIA_PARK_DIR; }
+std::string BundledVictoriaParkDir() { return BundledDataDir() + "/victoria_park"; }
 
 nlohmann::json InputFilesJson(const std::vector<InputFile>& files) {
   nlohmann::json out = nlohmann::json::array();
@@ -268,6 +269,51 @@ StatusOr<GpsErrors> CompareWithGps(const std::vector<StampedPose>& path,
   }
   e.mean_without_jumps_m = clean > 0 ? clean_sum / clean : 0;
   return e;
+}
+
+StatusOr<GpsScanErrors> CompareWithGpsAtScans(const std::vector<StampedPose>& path,
+                                              const std::vector<double>& scan_times,
+                                              const std::vector<TimedPoint>& gps,
+                                              double tolerance_s) {
+  // The path's last pose at each of its times.
+  std::vector<StampedPose> last;
+  for (const StampedPose& p : path) {
+    if (!last.empty() && last.back().t_s == p.t_s) last.pop_back();
+    last.push_back(p);
+  }
+  GpsScanErrors e;
+  std::vector<TimedPoint> fixes, estimates;  // the kept pairs, at the scan's time
+  auto by_time = [](const auto& a, double t) { return a.t_s < t; };
+  for (size_t k = 0; k < scan_times.size(); ++k) {
+    const double t = scan_times[k];
+    if (k > 0 && t == scan_times[k - 1]) continue;
+    auto p = std::lower_bound(last.begin(), last.end(), t, by_time);
+    if (p == last.end() || p->t_s != t) continue;
+    ++e.scans;
+    auto g = std::lower_bound(gps.begin(), gps.end(), t, by_time);
+    const TimedPoint* nearest = nullptr;
+    if (g != gps.end()) nearest = &*g;
+    if (g != gps.begin() && (nearest == nullptr || t - (g - 1)->t_s < nearest->t_s - t)) {
+      nearest = &*(g - 1);
+    }
+    if (nearest == nullptr || !(std::abs(nearest->t_s - t) <= tolerance_s)) continue;
+    fixes.push_back({t, nearest->x_m, nearest->y_m});
+    estimates.push_back({t, p->pose.x_m, p->pose.y_m});
+  }
+  e.pairs = static_cast<int64_t>(fixes.size());
+  StatusOr<TrajectoryError> a = CompareTrajectories(fixes, estimates);
+  if (!a.ok()) return a.status();
+  e.alignment = *a;
+  e.rmse_m = a->aligned_rmse_m;
+  return e;
+}
+
+std::vector<double> ScanTimes(const std::vector<ObservationRecord>& observations) {
+  std::vector<double> times;
+  for (const ObservationRecord& o : observations) {
+    if (times.empty() || times.back() != o.t_s) times.push_back(o.t_s);
+  }
+  return times;
 }
 
 }  // namespace grove::tools

@@ -29,8 +29,8 @@
 
 namespace grove::tools {
 
-// The bundled copy (the source tree's tools/data/victoria_park).
-const char* BundledVictoriaParkDir();
+// The bundled copy: victoria_park/ in the data directory (BundledDataDir()).
+std::string BundledVictoriaParkDir();
 
 // A file a run read, as stored: its path, size and CRC-32 (summary.json names them).
 struct InputFile {
@@ -94,6 +94,27 @@ struct GpsErrors {
 };
 StatusOr<GpsErrors> CompareWithGps(const std::vector<StampedPose>& path,
                                    const std::vector<TimedPoint>& gps);
+
+// The score of PHD-SLAM (Kaltiokallio et al., IEEE T-RO 2023; their released code's
+// performance_summary): at each scan time of `scan_times` (increasing, repeats allowed) at which
+// the path has an estimate (its last pose at that time), the GPS fix nearest in time, kept when
+// it lies within tolerance_s (25 ms); the RMSE of the distances between the kept pairs. Their
+// code starts the filter at a fixed pose in the GPS's frame; this text form of the data has
+// another frame, so the estimate is brought into it by the rigid transform that best aligns the
+// kept pairs (as CompareWithGps()). InvalidArgument when fewer than 2 pairs are kept.
+struct GpsScanErrors {
+  int64_t scans = 0;  // scan times with an estimate
+  int64_t pairs = 0;  // of them, with a GPS fix within the tolerance
+  double rmse_m = 0;
+  TrajectoryError alignment;
+};
+StatusOr<GpsScanErrors> CompareWithGpsAtScans(const std::vector<StampedPose>& path,
+                                              const std::vector<double>& scan_times,
+                                              const std::vector<TimedPoint>& gps,
+                                              double tolerance_s = 0.025);
+
+// The distinct times of `observations` (sorted by time), as CompareWithGpsAtScans() takes them.
+std::vector<double> ScanTimes(const std::vector<ObservationRecord>& observations);
 
 }  // namespace grove::tools
 

@@ -1,5 +1,5 @@
 // `grove fastslam montecarlo`: Monte Carlo runs of the landmark FastSLAM filters on the seed
-// paper's simulations (Ankışhan et al., paper 003, Section 4.1-4.3: Simulations I-III), written
+// paper's simulations (Ankışhan et al., 2016, Section 4.1-4.3: Simulations I-III), written
 // in the shape of its Tables 1 and 2 and Figures 3, 4, 6 and 8.
 //
 // Each (filter, particle count, run) is one job: run r simulates Bailey's vehicle with seed S + r

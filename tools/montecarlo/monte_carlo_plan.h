@@ -15,8 +15,8 @@
 
 namespace grove::tools {
 
-// One row of the seed's numbers (paper 003): Table 1 (Simulation I, no particle count given)
-// and Table 2 (Simulation II, 30 particles, 3 for DE-SRCD).
+// One row of the seed's numbers (Ankışhan et al., 2016): Table 1 (Simulation I, no particle count
+// given) and Table 2 (Simulation II, 30 particles, 3 for DE-SRCD).
 struct PaperRow {
   std::string_view scenario;
   FastSlamFilter filter;

@@ -1,5 +1,5 @@
 // The scenarios of `grove fastslam montecarlo`: the seed paper's Simulations I-III (Ankışhan et
-// al., paper 003, Section 4.1-4.3) built in, or a scenario file; each read into the simulator's
+// al., 2016, Section 4.1-4.3) built in, or a scenario file; each read into the simulator's
 // options, its map and a digest that keys the finished jobs made under it.
 #ifndef GROVE_TOOLS_MONTECARLO_MONTE_CARLO_SCENARIO_H_
 #define GROVE_TOOLS_MONTECARLO_MONTE_CARLO_SCENARIO_H_

@@ -203,6 +203,15 @@ nlohmann::json GpsErrorsJson(const GpsErrors& e) {
           {"max_without_jumps_m", e.max_without_jumps_m}};
 }
 
+nlohmann::json GpsScanErrorsJson(const GpsScanErrors& e) {
+  return {{"scans", e.scans},
+          {"pairs", e.pairs},
+          {"tolerance_s", 0.025},
+          {"rmse_m", e.rmse_m},
+          {"alignment_rotation_rad", e.alignment.rotation_rad},
+          {"alignment_translation_m", {e.alignment.translation_x_m, e.alignment.translation_y_m}}};
+}
+
 std::string GpsErrorCsv(const GpsErrors& e) {
   std::string out = "t,gps_x,gps_y,x,y,error\n";
   for (const AlignedPointError& f : e.fixes) {
@@ -243,6 +252,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
       : FacadeRunJob(config, options.run.ranks), options_(options) {}
 
   const FastSlamConfig& config() const { return config_; }
+  std::string BriefReport() const override { return engine_->Summary().BriefReport() + gps_brief_; }
 
   // Opens the inputs (their errors are input errors) and reads the optional truth. Observations
   // without ids select unknown association (config() says which ran).
@@ -439,6 +449,22 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
       (*summary)["gps_heaviest"] = gps_heaviest.ok()
                                        ? GpsErrorsJson(*gps_heaviest)
                                        : nlohmann::json(gps_heaviest.status().message());
+      const std::vector<double> scans = ScanTimes(park_->observations);
+      StatusOr<GpsScanErrors> phd = CompareWithGpsAtScans(mean, scans, park_->gps);
+      StatusOr<GpsScanErrors> phd_heaviest = CompareWithGpsAtScans(*heaviest, scans, park_->gps);
+      (*summary)["gps_phd_slam"] =
+          phd.ok() ? GpsScanErrorsJson(*phd) : nlohmann::json(phd.status().message());
+      (*summary)["gps_phd_slam_heaviest"] = phd_heaviest.ok()
+                                                ? GpsScanErrorsJson(*phd_heaviest)
+                                                : nlohmann::json(phd_heaviest.status().message());
+      if (gps_mean.ok() && phd.ok()) {
+        gps_brief_ = fmt::format(
+            "\nAgainst GPS (weighted-mean path): mean error {:.2f} m, RMSE {:.2f} m over {} fixes "
+            "after a rigid alignment; PHD-SLAM's score (fixes within 25 ms of a scan's estimate): "
+            "RMSE {:.2f} m over {} of {} scans.",
+            gps_mean->mean_m, gps_mean->rmse_m, gps_mean->fixes.size(), phd->rmse_m, phd->pairs,
+            phd->scans);
+      }
     } else {
       (*summary)["inputs"] = {{"controls", options_.controls_path},
                               {"observations", options_.observations_path}};
@@ -459,6 +485,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
   std::unique_ptr<FastSlamEventSource> source_;
   std::unique_ptr<VictoriaParkData> park_;
   VictoriaParkEvents* park_events_ = nullptr;  // source_, for Victoria Park
+  std::string gps_brief_;                      // Victoria Park: the GPS scores, for BriefReport()
   int64_t records_ = 0;                        // input rows
   FastSlamWorkload work_;  // counted before the run: controls and scans are the events Read() gives
   FastSlamEvent event_;

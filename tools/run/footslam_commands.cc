@@ -47,6 +47,17 @@ int SimulateCommand(const SimulateOptions& o) {
   if (!s.ok()) return Fail(kExitOutput, s.message());
   std::fprintf(stderr, "wrote %s/steps.csv and %s/truth.csv: %zu steps\n", o.out_dir.c_str(),
                o.out_dir.c_str(), walk->steps.size());
+  if (o.imu) {
+    StatusOr<int64_t> samples = WriteSimulatedImu(*walk, o.imu_options, o.out_dir);
+    if (!samples.ok()) {
+      return Fail(
+          samples.status().code() == StatusCode::kInvalidArgument ? kExitUsage : kExitOutput,
+          samples.status().message());
+    }
+    std::fprintf(stderr, "wrote %s/imu.csv and %s/stances.csv: %lld samples at %g Hz\n",
+                 o.out_dir.c_str(), o.out_dir.c_str(), static_cast<long long>(*samples),
+                 o.imu_options.rate_hz);
+  }
   return kExitOk;
 }
 

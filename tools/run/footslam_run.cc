@@ -13,6 +13,7 @@
 #include "grove/collective.h"
 #include "grove/config_json.h"
 #include "tools/io/footslam_outputs.h"
+#include "tools/io/imu_step_source.h"
 #include "tools/io/output_readers.h"
 #include "tools/io/step_reader.h"
 #include "tools/report/map_render.h"
@@ -25,11 +26,14 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   FootSlamJob(const FootSlamConfig& config, const FootSlamRunOptions& options)
       : FacadeRunJob(config, options.run.ranks),
         options_(options),
-        steps_name_(options.steps_path.empty() ? EmbeddedWalkName() : options.steps_path),
+        steps_name_(!options.imu_path.empty()    ? options.imu_path
+                    : options.steps_path.empty() ? EmbeddedWalkName()
+                                                 : options.steps_path),
         odometry_(Pose2{config.start_x_m, config.start_y_m, config.start_heading_rad}) {}
 
-  // Opens the step file; its errors are input errors.
+  // Opens the step file (or the IMU recording); its errors are input errors.
   Status Open() {
+    if (!options_.imu_path.empty()) return OpenImu();
     StepReaderOptions reader_options;
     reader_options.max_step_m = options_.max_step_m;
     StatusOr<StepReader> reader = OpenSteps(reader_options);
@@ -57,6 +61,7 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   std::vector<std::string> InputPaths() const override {
     std::vector<std::string> paths;
     if (!options_.steps_path.empty()) paths.push_back(options_.steps_path);
+    if (!options_.imu_path.empty()) paths.push_back(options_.imu_path);
     if (!options_.prior_map_path.empty()) paths.push_back(options_.prior_map_path);
     return paths;
   }
@@ -78,6 +83,7 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
                                       "map.svg"};
     // Storage of diversity: the stored map alone (map.csv and map_best.csv include it).
     if (config_.store_distance_m > 0) names.push_back("stored_map.csv");
+    if (imu_) names.push_back("steps.csv");  // the front end's steps
     return names;
   }
   std::string InputName() const override { return steps_name_; }
@@ -97,7 +103,7 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   }
 
   StatusOr<bool> Read(std::string* digest_bytes) override {
-    StatusOr<bool> more = reader_->Next(&step_);
+    StatusOr<bool> more = imu_ ? ReadImuStep() : reader_->Next(&step_);
     if (!more.ok() || !*more) return more;
     const double v[3] = {step_.t_s, step_.dx_m, step_.dy_m};
     digest_bytes->append(reinterpret_cast<const char*>(v), sizeof(v));
@@ -106,7 +112,7 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   void Replay() override { odometry_.Add(step_.dx_m, step_.dy_m); }
   Status Step() override {
     if (engine_->steps() == 0) {
-      Status st = engine_->SetStartTime(reader_->start_time_s());
+      Status st = engine_->SetStartTime(imu_ ? imu_->origin_time_s() : reader_->start_time_s());
       if (!st.ok()) return Status(st.code(), fmt::format("{}: {}", steps_name_, st.message()));
     }
     Status s = engine_->Step(step_.t_s, step_.dx_m, step_.dy_m);
@@ -141,7 +147,8 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
         out->Add("mean_trajectory.csv", TrajectoryCsv(engine_->MeanTrajectory())));
     GROVE_RETURN_IF_ERROR(out->Add("smoothed_trajectory.csv", TrajectoryCsv(*smoothed)));
     if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
-    // The smoothed path: the best of the three paths on the simulator's walks (README).
+    // The smoothed path: the best of the three paths on the simulator's walks
+    // (engine/footslam/README.md).
     MapImage image = FootSlamImage(
         config_.hex_radius_m, *cumulative, *smoothed, odometry_.points(),
         fmt::format("FootSLAM, {} particles, {} steps: cumulative map, smoothed path, "
@@ -152,6 +159,23 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
     if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
     summary->update(FootSlamSummaryJson(s));
     (*summary)["inputs"] = {{"steps", steps_name_}, {"steps_read", engine_->steps()}};
+    if (imu_) {
+      GROVE_RETURN_IF_ERROR(out->Add("steps.csv", FootStepsCsv(imu_steps_)));
+      const FootImuSummary f = imu_->Summary();
+      (*summary)["inputs"]["imu_format"] = imu_->reader().format();
+      (*summary)["inputs"]["imu_duplicates_skipped"] = imu_->reader().duplicates();
+      (*summary)["foot_imu"] = {{"config", nlohmann::json::parse(ConfigToJson(
+                                               FootImuConfigFields(), options_.imu_config))},
+                                {"samples", f.samples},
+                                {"still_samples", f.still_samples},
+                                {"stances", f.stances},
+                                {"steps", f.steps},
+                                {"alignment_t_s", f.alignment_t_s},
+                                {"origin_t_s", f.origin_t_s},
+                                {"gravity_mps2", f.gravity_mps2},
+                                {"distance_m", f.distance_m},
+                                {"seconds", f.seconds}};
+    }
     (*summary)["hexagons"] = {{"cumulative", cumulative->size()}, {"heaviest", best->size()}};
     if (s.prior_hexagons + s.prior_hexagons_outside > 0 || !options_.prior_map_path.empty()) {
       (*summary)["prior_map"] = {{"path", options_.prior_map_path},
@@ -163,6 +187,39 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   }
 
  private:
+  Status OpenImu() {
+    StatusOr<ImuStepSource> source =
+        ImuStepSource::Open(options_.imu_path, options_.imu_config, options_.imu_reader);
+    if (!source.ok()) return source.status();
+    imu_ = std::make_unique<ImuStepSource>(std::move(source).value());
+    // A regular file is run through the front end once more to count its steps (a stream is
+    // read once, by the run); an error there is reported when the run comes to it.
+    if (CountRegularFileLines(options_.imu_path) > 0 || options_.imu_path.ends_with(".mat")) {
+      StatusOr<ImuStepSource> again =
+          ImuStepSource::Open(options_.imu_path, options_.imu_config, options_.imu_reader);
+      if (again.ok()) {
+        FootStep step;
+        int64_t line = 0;
+        for (StatusOr<bool> more = again->Next(&step, &line); more.ok() && *more;
+             more = again->Next(&step, &line)) {
+          ++steps_;
+        }
+      }
+    }
+    records_ = steps_;
+    return Status::Ok();
+  }
+
+  StatusOr<bool> ReadImuStep() {
+    FootStep step;
+    int64_t line = 0;
+    StatusOr<bool> more = imu_->Next(&step, &line);
+    if (!more.ok() || !*more) return more;
+    imu_steps_.push_back(step);
+    step_ = StepRecord{step.t_s, step.dx_m, step.dy_m, line};
+    return true;
+  }
+
   // The step file, or the walk bundled in the binary.
   StatusOr<StepReader> OpenSteps(const StepReaderOptions& reader_options) const {
     return options_.steps_path.empty()
@@ -173,8 +230,10 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   FootSlamRunOptions options_;
   std::string steps_name_;
   std::unique_ptr<StepReader> reader_;
-  int64_t records_ = 0;  // input lines after the header
-  int64_t steps_ = 0;    // the steps Read() returns
+  std::unique_ptr<ImuStepSource> imu_;  // instead of reader_ with an IMU recording
+  std::vector<FootStep> imu_steps_;     // its steps so far
+  int64_t records_ = 0;                 // input lines after the header
+  int64_t steps_ = 0;                   // the steps Read() returns
   std::vector<HexCounts> prior_;
   StepRecord step_;
   OdometryPath odometry_;
@@ -187,6 +246,9 @@ int RunFootSlamCommand(const FootSlamConfig& config, const FootSlamRunOptions& o
   if (!(options.max_step_m > 0) || !std::isfinite(options.max_step_m)) {
     return Fail(kExitUsage,
                 fmt::format("--max-step = {}: must be > 0 and finite", options.max_step_m));
+  }
+  if (!options.imu_path.empty()) {
+    if (Status s = options.imu_config.Validate(); !s.ok()) return Fail(kExitUsage, s.message());
   }
   if (!options.prior_map_path.empty() && !options.run.resume_path.empty()) {
     return Fail(kExitUsage,

@@ -5,8 +5,11 @@
 #include <cstdint>
 #include <string>
 
+#include "grove/foot_imu.h"
 #include "grove/footslam.h"
 #include "grove/status.h"
+#include "tools/io/imu_reader.h"
+#include "tools/run/foot_imu_commands.h"
 #include "tools/run/run_loop.h"
 
 namespace grove::tools {
@@ -17,6 +20,10 @@ struct FootSlamRunOptions {
   std::string steps_path;      // empty: the walk bundled in the binary
   double max_step_m = 5.0;     // longer steps in the input are rejected
   std::string prior_map_path;  // a map.csv of an earlier walk (FootSlam::SetPriorMap); empty: none
+  // An IMU recording instead of a step file: its steps come from the foot IMU front end.
+  std::string imu_path;
+  FootImuConfig imu_config;
+  ImuReaderOptions imu_reader;
 };
 
 // Runs FootSLAM and writes every output; returns an exit code after printing any error to
@@ -36,6 +43,8 @@ struct SimulateOptions {
   double heading_drift = 0;
   bool scale_error_given = false;
   double scale_error = 0;
+  bool imu = false;  // also imu.csv and stances.csv
+  SimulateImuOptions imu_options;
 };
 // `grove footslam simulate`.
 int SimulateCommand(const SimulateOptions& options);

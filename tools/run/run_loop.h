@@ -26,7 +26,7 @@
 
 namespace grove::tools {
 
-// Exit codes of the grove command (documented in the README).
+// Exit codes of the grove command (documented in tools/README.md, "Exit codes").
 enum ExitCode : int {
   kExitOk = 0,
   kExitInternal = 1,  // a bug: please report

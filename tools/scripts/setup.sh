@@ -4,6 +4,7 @@
 #   tools/scripts/setup.sh run    FootSLAM, 30,000 particles, on the bundled walk -> build/footslam/
 #   tools/scripts/setup.sh test   every test (ctest)
 #   tools/scripts/setup.sh build  just build
+#   tools/scripts/setup.sh package  the Debian package (prefix /usr) -> build/grove_VERSION_ARCH.deb
 # Environment: BUILD_DIR (default build), BUILD_TYPE (Release, Debug, RelWithDebInfo; default
 # Release), SANITIZE=1 for the ASan + UBSan configuration (pooling off), EXTRA_CMAKE_ARGS for
 # anything else (e.g. -DGROVE_BUILD_BENCHMARKS=OFF).
@@ -16,7 +17,9 @@ shift || true
 packages=(cmake g++ make pkg-config libtbb-dev libeigen3-dev libjemalloc-dev libgtest-dev
   libbenchmark-dev libcli11-dev libfmt-dev nlohmann-json3-dev librandom123-dev libcairo2-dev
   zlib1g-dev libboost-dev gnuplot-nox libhwy-dev pybind11-dev python3-dev python3-numpy
-  python3-matplotlib libopenmpi-dev openmpi-bin)
+  python3-matplotlib libopenmpi-dev openmpi-bin libmatio-dev)
+# The package's man page and dependency list need help2man and dpkg-shlibdeps.
+[ "$job" = package ] && packages+=(help2man dpkg-dev file)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -32,6 +35,7 @@ fi
 
 build_dir="${BUILD_DIR:-build}"
 cmake_args=(-DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}")
+[ "$job" = package ] && cmake_args+=(-DCMAKE_INSTALL_PREFIX=/usr)
 if [ "${SANITIZE:-0}" = 1 ]; then
   cmake_args+=(-DGROVE_SANITIZE=ON)
   export LSAN_OPTIONS="suppressions=$PWD/tools/scripts/lsan.supp:print_suppressions=0"
@@ -50,8 +54,12 @@ case "$job" in
     ctest --test-dir "$build_dir" -j "$(nproc)" --output-on-failure "$@"
     ;;
   build) ;;
+  package)
+    cmake --build "$build_dir" --target package -- --no-print-directory >/dev/null
+    ls "$build_dir"/grove_*.deb
+    ;;
   *)
-    echo "usage: tools/scripts/setup.sh run|test|build [args]" >&2
+    echo "usage: tools/scripts/setup.sh run|test|build|package [args]" >&2
     exit 2
     ;;
 esac

@@ -147,7 +147,7 @@ struct BaileySimOptions {
 //
 // Bailey's example_webmap.ini: the defaults above.
 BaileySimOptions WebmapPreset();
-// Ankishan et al. (seed paper 003), Section 4.1, Simulation I: V = 3 m/s, wheelbase 4 m, controls
+// Ankışhan et al. (2016), Section 4.1, Simulation I: V = 3 m/s, wheelbase 4 m, controls
 // at 40 Hz, observations at 5 Hz, maximum range 30 m, and Q (Eq. 33) and R (Eq. 34). Readings of
 // the PDF's flattened text (each written down in the .cc): Q = diag(1.0^2, (10 pi/180)^2), so
 // sigma_speed_mps = 1.0 and sigma_steer_rad = 10 degrees; R = diag(1.2^2, (12 pi/180)^2), so

@@ -6,43 +6,16 @@
 #include <cmath>
 #include <initializer_list>
 #include <iterator>
-#include <random>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "tools/sim/sim_random.h"
 
 namespace grove::tools {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// Draws built on the raw 64-bit engine output, so they do not depend on the standard library.
-class Random {
- public:
-  explicit Random(uint64_t seed) : engine_(seed) {}
-
-  // Uniform in [0, 1), 53 random bits.
-  double Uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
-  // Standard normal by Box-Muller (one of the pair; the other is dropped for simplicity).
-  double Normal() {
-    const double u1 = 1.0 - Uniform();  // in (0, 1], so the log is finite
-    const double u2 = Uniform();
-    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
-  }
-  // Uniform in [0, n). REQUIRES: n > 0.
-  size_t Index(size_t n) { return std::min(n - 1, static_cast<size_t>(Uniform() * n)); }
-
- private:
-  std::mt19937_64 engine_;
-};
-
-// SplitMix64 finaliser: derives independent engine seeds from the user's seed.
-uint64_t MixSeed(uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
 
 struct Waypoint {
   double x_m;
@@ -273,8 +246,8 @@ StatusOr<SimulatedWalk> SimulateWalk(const SimulatorOptions& options) {
                               : options.scenario == Scenario::kCampus ? CampusGraph()
                                                                       : BuildingGraph();
   // Separate streams: the true walk must not change when only the odometry errors do.
-  Random walk_random(MixSeed(options.seed));
-  Random error_random(MixSeed(options.seed ^ 0x6F646F6D65747279ull));
+  SimRandom walk_random(MixSeed(options.seed));
+  SimRandom error_random(MixSeed(options.seed ^ 0x6F646F6D65747279ull));
 
   const double length_m = options.step_length_m;
   const int64_t step_count =

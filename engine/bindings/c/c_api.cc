@@ -59,6 +59,8 @@ static_assert(GROVE_FASTSLAM_ASSOCIATION_MAXIMUM_LIKELIHOOD ==
               static_cast<int>(FastSlamAssociation::kMaximumLikelihood));
 static_assert(GROVE_FASTSLAM_ASSOCIATION_EXCLUSIVE ==
               static_cast<int>(FastSlamAssociation::kExclusive));
+static_assert(GROVE_FASTSLAM_ASSOCIATION_SAMPLED ==
+              static_cast<int>(FastSlamAssociation::kSampled));
 static_assert(GROVE_FASTSLAM_GATE_DISTANCE2 == static_cast<int>(FastSlamGateUnit::kDistance2));
 static_assert(GROVE_FASTSLAM_GATE_PROBABILITY == static_cast<int>(FastSlamGateUnit::kProbability));
 static_assert(GROVE_FASTSLAM_EVIDENCE_OFF == static_cast<int>(FastSlamEvidence::kOff));

@@ -1106,7 +1106,30 @@ py::dict VersionDict() {
   return d;
 }
 
+// The module's first step on import. An interpreter other than the one the module was built for
+// usually fails here (no numpy on its path), so the error names both interpreters and the ways
+// out instead of pybind11's bare "initialization failed" (GROVE_PYTHON_BUILT_FOR: CMakeLists.txt).
+void RequireNumpy() {
+  try {
+    py::module_::import("numpy");
+  } catch (py::error_already_set& e) {
+    py::module_ sys = py::module_::import("sys");
+    const std::string here = py::str(sys.attr("executable")).cast<std::string>() + ", Python " +
+                             py::str(sys.attr("version")).cast<std::string>();
+    throw py::import_error(
+        "grove: numpy cannot be imported (" + std::string(e.what()) + ") by this interpreter (" +
+        here +
+        "); grove was built for " GROVE_PYTHON_BUILT_FOR
+        ": run that interpreter, install numpy for this one, or build grove for this one "
+        "(pip install --no-build-isolation ./engine/bindings/python from the source tree)");
+  }
+}
+
 }  // namespace
+
+// grove.FootImu (foot_imu_binding.cc); `raise` raises a status as the module's exception.
+void BindFootImu(py::module_& m, void (*raise)(const Status& status, const std::string& context));
+
 }  // namespace grove::python
 
 PYBIND11_MODULE(grove, m) {
@@ -1115,13 +1138,15 @@ PYBIND11_MODULE(grove, m) {
   m.doc() =
       "grove: particle-filter SLAM (FootSLAM on hexagon grids, landmark FastSLAM) whose particles "
       "share persistent maps.\n\n"
-      "Classes: FootSlam, FastSlam; errors: GroveError and one subclass per status code "
+      "Classes: FootSlam, FastSlam, FootImu (foot IMU samples to steps); errors: GroveError and "
+      "one subclass per status code "
       "(InvalidArgumentError is also a ValueError). Every failing call raises with the engine's "
       "message and leaves the filter as it was unless the error says otherwise.\n\n"
       "Threads: one filter is used by one thread at a time (a mutex per object serialises the "
       "calls on it); two filters share nothing and run in parallel in two Python threads, since "
       "every call releases the GIL while it filters. Arrays returned are copies owned by the "
       "caller: they stay valid after later steps and after the filter is gone.";
+  RequireNumpy();
   MakeErrors(m);
   g_pose_type = py::module_::import("collections")
                     .attr("namedtuple")("Pose", py::make_tuple("x", "y", "heading"))
@@ -1137,6 +1162,8 @@ PYBIND11_MODULE(grove, m) {
         "string (the one-line form).");
   BindFootSlam(m);
   BindFastSlam(m);
+  BindFootImu(
+      m, [](const grove::Status& status, const std::string& context) { Raise(status, context); });
   // A Python function, so that pickle finds it by name at every protocol (a bound C++ function
   // is pickled through its capsule, which protocols 0 and 1 cannot do).
   m.def(
@@ -1163,6 +1190,7 @@ def _refuse_when_initialised(cls, name):
     guarded.__doc__ = original.__doc__
     setattr(cls, name, guarded)
 
+_refuse_when_initialised(FootImu, "__init__")
 for _cls in (FootSlam, FastSlam):
     _refuse_when_initialised(_cls, "__init__")
     _refuse_when_initialised(_cls, "__setstate__")

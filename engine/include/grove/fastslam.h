@@ -52,8 +52,9 @@ enum class FastSlamFilter {
   // the pose is drawn from the result, and the weight is the product of each observation's
   // predictive likelihood.
   kFastSlam2,
-  // The seed's family (paper 003, Ankışhan et al.; engine/fastslam/sigma_point_filters.h and the
-  // README give every reading). Each draws its pose after resampling (as kFastSlam2) unless said.
+  // The seed's family (Ankışhan et al., 2016; engine/fastslam/sigma_point_filters.h and
+  // engine/fastslam/README.md give every reading). Each draws its pose after resampling (as
+  // kFastSlam2) unless said.
   // U-FastSLAM (Kim, Sakthivel, Chung 2008): the scaled unscented transform for the vehicle's
   // prediction and proposal, the landmark updates and the weights (ut_alpha, ut_beta, ut_kappa).
   kUnscented,
@@ -94,6 +95,10 @@ enum class FastSlamAssociation {
   // As kMaximumLikelihood, and within a scan one landmark per detection and one detection per
   // landmark (greedy by likelihood).
   kExclusive,
+  // Unknown association, per particle: each detection's association drawn in proportion to its
+  // likelihoods, a new landmark (p0) included, and weighted by their sum
+  // (engine/fastslam/association_sampling.h).
+  kSampled,
 };
 
 // How the gates are given.
@@ -174,7 +179,7 @@ struct GROVE_EXPORT FastSlamConfig {
   // |bearing| <= sensor_fov_rad / 2, from the pose the association used: FastSLAM 2.0's
   // predicted mean) without a detection inside its augment gate; it is removed when its
   // evidence falls below evidence_threshold. Default: on (measured: on Victoria Park it halves
-  // the map and lowers the GPS error; README), threshold 0.
+  // the map and lowers the GPS error; engine/fastslam/README.md), threshold 0.
   FastSlamEvidence evidence = FastSlamEvidence::kOn;
   int64_t evidence_threshold = 0;
   // The sensor's view for the evidence. Range: (0, 1e6] m and (0, 2 pi]. Defaults: Bailey's

@@ -108,7 +108,7 @@ struct GROVE_EXPORT FootSlamConfig {
   // White noise on each step's heading, radians. Range: [0, 10]. Default: 0.03.
   double heading_sigma_rad = 0.03;
   // Initial spread of the step-length scale error (scale = 1 + N(0, sigma)). Range: [0, 10].
-  // Default: 0 (scale fixed: see the README on the short-step trap).
+  // Default: 0 (scale fixed: see engine/footslam/README.md on the short-step trap).
   double scale_sigma = 0;
   // Random-walk increment of the scale error per step. Range: [0, 10]. Default: 0.
   double scale_drift_sigma = 0;
@@ -229,7 +229,7 @@ class GROVE_EXPORT FootSlam {
   // A prediction of the peak memory, in bytes, of a run of `steps` steps: particle state, two
   // generations of maps, the path histories and a fixed overhead. Calibrated on 2-thread runs of
   // the paper walk at 30,000 to 1,000,000 particles and the bundled walk at 30,000, whose peak
-  // RSS it exceeds by 7 to 22 % (bench/results/2026-12-05-AMD-EPYC-2c-session27/); the naive map
+  // RSS it exceeds by 7 to 22 % (engine/footslam/README.md, "Speed and memory"); the naive map
   // assumes about 1.2 new hexagons per step. REQUIRES: config.Validate() is ok.
   static int64_t EstimatePeakBytes(const FootSlamConfig& config, int64_t steps);
   virtual ~FootSlam();
@@ -292,11 +292,11 @@ class GROVE_EXPORT FootSlam {
 
   // ---- Checkpoints ----
 
-  // The whole state after the last step as the bytes of a checkpoint file (format in the
-  // README): every particle's pose, error states, weight, map and path, with the sharing
-  // between particles kept, so the size follows the distinct map nodes. `user_data` is stored
-  // as is (the grove command keeps its input position there). FailedPrecondition after an
-  // error stopped the engine.
+  // The whole state after the last step as the bytes of a checkpoint file (format in
+  // tools/io/FORMATS.md, "Checkpoints"): every particle's pose, error states, weight, map and path,
+  // with the sharing between particles kept, so the size follows the distinct map nodes.
+  // `user_data` is stored as is (the grove command keeps its input position there).
+  // FailedPrecondition after an error stopped the engine.
   StatusOr<std::string> Checkpoint(std::string_view user_data = {}) const;
 
   // An engine continuing from `checkpoint`, made by Checkpoint() under a configuration equal to

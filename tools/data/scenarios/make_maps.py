@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the maps of the seed's Simulations II and III (issue 12), whose own maps (the seed's
+"""Writes the maps of the seed's Simulations II and III (Ankışhan et al., 2016), whose own maps (the seed's
 Figs. 5 and 7) are not published: a loop of waypoints and landmarks scattered near the route, in
 Bailey's text map format (tools/sim/fastslam_simulator.h). Deterministic (fixed seeds)."""
 import math
@@ -54,7 +54,7 @@ rng = random.Random(2)
 wps = [(0, -60), (60, -65), (110, -40), (120, 10), (90, 45), (40, 40), (10, 65), (-40, 70),
        (-95, 50), (-115, 0), (-90, -45), (-45, -55)]
 write("sim2_map.txt",
-      "# grove: Simulation II map (issue 12). Written by tools/data/scenarios/make_maps.py; the seed's\n"
+      "# grove: Simulation II map. Written by tools/data/scenarios/make_maps.py; the seed's\n"
       "# Fig. 5 map is not published. Bailey's text map format (tools/sim/fastslam_simulator.h).\n",
       landmarks(rng, 60, wps, 4.0, 25.0, 6.0), wps)
 
@@ -64,6 +64,6 @@ rng = random.Random(3)
 wps = [(0, -4), (5, -4.5), (8, -2), (8, 2), (5, 4.5), (0, 4), (-4, 5), (-8, 2.5), (-8, -2),
        (-4, -4.5)]
 write("sim3_map.txt",
-      "# grove: Simulation III map (issue 12). Written by tools/data/scenarios/make_maps.py; the seed's\n"
+      "# grove: Simulation III map. Written by tools/data/scenarios/make_maps.py; the seed's\n"
       "# Fig. 7 map is not published. Bailey's text map format (tools/sim/fastslam_simulator.h).\n",
       landmarks(rng, 30, wps, 0.6, 3.0, 1.0), wps)
