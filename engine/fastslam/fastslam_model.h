@@ -597,7 +597,7 @@ class FastSlamModel {
       const bool ok = trie_.Update(&maps_[i], static_cast<uint64_t>(z.id), slot,
                                    [&](Landmark& l, bool existed) {
                                      if (!existed) {
-                                       l = steps_.NewLeaf(pose, rb);
+                                       s = steps_.NewLeaf(pose, rb, &l);
                                      } else {
                                        s = steps_.UpdateLeaf(pose, rb, &l, &ll);
                                      }

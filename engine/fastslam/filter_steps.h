@@ -272,12 +272,22 @@ class FilterSteps {
         return UpdateLandmark(pose, z, noise_, l, ll);
     }
   }
-  // A new leaf from z seen at `pose` (U-FastSLAM initialises as the EKF does: Kim's add_feature).
-  Landmark NewLeaf(const VehiclePose& pose, const RangeBearing& z) const {
-    if (traits_.map == FilterTraits::Map::kCentralDifference) {
-      return CentralDifferenceInitLandmark(pose, z, noise_, cd_step_);
+  // A new leaf from z seen at `pose` (U-FastSLAM initialises as the EKF does: Kim's add_feature)
+  // into *out. FailedPrecondition when its mean or covariance is not finite.
+  Status NewLeaf(const VehiclePose& pose, const RangeBearing& z, Landmark* out) const {
+    *out = traits_.map == FilterTraits::Map::kCentralDifference
+               ? CentralDifferenceInitLandmark(pose, z, noise_, cd_step_)
+               : InitLandmark(pose, z, noise_);
+    const Landmark& l = *out;
+    if (!std::isfinite(l.x_m) || !std::isfinite(l.y_m) || !std::isfinite(l.xx) ||
+        !std::isfinite(l.xy) || !std::isfinite(l.yy)) {
+      return FailedPreconditionError(fmt::format(
+          "the new landmark of range = {}, bearing = {} from ({}, {}, {}) is not finite: mean "
+          "({}, {}), covariance ({}, {}, {})",
+          z.range_m, z.bearing_rad, pose.x_m, pose.y_m, pose.heading_rad, l.x_m, l.y_m, l.xx, l.xy,
+          l.yy));
     }
-    return InitLandmark(pose, z, noise_);
+    return Status::Ok();
   }
 
  private:

@@ -112,7 +112,8 @@ class LandmarkUpdates {
   }
 
   // The paths of every particle to the landmarks of the scan; returns the particles whose
-  // paths are all made (all but from the first that ran out of memory on).
+  // paths are all made (all but from the first that ran out of memory or made a non-finite new
+  // landmark on).
   static size_t FindLeaves(const FilterSteps& steps, Trie* trie, Node** roots,
                            const VehiclePose* poses, uint64_t first, const ScanStep& scan, size_t n,
                            int slot, Scratch* sc, Failure* failure) {
@@ -122,16 +123,21 @@ class LandmarkUpdates {
       for (size_t j = 0; j < m; ++j) {
         const LandmarkObservation& z = scan.observations[j];
         Landmark* leaf = nullptr;
+        Status made;
         const bool ok = trie->Update(
             &roots[k], static_cast<uint64_t>(z.id), slot, [&](Landmark& l, bool existed) {
               if (existed) {
                 leaf = &l;
               } else {
-                l = steps.NewLeaf(poses[k], RangeBearing{z.range_m, z.bearing_rad});
+                made = steps.NewLeaf(poses[k], RangeBearing{z.range_m, z.bearing_rad}, &l);
               }
             });
         if (!ok) {
           failure->Note(k, 0, NoMemoryError(first + k, "map"), nullptr);
+          return k;
+        }
+        if (!made.ok()) {
+          failure->Note(k, j, ParticleError(first + k, z, made), nullptr);
           return k;
         }
         if (leaf == nullptr) continue;

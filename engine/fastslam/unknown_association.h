@@ -167,7 +167,9 @@ class UnknownAssociation {
     for (size_t j = 0; j < sc->decisions.size(); ++j) {
       if (sc->decisions[j].kind != Decision::kNew) continue;
       const LandmarkObservation& z = scan.observations[j];
-      Landmark l = steps.NewLeaf(pose, RangeBearing{z.range_m, z.bearing_rad});
+      Landmark l;
+      Status s = steps.NewLeaf(pose, RangeBearing{z.range_m, z.bearing_rad}, &l);
+      if (!s.ok()) return ParticleError(first_ + i, z, s);
       l.evidence = 1;
       l.tag = z.id >= 0 ? static_cast<int32_t>(z.id) : -1;
       GROVE_RETURN_IF_ERROR(Insert(trie, root, i, slot, l));

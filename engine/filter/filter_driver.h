@@ -5,10 +5,12 @@
 //
 // The model is a PosedModel: a FilterModel with the pose of each particle after a step.
 //
-// Errors: a step with a bad time returns InvalidArgument and changes nothing; a step the model
-// or the filter fails (its message prefixed with "step K (t = T s): "), and any exception or
-// allocation failure inside one (ResourceExhausted, Internal), latches the driver failed: every
-// later step returns FailedPrecondition and the state may not be checkpointed.
+// Errors: a step with a bad time (grove/input_rules.h, or out of order) returns InvalidArgument
+// and changes nothing; a step the model or the filter fails (its message prefixed with
+// "step K (t = T s): "), and any exception or allocation failure inside one (ResourceExhausted,
+// Internal), latches the driver failed: the message ends with kStoppedNote, an InvalidArgument
+// becomes FailedPrecondition (that code promises an unchanged engine), every later step returns
+// FailedPrecondition and the state may not be checkpointed.
 //
 // Thread safety: one thread drives an engine (see ParticleFilter).
 #ifndef GROVE_ENGINE_FILTER_FILTER_DRIVER_H_
@@ -35,6 +37,7 @@
 #include "engine/filter/particle_filter.h"
 #include "engine/filter/resampler.h"
 #include "engine/io/checkpoint_io.h"
+#include "grove/input_rules.h"
 #include "grove/status.h"
 #include "grove/types.h"
 
@@ -59,6 +62,9 @@ enum class TimeOrder {
   kIncreasing,     // every step after the one before (FootSLAM's steps)
   kNonDecreasing,  // a step may share the time of the one before (an update after a prediction)
 };
+
+// What the message of an error that stopped an engine ends with.
+inline constexpr char kStoppedNote[] = " (the engine stopped here: every later step fails)";
 
 template <PosedModel Model>
 class FilterDriver {
@@ -90,8 +96,8 @@ class FilterDriver {
   // start takes the first step's time. InvalidArgument for a non-finite time,
   // FailedPrecondition after the first step.
   Status SetStartTime(double t_s) {
-    if (!std::isfinite(t_s)) {
-      return InvalidArgumentError(fmt::format("start time = {}: must be finite", t_s));
+    if (Status s = CheckInput(InputField::kTime, t_s); !s.ok()) {
+      return InvalidArgumentError("start time: " + s.message());
     }
     if (filter_.steps() > 0) {
       return FailedPreconditionError("the start time must be set before the first step");
@@ -109,14 +115,11 @@ class FilterDriver {
     try {
       return f();
     } catch (const std::bad_alloc&) {
-      failed_ = true;
-      return ResourceExhaustedError("out of memory");
+      return Stop(ResourceExhaustedError("out of memory"));
     } catch (const std::exception& e) {
-      failed_ = true;
-      return InternalError(std::string("unexpected exception: ") + e.what());
+      return Stop(InternalError(std::string("unexpected exception: ") + e.what()));
     } catch (...) {
-      failed_ = true;
-      return InternalError("unexpected exception");
+      return Stop(InternalError("unexpected exception"));
     }
   }
 
@@ -125,7 +128,7 @@ class FilterDriver {
   template <typename F>
   Status AfterStep(F&& f) noexcept {
     Status status = Guarded(f);
-    if (!status.ok()) failed_ = true;
+    if (!status.ok() && !failed_) return Stop(status);
     return status;
   }
 
@@ -235,8 +238,8 @@ class FilterDriver {
  private:
   template <typename Run>
   Status Step(double t_s, Run&& run) {
-    if (!std::isfinite(t_s)) {
-      return InvalidArgumentError(fmt::format("step {}: t = {}: must be finite", steps() + 1, t_s));
+    if (Status s = CheckInput(InputField::kTime, t_s); !s.ok()) {
+      return InvalidArgumentError(fmt::format("step {}: {}", steps() + 1, s.message()));
     }
     GROVE_RETURN_IF_ERROR(CheckNotFailed("cannot be stepped again"));
     if (!start_time_unset_) {
@@ -261,9 +264,8 @@ class FilterDriver {
       Status status = run();
       times_.push_back(t_s);
       if (!status.ok()) {
-        failed_ = true;
-        return Status(status.code(), fmt::format("step {} (t = {} s): {}", filter_.steps(), t_s,
-                                                 status.message()));
+        return Stop(Status(status.code(), fmt::format("step {} (t = {} s): {}", filter_.steps(),
+                                                      t_s, status.message())));
       }
 #ifdef GROVE_EXPENSIVE_CHECKS
       // Debug builds walk every shared node after every step (mimalloc's expensive level).
@@ -275,15 +277,22 @@ class FilterDriver {
 #endif
       auto t0 = std::chrono::steady_clock::now();
       StatusOr<Pose2> mean = ComputeMeanPose();
-      if (!mean.ok()) {
-        failed_ = true;
-        return mean.status();
-      }
+      if (!mean.ok()) return Stop(mean.status());
       mean_.push_back({t_s, *mean});
       bookkeeping_s_ +=
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       return Status::Ok();
     });
+  }
+
+  // Latches the driver failed and returns `s` saying so. InvalidArgument promises an unchanged
+  // engine, which a half-done step is not: it becomes FailedPrecondition.
+  Status Stop(const Status& s) {
+    if (failed_) return s;
+    failed_ = true;
+    const StatusCode code =
+        s.code() == StatusCode::kInvalidArgument ? StatusCode::kFailedPrecondition : s.code();
+    return Status(code, s.message() + kStoppedNote);
   }
 
   // Weighted mean pose over fixed blocks (circular mean for the heading); across ranks, every

@@ -26,6 +26,7 @@
 #include "engine/footslam/htree_map.h"
 #include "engine/footslam/naive_map.h"
 #include "engine/footslam/prior_map.h"
+#include "grove/input_rules.h"
 
 namespace grove::footslam {
 namespace {
@@ -86,10 +87,11 @@ class FootSlamEngine final : public FootSlam::Impl {
   }
 
   Status Step(double t_s, double dx_m, double dy_m) override {
-    if (!std::isfinite(t_s) || !std::isfinite(dx_m) || !std::isfinite(dy_m)) {
+    Status s = CheckInput(InputField::kStepDx, dx_m);
+    if (s.ok()) s = CheckInput(InputField::kStepDy, dy_m);
+    if (!s.ok()) {
       return InvalidArgumentError(
-          fmt::format("step {}: t = {}, dx = {}, dy = {}: every value must be finite",
-                      driver_.steps() + 1, t_s, dx_m, dy_m));
+          fmt::format("step {} (t = {}): {}", driver_.steps() + 1, t_s, s.message()));
     }
     GROVE_RETURN_IF_ERROR(driver_.Update(t_s, StepInput{dx_m, dy_m}));
     if constexpr (BlockStoringMap<Map>) {

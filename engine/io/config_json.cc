@@ -81,6 +81,13 @@ StatusOr<std::vector<ConfigEntry>> ParseConfigObject(const std::string& name,
     return InvalidArgumentError(
         fmt::format("{}:{}:{}: nested deeper than {} levels", name, line, column, kMaxConfigDepth));
   }
+  // The parser takes a NUL byte for the end of the input, so a document followed by a NUL and
+  // anything at all would pass; JSON text has no raw NUL (not even in a string).
+  if (size_t at = text.find('\0'); at != std::string::npos) {
+    auto [line, column] = LineColumn(text, at);
+    return InvalidArgumentError(
+        fmt::format("{}:{}:{}: invalid JSON: a NUL byte (JSON text has none)", name, line, column));
+  }
   json doc;
   std::vector<std::string> keys;  // the top-level keys in order, repeats included
   try {

@@ -365,7 +365,7 @@ static void TestFootFatalError(void) {
   h = NewFoot(&c);
   for (k = 1; k <= 100 && s == GROVE_OK; ++k) s = grove_footslam_step(h, k, 1.0, 0);
   CHECK_STATUS_MSG(s, GROVE_OUT_OF_RANGE, grove_footslam_last_error(h));
-  CHECK(grove_footslam_last_error(h)[0] != '\0');
+  CHECK(Contains(grove_footslam_last_error(h), "the engine stopped here"));
   CHECK_FOOT(h, grove_footslam_step(h, 1000, 0.1, 0), GROVE_FAILED_PRECONDITION);
   CHECK_FOOT(h, grove_footslam_checkpoint(h, NULL, 0, &n), GROVE_FAILED_PRECONDITION);
   CHECK_FOOT(h, grove_footslam_mean_pose(h, &pose), GROVE_OK);
@@ -869,6 +869,76 @@ static void TestFastErrors(void) {
   printf("ok: fastslam create, control and scan errors leave the engine unchanged\n");
 }
 
+/* Regression: values outside grove/input_rules.h's bounds (a huge finite range made a landmark
+ * of infinite covariance, a control at t = 1e300 blocked every later call, an id of INT64_MAX
+ * and any steering angle passed) are refused with GROVE_INVALID_ARGUMENT naming the value, and
+ * the engine is exactly as before: step count, mean pose and time; the next good call works. */
+static void TestFastBoundsLeaveEngineUnchanged(void) {
+  grove_fastslam_config c = FastConfig();
+  grove_fastslam* h = NewFast(&c);
+  grove_landmark_observation obs[2] = {{10, 0.1, 0}, {12, -0.2, 1}};
+  grove_pose before, after;
+  int64_t steps_before = -1, steps = -1;
+  size_t poses_before = 0, poses = 0;
+  CHECK_FAST(h, grove_fastslam_control(h, 0, 2, 0), GROVE_OK);
+  CHECK_FAST(h, grove_fastslam_scan(h, 0.1, obs, 2), GROVE_OK);
+  CHECK_FAST(h, grove_fastslam_step_count(h, &steps_before), GROVE_OK);
+  CHECK_FAST(h, grove_fastslam_mean_pose(h, &before), GROVE_OK);
+  CHECK_FAST(h, grove_fastslam_mean_trajectory(h, NULL, 0, &poses_before), GROVE_OK);
+
+  obs[1].range_m = 1e300;
+  CHECK_FAST(h, grove_fastslam_scan(h, 0.2, obs, 2), GROVE_INVALID_ARGUMENT);
+  CHECK(Contains(grove_fastslam_last_error(h), "observation 1: range = 1e+300: must be in"));
+  obs[1].range_m = 1e12;
+  CHECK_FAST(h, grove_fastslam_scan(h, 0.2, obs, 2), GROVE_INVALID_ARGUMENT);
+  obs[1].range_m = 12;
+  obs[1].id = INT64_MAX;
+  CHECK_FAST(h, grove_fastslam_scan(h, 0.2, obs, 2), GROVE_INVALID_ARGUMENT);
+  CHECK(Contains(grove_fastslam_last_error(h), "id = 9223372036854775807"));
+  obs[1].id = 1;
+  CHECK_FAST(h, grove_fastslam_scan(h, 1e300, obs, 2), GROVE_INVALID_ARGUMENT);
+  CHECK_FAST(h, grove_fastslam_control(h, 1e300, 2, 0), GROVE_INVALID_ARGUMENT);
+  CHECK(Contains(grove_fastslam_last_error(h), "t = 1e+300: must be within +-1e12 s"));
+  CHECK_FAST(h, grove_fastslam_control(h, 0.15, 1e30, 0), GROVE_INVALID_ARGUMENT);
+  CHECK(Contains(grove_fastslam_last_error(h), "speed = 1e+30: must be within +-1000 m/s"));
+  CHECK_FAST(h, grove_fastslam_control(h, 0.15, 2, 4), GROVE_INVALID_ARGUMENT);
+  CHECK(Contains(grove_fastslam_last_error(h), "steering = 4: must be in (-pi/2, pi/2) rad"));
+  CHECK_FAST(h, grove_fastslam_control(h, 0.15, 2, 1e10), GROVE_INVALID_ARGUMENT);
+
+  CHECK_FAST(h, grove_fastslam_step_count(h, &steps), GROVE_OK);
+  CHECK_FAST(h, grove_fastslam_mean_pose(h, &after), GROVE_OK);
+  CHECK_FAST(h, grove_fastslam_mean_trajectory(h, NULL, 0, &poses), GROVE_OK);
+  CHECK(steps == steps_before && poses == poses_before);
+  CHECK(memcmp(&before, &after, sizeof before) == 0);
+  /* Not latched: the engine takes the next good control and scan. */
+  CHECK_FAST(h, grove_fastslam_control(h, 0.15, 2, 0.1), GROVE_OK);
+  CHECK_FAST(h, grove_fastslam_scan(h, 0.2, obs, 2), GROVE_OK);
+  grove_fastslam_destroy(h);
+  printf("ok: fastslam values outside the input bounds leave the engine unchanged\n");
+}
+
+/* Regression: FootSLAM's steps keep the same bounds (|t| <= 1e12 s, |dx|, |dy| <= 1e6 m). */
+static void TestFootBoundsLeaveEngineUnchanged(void) {
+  grove_footslam_config c = FootConfig();
+  grove_footslam* h = NewFoot(&c);
+  int64_t steps = -1;
+  CHECK_FOOT(h, grove_footslam_step(h, 1, 0.5, 0), GROVE_OK);
+  CHECK_FOOT(h, grove_footslam_step(h, 1e300, 0.5, 0), GROVE_INVALID_ARGUMENT);
+  CHECK(Contains(grove_footslam_last_error(h), "t = 1e+300: must be within +-1e12 s"));
+  CHECK_FOOT(h, grove_footslam_step(h, 2, 1e7, 0), GROVE_INVALID_ARGUMENT);
+  CHECK(Contains(grove_footslam_last_error(h), "dx = 10000000: must be within +-1e6 m"));
+  CHECK_FOOT(h, grove_footslam_step(h, 2, 0, -1e300), GROVE_INVALID_ARGUMENT);
+  CHECK_FOOT(h, grove_footslam_step_count(h, &steps), GROVE_OK);
+  CHECK(steps == 1);
+  CHECK_FOOT(h, grove_footslam_step(h, 2, 0.5, 0), GROVE_OK);
+  grove_footslam_destroy(h);
+  h = NewFoot(&c);
+  CHECK_FOOT(h, grove_footslam_set_start_time(h, -1e13), GROVE_INVALID_ARGUMENT);
+  CHECK_FOOT(h, grove_footslam_set_start_time(h, 0), GROVE_OK);
+  grove_footslam_destroy(h);
+  printf("ok: footslam values outside the input bounds leave the engine unchanged\n");
+}
+
 static void TestFastRuns(void) {
   Scenario s, s2;
   const grove_fastslam_config c = FastConfig();
@@ -1091,12 +1161,14 @@ int main(void) {
   TestFootNullHandle();
   TestFootCreateErrors();
   TestFootStepErrors();
+  TestFootBoundsLeaveEngineUnchanged();
   TestFootFatalError();
   TestFootRuns();
   TestFootPriorMap();
   TestFootStorage();
   TestFastNullHandle();
   TestFastErrors();
+  TestFastBoundsLeaveEngineUnchanged();
   TestFastRuns();
   printf("c_api_test: all passed\n");
   return 0;

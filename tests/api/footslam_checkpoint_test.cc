@@ -289,18 +289,28 @@ TEST_F(CorruptCheckpointTest, ADifferentConfigurationIsRefusedNamingTheField) {
   EXPECT_TRUE(ResumeStatus(good_, other).ok());
 }
 
-// A step of any length ends: the walk stops where the particle leaves the grid (it used to walk
-// every hexagon of a 1e9 m step).
+// A step of any allowed length ends: the walk stops where the particle leaves the grid (it used
+// to walk every hexagon of a 1e9 m step), and stops the engine, saying so. A longer step breaks
+// grove/input_rules.h: refused, the engine unchanged.
 TEST(FootSlamStepTest, AHugeStepLeavesTheGridAndReturns) {
-  for (double d : {1e9, 1e200, 1e307}) {
-    FootSlamConfig config = Small();
-    config.particles = 10;
-    config.grid = FootSlamGrid::kFixed;
+  FootSlamConfig config = Small();
+  config.particles = 10;
+  config.grid = FootSlamGrid::kFixed;
+  for (double d : {1e3, 1e6}) {
     auto slam = Make(config);
     Status s = slam->Step(1, d, -d);
     EXPECT_EQ(s.code(), StatusCode::kOutOfRange) << s.ToString();
     EXPECT_NE(s.message().find("left the 256 x 256 hexagon grid"), std::string::npos);
+    EXPECT_NE(s.message().find("the engine stopped here"), std::string::npos) << s.message();
     EXPECT_EQ(slam->Step(2, 0.5, 0).code(), StatusCode::kFailedPrecondition);
+  }
+  for (double d : {1e9, 1e200, 1e307}) {
+    auto slam = Make(config);
+    Status s = slam->Step(1, d, -d);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << s.ToString();
+    EXPECT_NE(s.message().find("must be within +-1e6 m"), std::string::npos) << s.message();
+    EXPECT_EQ(slam->steps(), 0);
+    EXPECT_TRUE(slam->Step(2, 0.5, 0).ok());
   }
 }
 

@@ -559,5 +559,24 @@ TEST(UnknownAssociationAccuracy, FastSlam2OnTheWebmapStaysWithinItsBounds) {
   EXPECT_LT(rmse[1], 7.5);
 }
 
+// The prediction counted 4 KiB a particle whatever the scans held: 149 MB for Victoria Park's
+// first 20 s at 20,000 particles (fastslam1), whose peak RSS was 264 to 270 MB. It now grows
+// with the detections a scan holds (about 10 there, 1.4 on the webmap).
+TEST(FastSlamMemoryPrediction, CoversVictoriaParksPeakAndGrowsWithDetections) {
+  FastSlamConfig config;
+  config.filter = FastSlamFilter::kFastSlam1;
+  config.particles = 20000;
+  FastSlamWorkload park;  // `grove fastslam victoria-park --until 20`: 938 steps
+  park.controls = 758;
+  park.scans = 90;
+  park.observations = 968;
+  EXPECT_GT(FastSlam::EstimatePeakBytes(config, park), 270'000'000);
+  FastSlamWorkload sparse = park;
+  sparse.observations = 125;
+  EXPECT_LT(FastSlam::EstimatePeakBytes(config, sparse), FastSlam::EstimatePeakBytes(config, park));
+  config.particles = 40000;
+  EXPECT_GT(FastSlam::EstimatePeakBytes(config, park), 540'000'000);
+}
+
 }  // namespace
 }  // namespace grove

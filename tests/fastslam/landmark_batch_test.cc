@@ -217,7 +217,7 @@ TEST(LandmarkUpdatesTest, EqualsParticleByParticleUpdates) {
           &one.roots[k], static_cast<uint64_t>(z.id), 0, [&](Landmark& l, bool existed) {
             const RangeBearing rb{z.range_m, z.bearing_rad};
             if (!existed) {
-              l = one.steps.NewLeaf(one.poses[k], rb);
+              ASSERT_TRUE(one.steps.NewLeaf(one.poses[k], rb, &l).ok());
               return;
             }
             double ll = 0;

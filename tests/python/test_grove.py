@@ -367,6 +367,19 @@ class FootSlamRunTest(unittest.TestCase):
         f.step(10.0, 0.5, 0.0)  # still usable
         self.assertEqual(f.steps, 6)
 
+    def test_steps_outside_the_input_bounds_raise_and_change_nothing(self):
+        # Regression: FootSLAM took any finite time and step.
+        f = grove.FootSlam(SMALL)
+        f.run(self.walk[:5])
+        before = f.mean_trajectory()
+        with self.assertRaisesRegex(grove.InvalidArgumentError, r"dx = 10000000: must be within"):
+            f.step(10.0, 1e7, 0.0)
+        with self.assertRaisesRegex(grove.InvalidArgumentError, r"t = 1e\+300: must be within"):
+            f.step(1e300, 0.1, 0.0)
+        self.assertEqual(f.steps, 5)
+        np.testing.assert_array_equal(f.mean_trajectory(), before)
+        f.step(10.0, 0.5, 0.0)
+
     def test_time_going_backwards_raises_naming_it(self):
         f = grove.FootSlam(SMALL)
         f.step(1.0, 0.5, 0.0)
@@ -647,6 +660,30 @@ class FastSlamTest(unittest.TestCase):
             grove.FastSlam(wheel_base=3)
         with self.assertRaisesRegex(grove.InvalidArgumentError, "association"):
             grove.FastSlam(association="magic")
+
+    def test_values_outside_the_input_bounds_raise_and_change_nothing(self):
+        # Regression: a huge finite range made a landmark of infinite covariance, a control at
+        # t = 1e300 blocked every later call, and any speed, steering angle or id passed.
+        f = grove.FastSlam(self.CONFIG)
+        f.control(0.0, 3.0, 0.0)
+        f.scan(0.1, np.array([[5.0, 0.1, 0]]))
+        steps, before = f.steps, f.mean_trajectory()
+        refused = [
+            (lambda: f.scan(0.2, np.array([[1e300, 0.1, 0]])),
+             r"observation 0: range = 1e\+300: must be in \[0, 1e6\] m"),
+            (lambda: f.scan(0.2, np.array([[1e12, 0.1, 0]])), "range = "),
+            (lambda: f.scan(0.2, np.array([[5.0, 0.1, 2.0**40]])), "id = 1099511627776"),
+            (lambda: f.control(1e300, 3.0, 0.0), r"t = 1e\+300: must be within \+-1e12 s"),
+            (lambda: f.control(0.15, 1e30, 0.0), r"speed = 1e\+30: must be within \+-1000 m/s"),
+            (lambda: f.control(0.15, 3.0, 4.0), r"steering = 4: must be in \(-pi/2, pi/2\) rad"),
+        ]
+        for call, message in refused:
+            with self.assertRaisesRegex(grove.InvalidArgumentError, message):
+                call()
+        self.assertEqual(f.steps, steps)
+        np.testing.assert_array_equal(f.mean_trajectory(), before)
+        f.control(0.15, 3.0, 0.1)  # not stopped: the next good calls work
+        f.scan(0.2, np.array([[5.0, 0.1, 0]]))
 
 
 class InterpreterErrorTest(unittest.TestCase):

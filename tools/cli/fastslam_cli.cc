@@ -170,11 +170,16 @@ class MonteCarloCli {
     typed_
         .Integer("--loops", &options_.loops, 1, kMonteCarloMaxLoops, "Loops through the waypoints")
         ->default_str("the scenario's");
+    AddMemoryBudgetFlag(app, &memory_budget_);
     app->add_flag("--no-progress", no_progress_, "No progress output");
   }
 
   int Run() {
     if (Status s = typed_.Apply(); !s.ok()) return Fail(kExitUsage, s.message());
+    if (const int code = ParseMemoryBudgetFlag(memory_budget_, &options_.memory_budget_bytes);
+        code >= 0) {
+      return code;
+    }
     // An empty list is refused, never read as "the seed's counts".
     if (*particles_ && options_.particles.empty()) {
       return Fail(kExitUsage,
@@ -196,6 +201,7 @@ class MonteCarloCli {
  private:
   MonteCarloOptions options_;
   TypedFlags typed_;
+  std::string memory_budget_;
   CLI::Option* particles_ = nullptr;
   bool no_progress_ = false;
 };

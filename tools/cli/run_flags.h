@@ -22,6 +22,24 @@
 
 namespace grove::tools {
 
+// --memory-budget SIZE, as every command that predicts its memory takes it.
+inline void AddMemoryBudgetFlag(CLI::App* app, std::string* text) {
+  Document(app->add_option("--memory-budget", *text,
+                           "Refuse runs predicted to need more memory, e.g. 512M or 8G"),
+           {"SIZE", "", {}, "the memory available"});
+}
+
+// The bytes of --memory-budget's `text` (0 when not given) into *bytes. Returns -1 to go on, or
+// the exit code after printing the error.
+inline int ParseMemoryBudgetFlag(const std::string& text, int64_t* bytes) {
+  *bytes = 0;
+  if (text.empty()) return -1;
+  StatusOr<int64_t> parsed = ParseMemorySize(text);
+  if (!parsed.ok()) return Fail(kExitUsage, parsed.status().message());
+  *bytes = *parsed;
+  return -1;
+}
+
 template <typename Config>
 class RunFlags {
  public:
@@ -31,9 +49,7 @@ class RunFlags {
       : fields_(fields), config_flags_(app, fields, defaults), run_flags_(app) {
     AddPath(app, "--out", &options_.out_dir, "Output directory");
     config_option_ = AddPath(app, "--config", &config_path_, "JSON file setting any parameter");
-    Document(app->add_option("--memory-budget", memory_budget_,
-                             "Refuse runs predicted to need more memory, e.g. 512M or 8G"),
-             {"SIZE", "", {}, "the memory available"});
+    AddMemoryBudgetFlag(app, &memory_budget_);
     run_flags_.Integer("--checkpoint-every", &options_.checkpoint_every, 0,
                        std::numeric_limits<int64_t>::max(),
                        "Write a checkpoint every N steps (0: only when stopped by SIGINT or "
@@ -80,12 +96,7 @@ class RunFlags {
     if (options_.out_dir.empty()) return Fail(kExitUsage, "--out: an output directory is required");
     *options = options_;
     options->progress = !no_progress_;
-    if (!memory_budget_.empty()) {
-      StatusOr<int64_t> bytes = ParseMemorySize(memory_budget_);
-      if (!bytes.ok()) return Fail(kExitUsage, bytes.status().message());
-      options->memory_budget_bytes = *bytes;
-    }
-    return -1;
+    return ParseMemoryBudgetFlag(memory_budget_, &options->memory_budget_bytes);
   }
 
  private:

@@ -251,6 +251,11 @@ Status LineError(std::string_view path, int64_t line, int64_t column, std::strin
   return InvalidArgumentError(fmt::format("{}:{}:{}: {}", path, line, column, what));
 }
 
+Status AtField(std::string_view path, int64_t line, const CsvField& field, const Status& rule) {
+  if (rule.ok()) return rule;
+  return LineError(path, line, field.column, rule.message());
+}
+
 std::string QuotedField(std::string_view text) { return QuoteForMessage(text, kMessageTextBytes); }
 
 NumberParse ParseCsvDouble(std::string_view text, double* value) {

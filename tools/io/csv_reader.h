@@ -108,6 +108,9 @@ bool IsBlankLine(std::string_view line);
 bool IsSkippedLine(std::string_view line);
 // InvalidArgument "path:line:column: what".
 Status LineError(std::string_view path, int64_t line, int64_t column, std::string_view what);
+// A field's value checked by a rule of grove/input_rules.h, `rule` being the check's status: Ok,
+// or "path:line:column: " and the rule's message.
+Status AtField(std::string_view path, int64_t line, const CsvField& field, const Status& rule);
 // A field's (or line's) text for a message: QuoteForMessage(text, kMessageTextBytes).
 std::string QuotedField(std::string_view text);
 

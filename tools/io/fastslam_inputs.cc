@@ -2,29 +2,22 @@
 
 #include <fmt/format.h>
 
-#include <cmath>
-#include <numbers>
+#include "grove/input_rules.h"
 
 namespace grove::tools {
 namespace {
 
-constexpr double kMaxAbsTime = 1e12;
-
 Status ParseTime(const std::string& path, int64_t line, const CsvField& f, double* t) {
   GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, f, "t", t));
-  if (std::fabs(*t) > kMaxAbsTime) {
-    return LineError(path, line, f.column,
-                     fmt::format("t = {}: must be within +-{:g} s", *t, kMaxAbsTime));
-  }
-  return Status::Ok();
+  return AtField(path, line, f, CheckInput(InputField::kTime, *t));
 }
 
 }  // namespace
 
-StatusOr<ControlReader> ControlReader::Open(const std::string& path) {
+StatusOr<ControlReader> ControlReader::Open(const std::string& path, const FastSlamConfig& config) {
   StatusOr<CsvTableReader> table = CsvTableReader::Open(path, {{"t", "v", "steer"}});
   if (!table.ok()) return table.status();
-  return ControlReader(std::move(table).value());
+  return ControlReader(std::move(table).value(), config);
 }
 
 StatusOr<bool> ControlReader::Next(ControlRecord* out) {
@@ -37,7 +30,9 @@ StatusOr<bool> ControlReader::Next(ControlRecord* out) {
   r.line = line;
   GROVE_RETURN_IF_ERROR(ParseTime(path, line, (*f)[0], &r.t_s));
   GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[1], "v", &r.v_mps));
+  GROVE_RETURN_IF_ERROR(AtField(path, line, (*f)[1], CheckInput(InputField::kSpeed, r.v_mps)));
   GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[2], "steer", &r.steer_rad));
+  GROVE_RETURN_IF_ERROR(AtField(path, line, (*f)[2], CheckSteering(config_, r.steer_rad)));
   if (has_previous_ && !(r.t_s > previous_s_)) {
     return LineError(
         path, line, (*f)[0].column,
@@ -68,14 +63,9 @@ StatusOr<bool> ObservationReader::Next(ObservationRecord* out) {
   GROVE_RETURN_IF_ERROR(ParseTime(path, line, (*f)[0], &r.t_s));
   GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[1], "range", &r.z.range_m));
   GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, line, (*f)[2], "bearing", &r.z.bearing_rad));
-  if (r.z.range_m < 0) {
-    return LineError(path, line, (*f)[1].column,
-                     fmt::format("range = {}: must be >= 0", r.z.range_m));
-  }
-  if (!(r.z.bearing_rad > -std::numbers::pi && r.z.bearing_rad <= std::numbers::pi)) {
-    return LineError(path, line, (*f)[2].column,
-                     fmt::format("bearing = {}: must be in (-pi, pi]", r.z.bearing_rad));
-  }
+  GROVE_RETURN_IF_ERROR(AtField(path, line, (*f)[1], CheckInput(InputField::kRange, r.z.range_m)));
+  GROVE_RETURN_IF_ERROR(
+      AtField(path, line, (*f)[2], CheckInput(InputField::kBearing, r.z.bearing_rad)));
   if (has_ids()) {
     int32_t id = 0;
     GROVE_RETURN_IF_ERROR(ParseCsvId(path, line, (*f)[3], "id", &id));
@@ -95,8 +85,9 @@ StatusOr<bool> ObservationReader::Next(ObservationRecord* out) {
 }
 
 StatusOr<FastSlamInputReader> FastSlamInputReader::Open(const std::string& controls_path,
-                                                        const std::string& observations_path) {
-  StatusOr<ControlReader> c = ControlReader::Open(controls_path);
+                                                        const std::string& observations_path,
+                                                        const FastSlamConfig& config) {
+  StatusOr<ControlReader> c = ControlReader::Open(controls_path, config);
   if (!c.ok()) return c.status();
   StatusOr<ObservationReader> o = ObservationReader::Open(observations_path);
   if (!o.ok()) return o.status();

@@ -3,11 +3,12 @@
 //   controls.csv      `t,v,steer`: time (s, strictly increasing), speed (m/s), steering angle
 //                     (rad); the control of row k holds from t_k until t_{k+1}.
 //   observations.csv  `t,range,bearing` or `t,range,bearing,id`: one detection a row, rows with
-//                     the same t one scan, t non-decreasing; range >= 0 (m), bearing in
-//                     (-pi, pi] (rad, counter-clockwise from the heading), id an integer >= 0
-//                     naming the landmark (known association; without the column, or under
+//                     the same t one scan, t non-decreasing; range (m), bearing (rad,
+//                     counter-clockwise from the heading), id an integer in [0, 2^31) naming the
+//                     landmark (known association; without the column, or under
 //                     --association ml, the association is unknown and ids only tag).
-// The CSV syntax and the "FILE:LINE:COLUMN: what" errors are those of tools/io/csv_reader.h.
+// Every value is checked against grove/input_rules.h, the engine's own bounds. The CSV syntax
+// and the "FILE:LINE:COLUMN: what" errors are those of tools/io/csv_reader.h.
 //
 // FastSlamInputReader merges the two files into the order the filter takes them: each control,
 // then the scans from its time until the next control's (a control and a scan at the same time:
@@ -40,14 +41,18 @@ struct ObservationRecord {
 
 class ControlReader {
  public:
-  static StatusOr<ControlReader> Open(const std::string& path);
+  // The steering angles are checked against `config`'s vehicle (grove/input_rules.h).
+  static StatusOr<ControlReader> Open(const std::string& path,
+                                      const FastSlamConfig& config = FastSlamConfig());
   // The next control: false at the end.
   StatusOr<bool> Next(ControlRecord* out);
   const std::string& path() const { return table_.path(); }
 
  private:
-  explicit ControlReader(CsvTableReader table) : table_(std::move(table)) {}
+  ControlReader(CsvTableReader table, const FastSlamConfig& config)
+      : table_(std::move(table)), config_(config) {}
   CsvTableReader table_;
+  FastSlamConfig config_;
   bool has_previous_ = false;
   double previous_s_ = 0;
 };
@@ -90,7 +95,8 @@ class FastSlamEventSource {
 class FastSlamInputReader final : public FastSlamEventSource {
  public:
   static StatusOr<FastSlamInputReader> Open(const std::string& controls_path,
-                                            const std::string& observations_path);
+                                            const std::string& observations_path,
+                                            const FastSlamConfig& config = FastSlamConfig());
   // The next event; false at the end of both files. Without an id column the ids are -1.
   StatusOr<bool> Next(FastSlamEvent* out) override;
   std::string ControlSource() const override { return controls_.path(); }

@@ -37,18 +37,20 @@ void RemoveStaleStaging(const std::string& dir) {
 StatusOr<OutputDirectory> OutputDirectory::Open(const std::string& path) {
   if (path.empty()) return InvalidArgumentError("--out: the path is empty");
   struct stat st;
-  bool created = false;
+  std::vector<std::string> created;
   if (::stat(path.c_str(), &st) == 0) {
     if (!S_ISDIR(st.st_mode)) {
       return IoError(fmt::format("--out {}: exists and is not a directory", path));
     }
   } else {
-    GROVE_RETURN_IF_ERROR(EnsureDirectory(path));
-    created = true;
+    GROVE_RETURN_IF_ERROR(EnsureDirectory(path, &created));
   }
   int fd = ::open(path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return IoError(fmt::format("cannot open directory {}: {}", path, ErrnoText(errno)));
-  OutputDirectory dir(path, fd, created);
+  if (fd < 0) {
+    RemoveCreatedDirectories(created);
+    return IoError(fmt::format("cannot open directory {}: {}", path, ErrnoText(errno)));
+  }
+  OutputDirectory dir(path, fd, std::move(created));
   if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
     if (errno == EWOULDBLOCK) {
       return FailedPreconditionError(
@@ -66,15 +68,15 @@ StatusOr<OutputDirectory> OutputDirectory::Open(const std::string& path) {
 OutputDirectory::OutputDirectory(OutputDirectory&& other) noexcept
     : path_(std::move(other.path_)),
       fd_(std::exchange(other.fd_, -1)),
-      created_(other.created_),
+      created_(std::move(other.created_)),
       keep_(other.keep_) {
-  other.created_ = false;
+  other.created_.clear();
 }
 
 OutputDirectory::~OutputDirectory() {
   if (fd_ < 0) return;
   ::close(fd_);
-  if (created_ && !keep_) ::rmdir(path_.c_str());  // only when empty
+  if (!keep_) RemoveCreatedDirectories(created_);  // only the empty ones
 }
 
 StatusOr<OutputSet> OutputSet::Begin(const std::string& dir) {

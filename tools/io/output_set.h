@@ -1,10 +1,10 @@
 // The output directory of a run and the set of files a run writes into it, written as a set.
 //
-// OutputDirectory: opened before the first step. It creates the directory if needed (removed
-// again, if still empty, when the run does not succeed), takes an exclusive lock on it
-// (flock(2) on the directory itself: a second run into the same directory is refused at once,
-// and the lock dies with its process), and removes the staging directories that killed runs
-// left behind.
+// OutputDirectory: opened before the first step. It creates the directory and its missing
+// parents if needed (removed again, those still empty, when the run does not succeed), takes an
+// exclusive lock on it (flock(2) on the directory itself: a second run into the same directory is
+// refused at once, and the lock dies with its process), and removes the staging directories that
+// killed runs left behind.
 //
 // OutputSet: every file is written complete and fsynced into a fresh staging directory inside
 // the output directory (`.grove-staging-XXXXXX`); only when all of them are there are they
@@ -37,7 +37,8 @@ class OutputDirectory {
   OutputDirectory(OutputDirectory&& other) noexcept;
   OutputDirectory& operator=(OutputDirectory&&) = delete;
   OutputDirectory(const OutputDirectory&) = delete;
-  // Unlocks; removes the directory if this run created it, did not Keep() it and it is empty.
+  // Unlocks; unless Keep() was called, removes the directories Open() created (the directory
+  // and its parents) that are empty, deepest first.
   ~OutputDirectory();
 
   const std::string& path() const { return path_; }
@@ -45,11 +46,11 @@ class OutputDirectory {
   void Keep() { keep_ = true; }
 
  private:
-  OutputDirectory(std::string path, int fd, bool created)
-      : path_(std::move(path)), fd_(fd), created_(created) {}
+  OutputDirectory(std::string path, int fd, std::vector<std::string> created)
+      : path_(std::move(path)), fd_(fd), created_(std::move(created)) {}
   std::string path_;
   int fd_ = -1;
-  bool created_ = false;
+  std::vector<std::string> created_;  // by Open(), outermost first
   bool keep_ = false;
 };
 

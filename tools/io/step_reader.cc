@@ -10,10 +10,11 @@
 #include <string_view>
 #include <utility>
 
+#include "grove/input_rules.h"
+
 namespace grove::tools {
 namespace {
 
-constexpr double kMaxAbsTime = 1e12;
 constexpr std::string_view kExpectedHeader = "expected a header \"t,dx,dy\" or \"t,x,y\"";
 // The columns a deltas-form file may add after t,dx,dy (the foot IMU front end writes them);
 // checked, not used.
@@ -150,16 +151,20 @@ StatusOr<bool> StepReader::ReadRow(Row* row) {
   }
   Row parsed{0, 0, 0, number};
   GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, number, fields_[0], "t", &parsed.t_s));
-  // Bounded so that time differences and the start time before the first step stay exact enough
-  // to be strictly ordered (a second is still resolved at 1e12 s, about 31,700 years).
-  if (std::fabs(parsed.t_s) > kMaxAbsTime) {
-    return LineError(path, number, fields_[0].column,
-                     fmt::format("t = {}: must be within +-{:g} s", parsed.t_s, kMaxAbsTime));
-  }
+  // The engine's bound (grove/input_rules.h): time differences and the start time before the
+  // first step stay exact enough to be strictly ordered.
+  GROVE_RETURN_IF_ERROR(
+      AtField(path, number, fields_[0], CheckInput(InputField::kTime, parsed.t_s)));
   GROVE_RETURN_IF_ERROR(
       ParseFiniteNumber(path, number, fields_[1], positions_form_ ? "x" : "dx", &parsed.a_m));
   GROVE_RETURN_IF_ERROR(
       ParseFiniteNumber(path, number, fields_[2], positions_form_ ? "y" : "dy", &parsed.b_m));
+  if (!positions_form_) {
+    GROVE_RETURN_IF_ERROR(
+        AtField(path, number, fields_[1], CheckInput(InputField::kStepDx, parsed.a_m)));
+    GROVE_RETURN_IF_ERROR(
+        AtField(path, number, fields_[2], CheckInput(InputField::kStepDy, parsed.b_m)));
+  }
   if (has_previous_time_ && !(parsed.t_s > previous_time_s_)) {
     return LineError(
         path, number, fields_[0].column,

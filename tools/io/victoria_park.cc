@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "grove/checksum.h"
+#include "grove/input_rules.h"
 #include "tools/io/bundled_data.h"
 #include "tools/io/csv_reader.h"
 #include "tools/io/gzip_line_reader.h"
@@ -100,7 +101,8 @@ nlohmann::json InputFilesJson(const std::vector<InputFile>& files) {
   return out;
 }
 
-StatusOr<VictoriaParkData> ReadVictoriaPark(const std::string& dir, double until_s) {
+StatusOr<VictoriaParkData> ReadVictoriaPark(const std::string& dir, double until_s,
+                                            const FastSlamConfig& config) {
   VictoriaParkData d;
   for (auto [name, path] :
        {std::pair{"inputs.dat", &d.controls_path},
@@ -111,6 +113,7 @@ StatusOr<VictoriaParkData> ReadVictoriaPark(const std::string& dir, double until
   }
   auto increasing = [](const std::string& path, int64_t line, const CsvField& f, double t,
                        double previous, bool strict) -> Status {
+    GROVE_RETURN_IF_ERROR(AtField(path, line, f, CheckInput(InputField::kTime, t)));
     if (strict ? !(t > previous) : t < previous) {
       return LineError(path, line, f.column,
                        fmt::format("time = {}: must be {} the previous time {}", t,
@@ -124,10 +127,9 @@ StatusOr<VictoriaParkData> ReadVictoriaPark(const std::string& dir, double until
       [&](const std::vector<double>& v, const std::vector<CsvField>& f, int64_t line) -> Status {
         GROVE_RETURN_IF_ERROR(increasing(d.controls_path, line, f[0], v[0], last, true));
         last = v[0];
-        if (!(std::fabs(v[2]) < 0.5 * kPi)) {
-          return LineError(d.controls_path, line, f[2].column,
-                           fmt::format("steering = {}: must be within (-pi/2, pi/2)", v[2]));
-        }
+        GROVE_RETURN_IF_ERROR(
+            AtField(d.controls_path, line, f[1], CheckInput(InputField::kSpeed, v[1])));
+        GROVE_RETURN_IF_ERROR(AtField(d.controls_path, line, f[2], CheckSteering(config, v[2])));
         if (v[0] <= until_s) d.controls.push_back({v[0], v[1], v[2], line});
         return Status::Ok();
       }));
@@ -137,10 +139,8 @@ StatusOr<VictoriaParkData> ReadVictoriaPark(const std::string& dir, double until
       [&](const std::vector<double>& v, const std::vector<CsvField>& f, int64_t line) -> Status {
         GROVE_RETURN_IF_ERROR(increasing(d.observations_path, line, f[0], v[0], last, false));
         last = v[0];
-        if (!(v[1] >= 0)) {
-          return LineError(d.observations_path, line, f[1].column,
-                           fmt::format("range = {}: must be >= 0", v[1]));
-        }
+        GROVE_RETURN_IF_ERROR(
+            AtField(d.observations_path, line, f[1], CheckInput(InputField::kRange, v[1])));
         if (!(v[2] >= 0 && v[2] <= kPi)) {
           return LineError(
               d.observations_path, line, f[2].column,

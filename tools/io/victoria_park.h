@@ -50,9 +50,18 @@ struct VictoriaParkData {
 // The files as summary.json lists them: [{"path", "bytes", "crc32"}], as the outputs are.
 nlohmann::json InputFilesJson(const std::vector<InputFile>& files);
 
+// The documented defaults of `grove fastslam victoria-park`: FastSLAM 2.0, 100 particles, the
+// guivant_nebot vehicle with L = 2.83 m, H = 0.76 m, a = 3.78 m, b = 0.50 m, the seed's noise
+// (sigma_v 0.4 m/s, sigma_gamma 1.4 deg, sigma_r 0.5 m, sigma_b 1.5 deg), unknown association
+// with Bailey's gates (4 and 25), evidence within 30 m and the laser's 180 degrees.
+FastSlamConfig VictoriaParkConfig();
+
 // Reads `dir`/inputs.dat, measurements.dat and gps.dat (each as NAME or NAME.gz; both present is
 // an error), keeping the records with time <= until_s. Lines longer than 64 KiB are errors.
-StatusOr<VictoriaParkData> ReadVictoriaPark(const std::string& dir, double until_s);
+// Times, speeds, steering angles (for `config`'s vehicle) and ranges are checked against
+// grove/input_rules.h, the engine's own bounds.
+StatusOr<VictoriaParkData> ReadVictoriaPark(const std::string& dir, double until_s,
+                                            const FastSlamConfig& config = VictoriaParkConfig());
 
 // The events of the data in the filter's order (a control before a scan at its time).
 class VictoriaParkEvents final : public FastSlamEventSource {
@@ -68,12 +77,6 @@ class VictoriaParkEvents final : public FastSlamEventSource {
   size_t control_ = 0, observation_ = 0;
   int64_t skipped_scans_ = 0;
 };
-
-// The documented defaults of `grove fastslam victoria-park`: FastSLAM 2.0, 100 particles, the
-// guivant_nebot vehicle with L = 2.83 m, H = 0.76 m, a = 3.78 m, b = 0.50 m, the seed's noise
-// (sigma_v 0.4 m/s, sigma_gamma 1.4 deg, sigma_r 0.5 m, sigma_b 1.5 deg), unknown association
-// with Bailey's gates (4 and 25), evidence within 30 m and the laser's 180 degrees.
-FastSlamConfig VictoriaParkConfig();
 
 // Error of an estimated path against GPS after a rigid 2-D alignment of the path to the fixes
 // inside its time span (tools/report/trajectory_metrics.h), with the statistics of the per-fix

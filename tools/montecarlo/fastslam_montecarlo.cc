@@ -6,6 +6,8 @@
 #include <charconv>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
+#include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -23,8 +25,10 @@
 #include "tools/montecarlo/mc_statistics.h"
 #include "tools/montecarlo/result_charts.h"
 #include "tools/montecarlo/result_tables.h"
+#include "tools/run/memory_budget.h"
 #include "tools/run/progress_reporter.h"
 #include "tools/run/run_loop.h"
+#include "tools/run/signal_policy.h"
 
 namespace grove::tools {
 namespace {
@@ -148,6 +152,7 @@ struct LoadedScenario {
   MonteCarloScenario scenario;
   int64_t control_steps = 0;
   size_t scans = 0;
+  size_t observations = 0;
 };
 
 // Reads the scenario and simulates run 0. The truth does not depend on the seed; run 0's
@@ -173,7 +178,38 @@ int LoadScenario(const MonteCarloOptions& options, uint64_t seed, LoadedScenario
   }
   out->control_steps = probe->control_steps();
   out->scans = probe->scan_times_s.size();
+  out->observations = probe->observations.size();
   return -1;
+}
+
+// Per job beyond its engine, a bound per control row: the simulation (true and noisy controls,
+// truth, observations), the outcome's trajectory, truth and scan samples, and the CSV text.
+constexpr int64_t kJobBytesPerControl = 640;
+
+// The peak memory of the jobs `todo` when `threads` run side by side, the costliest first (as
+// RunMonteCarloJobs starts them): the process's fixed part once, and the rest of the `threads`
+// largest predictions.
+int64_t PredictJobsBytes(const LoadedScenario& loaded, const MonteCarloPlan& plan,
+                         const std::vector<size_t>& todo, int threads) {
+  FastSlamWorkload work;
+  work.controls = loaded.control_steps + 1;
+  work.scans = static_cast<int64_t>(loaded.scans);
+  work.observations = static_cast<int64_t>(loaded.observations);
+  std::vector<int64_t> jobs;
+  for (size_t i : todo) {
+    const MonteCarloJob& job = plan.jobs[i];
+    const MonteCarloGroup& g = plan.groups[job.group];
+    const FastSlamConfig config =
+        MonteCarloJobConfig(loaded.scenario, g.filter, g.particles, job.seed);
+    jobs.push_back(FastSlam::EstimatePeakBytes(config, work) - kProcessBaselineBytes +
+                   kJobBytesPerControl * work.controls);
+  }
+  std::sort(jobs.begin(), jobs.end(), std::greater<>());
+  int64_t total = kProcessBaselineBytes;
+  for (size_t k = 0; k < jobs.size() && k < static_cast<size_t>(threads); ++k) {
+    total = total > INT64_MAX - jobs[k] ? INT64_MAX : total + jobs[k];
+  }
+  return total;
 }
 
 // The MPI ranks the jobs are shared among (one without all_gather).
@@ -281,6 +317,25 @@ json SummaryJson(const MonteCarloOptions& options, const MonteCarloScenario& sce
           {"grove", VersionJson()}};
 }
 
+// kExitOk when every job succeeded; otherwise prints how many failed, with the first failure,
+// and returns kExitMemory when one ran out of memory, else kExitRun.
+int FailedJobsExit(const MonteCarloPlan& plan, const std::vector<GroupResult>& results) {
+  int64_t failed = 0, out_of_memory = 0;
+  std::string first;
+  for (size_t g = 0; g < results.size(); ++g) {
+    failed += results[g].runs_failed;
+    out_of_memory += results[g].out_of_memory;
+    if (first.empty() && !results[g].failures.empty()) {
+      first = plan.groups[g].name + " " + results[g].failures.front();
+    }
+  }
+  if (failed == 0) return kExitOk;
+  return Fail(out_of_memory > 0 ? kExitMemory : kExitRun,
+              fmt::format("{} of {} jobs failed (first: {}); the tables count them as failed "
+                          "runs; run the same command again to run them again",
+                          failed, plan.jobs.size(), first));
+}
+
 // Once every job is done: the aggregates from the files, the tables, the charts and
 // summary.json; table.md also to stdout. Returns the exit code.
 int WriteResults(const MonteCarloOptions& options, const MonteCarloRequest& request,
@@ -308,16 +363,18 @@ int WriteResults(const MonteCarloOptions& options, const MonteCarloRequest& requ
   s = WriteFileAtomically(dir + "/summary.json", summary.dump(2) + "\n");
   if (!s.ok()) return Fail(kExitOutput, s.message());
   std::printf("%s", tables.md.c_str());
+  std::fflush(stdout);  // while SIGPIPE is ignored: a closed stdout must not kill the command
   std::fprintf(stderr, "montecarlo: %zu jobs (%zu run, %lld reused) in %s; wrote %s/table.md\n",
                plan.jobs.size(), counts.ran, static_cast<long long>(counts.reused),
                FormatDuration(wall_s).c_str(), dir.c_str());
-  return kExitOk;
+  return FailedJobsExit(plan, *results);
 }
 
 }  // namespace
 
 int FastSlamMonteCarloCommand(const MonteCarloOptions& options) {
   const auto wall_start = Clock::now();
+  const SignalHandlers signals;
   MonteCarloRequest request;
   if (const int code = ReadRequest(options, &request); code >= 0) return code;
   LoadedScenario loaded;
@@ -327,12 +384,7 @@ int FastSlamMonteCarloCommand(const MonteCarloOptions& options) {
       MakeMonteCarloPlan(scenario, request.filters, request.particles, options.runs, request.seed);
   if (!plan.ok()) return Fail(kExitUsage, plan.status().message());
 
-  // Rank 0 makes and locks the output directory while the others wait.
   const RankGroup ranks(options);
-  std::optional<OutputDirectory> out;
-  const int opened = ranks.rank() == 0 ? OpenOutput(options.out_dir, *plan, &out) : kExitOk;
-  if (const int agreed = ranks.Agree(opened); agreed != kExitOk) return agreed;
-
   JobCounts counts;
   int64_t own_jobs = 0;
   const std::vector<size_t> todo =
@@ -343,6 +395,22 @@ int FastSlamMonteCarloCommand(const MonteCarloOptions& options) {
   const int threads = options.threads == 0 ? hardware : static_cast<int>(options.threads);
   counts.threads_used =
       static_cast<int>(std::max<size_t>(1, std::min<size_t>(threads, todo.size())));
+  // The jobs that run side by side must fit, before any directory is made or job started.
+  const MemoryBudget budget = MemoryBudget::Of(options.memory_budget_bytes);
+  const int64_t predicted = PredictJobsBytes(loaded, *plan, todo, counts.threads_used);
+  Status fits = budget.Check(
+      predicted,
+      fmt::format("{} job{} side by side, the largest with {} particles", counts.threads_used,
+                  counts.threads_used == 1 ? "" : "s",
+                  todo.empty() ? 0 : plan->groups[plan->jobs[todo.front()].group].particles),
+      "use fewer particles or --threads, or raise --memory-budget");
+  const int fit = fits.ok() ? kExitOk : Fail(kExitMemory, fits.message());
+  if (const int agreed = ranks.Agree(fit); agreed != kExitOk) return agreed;
+
+  // Rank 0 makes and locks the output directory while the others wait.
+  std::optional<OutputDirectory> out;
+  const int opened = ranks.rank() == 0 ? OpenOutput(options.out_dir, *plan, &out) : kExitOk;
+  if (const int agreed = ranks.Agree(opened); agreed != kExitOk) return agreed;
   PrintPlan(loaded, *plan, options.runs, counts);
   if (ranks.ranks() > 1) {
     std::fprintf(stderr, "montecarlo: rank %zu of %d runs %lld of the %zu jobs\n", ranks.rank(),
@@ -352,7 +420,14 @@ int FastSlamMonteCarloCommand(const MonteCarloOptions& options) {
   Status ran =
       RunMonteCarloJobs(scenario, *plan, todo, counts.threads_used, options.out_dir, &progress);
   progress.Finish();
-  const int code = ran.ok() ? kExitOk : Fail(kExitOutput, ran.message());
+  int code = ran.ok() ? kExitOk : Fail(kExitOutput, ran.message());
+  if (const int signal = StopSignal(); signal != 0 && code == kExitOk) {
+    std::fprintf(stderr,
+                 "montecarlo: stopped by %s; the jobs finished so far are kept in %s: run the same "
+                 "command again to run the rest\n",
+                 strsignal(signal), options.out_dir.c_str());
+    code = kExitSignalBase + signal;
+  }
   // Every rank's jobs are on disk once all have come here; rank 0 writes the aggregates.
   if (const int agreed = ranks.Agree(code); agreed != kExitOk || ranks.rank() != 0) return agreed;
   return WriteResults(options, request, scenario, *plan, counts, wall_start);

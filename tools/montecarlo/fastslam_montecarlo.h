@@ -41,7 +41,10 @@ struct MonteCarloOptions {
   int64_t threads = 0;     // jobs in parallel, 0..kMonteCarloMaxThreads; 0: every hardware thread
   int64_t loops = 0;       // 0: the scenario's; else 1..kMonteCarloMaxLoops
   bool progress = true;    // progress on stderr
-  bool charts = true;      // not a flag: lets tests skip gnuplot
+  // Refuse (exit 6, before any job) when the jobs run side by side are predicted to need more;
+  // 0: the memory available (tools/run/memory_budget.h).
+  int64_t memory_budget_bytes = 0;
+  bool charts = true;  // not a flag: lets tests skip gnuplot
   // MPI ranks (tools/cli/mpi_world.h): job i runs on rank i % ranks, then rank 0 writes the
   // tables from the files every rank wrote (DIR on a file system they share). all_gather(mine)
   // returns every rank's string in rank order on every rank (collective). Unset: one rank.
@@ -52,8 +55,11 @@ struct MonteCarloOptions {
 
 // Runs the command. Returns 0, or prints "grove: error: ..." and returns 2 (a bad option: it is
 // named with its value; a bad scenario file's content), 3 (a scenario file or map that cannot be
-// read or simulated) or 5 (the output directory or a file in it cannot be written, or another
-// grove run holds DIR). A filter that fails in a job is that run's status, not an error.
+// read or simulated), 4 (some job's filter failed: its run's status, counted in the tables; a
+// rerun runs it again), 5 (the output directory or a file in it cannot be written, or another
+// grove run holds DIR), 6 (the jobs that run side by side are predicted to need more memory
+// than the budget, before any job; or a job ran out of memory) or 128 + the signal (SIGINT or
+// SIGTERM: no further job started, the running ones abandoned, the finished ones kept).
 int FastSlamMonteCarloCommand(const MonteCarloOptions& options);
 
 }  // namespace grove::tools

@@ -15,6 +15,8 @@ namespace {
 using nlohmann::json;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// The code of an out-of-memory failure.
+constexpr StatusCode kOutOfMemory = StatusCode::kResourceExhausted;
 
 }  // namespace
 
@@ -24,6 +26,7 @@ void GroupResult::Add(const json& record, const RunSeries& series) {
     ++runs_failed;
     failures.push_back(fmt::format("run {}: {}", record["run"].get<int64_t>(),
                                    record["status"].get<std::string>()));
+    out_of_memory += record.value("status_code", "") == StatusCodeName(kOutOfMemory);
     return;
   }
   ++runs_ok;
@@ -89,7 +92,7 @@ StatusOr<std::vector<GroupResult>> ReadGroupResults(const std::string& dir,
   for (const MonteCarloJob& job : plan.jobs) {
     const MonteCarloGroup& g = plan.groups[job.group];
     std::string csv;
-    StatusOr<json> record = ReadFinishedJob(dir, scenario, g, job, &csv);
+    StatusOr<json> record = ReadJobRecord(dir, scenario, g, job, &csv);
     if (!record.ok()) return record.status();
     StatusOr<RunSeries> series = ParseRunSeries(RunPath(dir, g, job.run, "csv"), csv);
     if (!series.ok()) return series.status();

@@ -24,6 +24,7 @@ inline constexpr int kPoseDof = 3;
 struct GroupResult {
   int64_t runs_ok = 0;
   int64_t runs_failed = 0;
+  int64_t out_of_memory = 0;          // of runs_failed
   std::vector<std::string> failures;  // "run r: message"
   std::vector<double> mse_mean, mse_variance, heading_mse, nees_mean, cpu_s, ns_per_particle_step,
       final_error;
@@ -43,8 +44,8 @@ struct GroupResult {
   void CountNeesInside();
 };
 
-// Every group's result, read from the finished records in `dir`, in plan.groups's order. An
-// error when a record is missing or damaged.
+// Every group's result, read from the records in `dir` (failed runs included), in plan.groups's
+// order. An error when a record is missing or damaged.
 StatusOr<std::vector<GroupResult>> ReadGroupResults(const std::string& dir,
                                                     const MonteCarloScenario& scenario,
                                                     const MonteCarloPlan& plan);

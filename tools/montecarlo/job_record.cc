@@ -112,27 +112,30 @@ json JobJson(const MonteCarloScenario& scenario, const MonteCarloGroup& group,
              const MonteCarloJob& job, const JobOutcome& outcome, const RunFigures& f,
              const std::string& csv) {
   const bool ok = outcome.status.ok();
-  return {{"filter", FastSlamFilterName(group.filter)},
-          {"particles", group.particles},
-          {"run", job.run},
-          {"seed", job.seed},
-          {"scenario", scenario.spec.name},
-          {"scenario_digest", scenario.digest},
-          {"config_digest", group.config_digest},
-          {"status", ok ? std::string("ok") : outcome.status.message()},
-          {"position_mse_mean", ok ? Mean(f.e2) : kNaN},
-          {"position_mse_variance", ok ? PopulationVariance(f.e2) : kNaN},
-          {"heading_mse_mean", ok ? Mean(f.h2) : kNaN},
-          {"final_position_error_m", ok ? f.final_error : kNaN},
-          {"nees_mean", ok ? Mean(f.finite_nees) : kNaN},
-          {"nees_scans", f.nees_scans},
-          {"nees_undefined", f.nees_undefined},
-          {"cpu_s", outcome.cpu_s},
-          {"filter_steps", outcome.steps},
-          {"rows", outcome.truth.size()},
-          {"rows_evaluated", f.e2.size()},
-          {"csv_bytes", csv.size()},
-          {"csv_fnv1a", Hex16(Fnv1a(csv))}};
+  json j = {{"filter", FastSlamFilterName(group.filter)},
+            {"particles", group.particles},
+            {"run", job.run},
+            {"seed", job.seed},
+            {"scenario", scenario.spec.name},
+            {"scenario_digest", scenario.digest},
+            {"config_digest", group.config_digest},
+            {"status", ok ? std::string("ok") : outcome.status.message()},
+            {"position_mse_mean", ok ? Mean(f.e2) : kNaN},
+            {"position_mse_variance", ok ? PopulationVariance(f.e2) : kNaN},
+            {"heading_mse_mean", ok ? Mean(f.h2) : kNaN},
+            {"final_position_error_m", ok ? f.final_error : kNaN},
+            {"nees_mean", ok ? Mean(f.finite_nees) : kNaN},
+            {"nees_scans", f.nees_scans},
+            {"nees_undefined", f.nees_undefined},
+            {"cpu_s", outcome.cpu_s},
+            {"filter_steps", outcome.steps},
+            {"rows", outcome.truth.size()},
+            {"rows_evaluated", f.e2.size()},
+            {"csv_bytes", csv.size()},
+            {"csv_fnv1a", Hex16(Fnv1a(csv))}};
+  // A failure's kind: out of memory ("resource exhausted") sets the command's exit code.
+  if (!ok) j["status_code"] = StatusCodeName(outcome.status.code());
+  return j;
 }
 
 double ParseField(std::string_view field) {
@@ -161,8 +164,20 @@ Status WriteJobRecord(const std::string& dir, const MonteCarloScenario& scenario
 }
 
 StatusOr<json> ReadFinishedJob(const std::string& dir, const MonteCarloScenario& scenario,
-                               const MonteCarloGroup& group, const MonteCarloJob& job,
-                               std::string* csv_text) {
+                               const MonteCarloGroup& group, const MonteCarloJob& job) {
+  StatusOr<json> j = ReadJobRecord(dir, scenario, group, job);
+  if (!j.ok()) return j.status();
+  if ((*j)["status"] != "ok") {
+    return FailedPreconditionError(fmt::format("{}: the job failed ({}): it runs again",
+                                               RunPath(dir, group, job.run, "json"),
+                                               (*j)["status"].get<std::string>()));
+  }
+  return j;
+}
+
+StatusOr<json> ReadJobRecord(const std::string& dir, const MonteCarloScenario& scenario,
+                             const MonteCarloGroup& group, const MonteCarloJob& job,
+                             std::string* csv_text) {
   const std::string path = RunPath(dir, group, job.run, "json");
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) return NotFoundError(path + ": not written yet");

@@ -49,10 +49,16 @@ Status WriteJobRecord(const std::string& dir, const MonteCarloScenario& scenario
 
 // The job's JSON, when it exists, parses and belongs to this job under this scenario and
 // configuration, and its CSV has the recorded size and hash; otherwise an error saying why.
-// `csv_text` (may be null) gets the CSV.
+// `csv_text` (may be null) gets the CSV. The job may have failed ("status" is not "ok"; then
+// "status_code" names the failure's StatusCode).
+StatusOr<nlohmann::json> ReadJobRecord(const std::string& dir, const MonteCarloScenario& scenario,
+                                       const MonteCarloGroup& group, const MonteCarloJob& job,
+                                       std::string* csv_text = nullptr);
+
+// ReadJobRecord() of a job that succeeded: only those are finished, a later invocation runs a
+// failed one again (FailedPrecondition for it).
 StatusOr<nlohmann::json> ReadFinishedJob(const std::string& dir, const MonteCarloScenario& scenario,
-                                         const MonteCarloGroup& group, const MonteCarloJob& job,
-                                         std::string* csv_text = nullptr);
+                                         const MonteCarloGroup& group, const MonteCarloJob& job);
 
 // The columns of a run's CSV that the aggregates need, one entry per truth row.
 struct RunSeries {

@@ -13,6 +13,7 @@
 #include <new>
 
 #include "tools/montecarlo/job_record.h"
+#include "tools/run/signal_policy.h"
 #include "tools/sim/fastslam_simulator.h"
 
 namespace grove::tools {
@@ -25,9 +26,10 @@ double ThreadCpuSeconds() {
 }
 
 // Simulates the job's run and runs its filter on it, on this thread. Never throws: out of
-// memory and other exceptions become the outcome's status.
+// memory and other exceptions become the outcome's status. A stop signal (StopRequested())
+// ends it at the next scan with *stopped set: the job is not finished.
 JobOutcome RunJobFilter(const MonteCarloScenario& scenario, const MonteCarloGroup& group,
-                        const MonteCarloJob& job) {
+                        const MonteCarloJob& job, bool* stopped) {
   BaileySimOptions sim_options = scenario.spec.sim;
   sim_options.seed = job.seed;
   JobOutcome o;
@@ -47,8 +49,13 @@ JobOutcome RunJobFilter(const MonteCarloScenario& scenario, const MonteCarloGrou
       return o;
     }
     FastSlam& f = **slam;
-    o.status = FeedSimulation(*sim, &f, SIZE_MAX, nullptr, [&](double t) {
+    o.status = FeedSimulation(*sim, &f, SIZE_MAX, nullptr, [&](double t) -> Status {
+      if (StopRequested()) {
+        *stopped = true;
+        return FailedPreconditionError("stopped by a signal");
+      }
       o.scans.push_back({t, f.MeanPose(), f.PoseCovariance()});
+      return Status::Ok();
     });
     o.cpu_s = ThreadCpuSeconds() - cpu0;
     o.steps = f.steps();
@@ -98,10 +105,13 @@ Status RunMonteCarloJobs(const MonteCarloScenario& scenario, const MonteCarloPla
       // Relaxed: the counter only hands out distinct indices; the task group's wait publishes
       // the results.
       const size_t i = next.fetch_add(1, std::memory_order_relaxed);
-      if (i >= todo.size() || stop.load(std::memory_order_relaxed)) return;
+      if (i >= todo.size() || stop.load(std::memory_order_relaxed) || StopRequested()) return;
       const MonteCarloJob& job = plan.jobs[todo[i]];
       const MonteCarloGroup& group = plan.groups[job.group];
-      Status s = WriteJobRecord(dir, scenario, group, job, RunJobFilter(scenario, group, job));
+      bool stopped = false;
+      const JobOutcome outcome = RunJobFilter(scenario, group, job, &stopped);
+      if (stopped) return;  // not finished: a rerun runs it
+      Status s = WriteJobRecord(dir, scenario, group, job, outcome);
       if (!s.ok()) {
         std::lock_guard<std::mutex> lock(error_mu);
         if (write_error.ok()) write_error = s;

@@ -26,7 +26,8 @@ std::vector<size_t> JobsToRun(const std::string& dir, const MonteCarloScenario& 
 // Runs the jobs `todo` (indices into plan.jobs) on `threads` threads, each simulating its run
 // and running its filter on one thread and writing its record into `dir`; tells `progress` of
 // each. Stops at the first record that cannot be written and returns that error; a filter's
-// failure is its record's status, not an error.
+// failure is its record's status, not an error. A stop signal (tools/run/signal_policy.h)
+// starts no further job and ends the running ones at their next scan, unrecorded.
 Status RunMonteCarloJobs(const MonteCarloScenario& scenario, const MonteCarloPlan& plan,
                          const std::vector<size_t>& todo, int threads, const std::string& dir,
                          JobProgress* progress);

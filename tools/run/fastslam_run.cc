@@ -219,6 +219,10 @@ const char* FilterTitle(FastSlamFilter filter) {
   return FastSlamFilterName(filter);
 }
 
+// What the command keeps per input row besides the engine: the rows of a dataset read whole
+// and the outputs built in memory (measured on Victoria Park and the webmap).
+constexpr int64_t kCommandBytesPerRow = 256;
+
 class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
  public:
   FastSlamJob(const FastSlamConfig& config, const FastSlamRunOptions& options)
@@ -232,18 +236,18 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
   Status Open() {
     if (!options_.victoria_park_dir.empty()) {
       StatusOr<VictoriaParkData> data =
-          ReadVictoriaPark(options_.victoria_park_dir, options_.until_s);
+          ReadVictoriaPark(options_.victoria_park_dir, options_.until_s, config_);
       if (!data.ok()) return data.status();
       park_ = std::make_unique<VictoriaParkData>(std::move(data).value());
       park_events_ = new VictoriaParkEvents(park_.get());
       source_.reset(park_events_);
       records_ = static_cast<int64_t>(park_->controls.size() + park_->observations.size());
       VictoriaParkEvents events(park_.get());
-      steps_ = CountRecords<FastSlamEvent>(events);
+      CountWorkload(events);
       return Status::Ok();
     }
     StatusOr<FastSlamInputReader> reader =
-        FastSlamInputReader::Open(options_.controls_path, options_.observations_path);
+        FastSlamInputReader::Open(options_.controls_path, options_.observations_path, config_);
     if (!reader.ok()) return reader.status();
     if (!reader->has_ids() && config_.association == FastSlamAssociation::kKnown) {
       if (ranks_ == nullptr || ranks_->rank() == 0) {  // one line, not one per rank
@@ -258,8 +262,8 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
     if (records_ > 0) {
       // Regular files: read them once more to count the scans among the rows.
       StatusOr<FastSlamInputReader> events =
-          FastSlamInputReader::Open(options_.controls_path, options_.observations_path);
-      if (events.ok()) steps_ = CountRecords<FastSlamEvent>(*events);
+          FastSlamInputReader::Open(options_.controls_path, options_.observations_path, config_);
+      if (events.ok()) CountWorkload(*events);
     }
     if (!options_.truth_path.empty()) {
       StatusOr<std::map<double, Pose2>> truth = ReadPoses(options_.truth_path);
@@ -272,6 +276,25 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
       landmarks_truth_ = std::move(l).value();
     }
     return Status::Ok();
+  }
+
+  // Counts the workload of `events` (a second reader of the input) into work_: none when it
+  // fails before its end (the run reports that error).
+  void CountWorkload(FastSlamEventSource& events) {
+    FastSlamWorkload work;
+    FastSlamEvent e;
+    for (;;) {
+      StatusOr<bool> more = events.Next(&e);
+      if (!more.ok()) return;
+      if (!*more) break;
+      if (!e.is_scan) {
+        ++work.controls;
+        continue;
+      }
+      ++work.scans;
+      work.observations += static_cast<int64_t>(e.scan.size());
+    }
+    work_ = work;
   }
 
   std::vector<std::string> InputPaths() const override {
@@ -294,17 +317,19 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
   }
   const char* RecordsName() const override { return "input rows"; }
   int64_t ExpectedRecords() const override { return records_; }
-  int64_t ExpectedSteps() const override { return steps_; }
-  // A rough bound, not a calibrated model: 64 MiB fixed, 4 KiB per particle (state, its own map
-  // paths in two generations, path segments) and 256 bytes per input row (the step log, times
-  // and poses of the driver, the outputs built in memory).
-  // Across ranks, of this rank's particles.
+  int64_t ExpectedSteps() const override { return work_.controls + work_.scans; }
+  // The process and engine (FastSlam::EstimatePeakBytes of the counted workload; across ranks,
+  // of this rank's particles) and what the command keeps per input row (the records of a
+  // dataset read whole, the outputs built in memory).
   int64_t PredictPeakBytes(int64_t records) const override {
-    const uint64_t share = ShareOf(static_cast<uint64_t>(config_.particles), ranks_).count;
-    return (int64_t{64} << 20) + static_cast<int64_t>(share) * 4096 + records * 256;
+    FastSlamConfig share = config_;
+    share.particles =
+        static_cast<int64_t>(ShareOf(static_cast<uint64_t>(config_.particles), ranks_).count);
+    return FastSlam::EstimatePeakBytes(share, work_) + records * kCommandBytesPerRow;
   }
   std::string DescribePrediction(int64_t records) const override {
-    return fmt::format("{} particles, {} input rows{}", config_.particles, records,
+    return fmt::format("{} particles, {} input rows: {} controls, {} scans, {} detections{}",
+                       config_.particles, records, work_.controls, work_.scans, work_.observations,
                        records_ == 0 ? " (a stream: its length is not known before the run)" : "");
   }
 
@@ -438,7 +463,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
   VictoriaParkEvents* park_events_ = nullptr;  // source_, for Victoria Park
   std::string gps_brief_;                      // Victoria Park: the GPS scores, for BriefReport()
   int64_t records_ = 0;                        // input rows
-  int64_t steps_ = 0;                          // controls and scans: the events Read() returns
+  FastSlamWorkload work_;  // counted before the run: controls and scans are the events Read() gives
   FastSlamEvent event_;
   std::map<double, Pose2> truth_;
   std::map<int64_t, IdPoint> landmarks_truth_;

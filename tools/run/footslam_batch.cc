@@ -105,6 +105,10 @@ StatusOr<std::vector<Walk>> ReadManifest(const std::string& path, const FootSlam
     auto error = [&](size_t column, const std::string& message) {
       return InvalidArgumentError(fmt::format("{}:{}:{}: {}", path, number, column, message));
     };
+    // The parser takes a NUL byte for the end of the input: what follows one would be ignored.
+    if (const size_t nul = line.find('\0'); nul != std::string::npos) {
+      return error(nul + 1, "not a JSON object: a NUL byte (JSON text has none)");
+    }
     nlohmann::json j;
     std::string duplicate;
     try {
@@ -225,6 +229,8 @@ WalkResult RunWalk(const Walk& w, const FootSlamBatchOptions& options, int64_t m
   run.run.handle_signals = false;
   run.run.memory_budget_bytes = memory_budget;
   run.run.checkpoint_every = options.checkpoint_every;
+  // A batch has no --resume: it resumes a stopped walk by itself.
+  run.run.resume_advice = "run the same batch command again: it resumes this walk";
   result.resumed = same && FileExists(dir + "/checkpoint.grove");
   if (result.resumed) {
     run.run.resume_path = dir + "/checkpoint.grove";  // it holds the prior map

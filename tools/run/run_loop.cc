@@ -29,15 +29,6 @@
 namespace grove::tools {
 namespace {
 
-// The signal that asked the run to stop (0: none), and whether the terminal went away. A
-// signal handler may only store to lock-free atomics; the loop reads them between steps.
-std::atomic<int> g_stop_signal{0};
-std::atomic<bool> g_hangup{false};
-static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free);
-
-extern "C" void OnStopSignal(int signal) { g_stop_signal.store(signal, std::memory_order_relaxed); }
-extern "C" void OnHangup(int) { g_hangup.store(true, std::memory_order_relaxed); }
-
 // Where the run stands in its input: kept in each checkpoint so that a resumed run can check
 // that it reads the same records.
 struct InputPosition {
@@ -86,9 +77,10 @@ std::string DirectoryOf(const std::string& path) {
 }
 
 // Every path the run will write is checked before the first step: none is an input, none is
-// a directory, the checkpoint's directory exists (or is made) and takes a file.
+// a directory, the checkpoint's directory exists (or is made: *created gets what was made) and
+// takes a file.
 Status CheckOutputPaths(const RunJob& job, const std::string& out_dir,
-                        const std::string& checkpoint_path) {
+                        const std::string& checkpoint_path, std::vector<std::string>* created) {
   struct Input {
     std::string path;
     struct stat st;
@@ -123,7 +115,7 @@ Status CheckOutputPaths(const RunJob& job, const std::string& out_dir,
     }
   }
   // The checkpoint's directory must take a file now, not after hours of running.
-  GROVE_RETURN_IF_ERROR(EnsureDirectory(DirectoryOf(checkpoint_path)));
+  GROVE_RETURN_IF_ERROR(EnsureDirectory(DirectoryOf(checkpoint_path), created));
   StatusOr<AtomicFileWriter> probe = AtomicFileWriter::Create(checkpoint_path);
   if (!probe.ok()) return probe.status();
   return Status::Ok();  // the probe's temporary is removed here
@@ -138,15 +130,6 @@ StatusOr<std::string> ReadCheckpointFile(const std::string& path) {
                                S_ISDIR(st.st_mode) ? "is a directory" : "is not a regular file"));
   }
   return ReadWholeFile(path);
-}
-
-int64_t ReadCgroupValue(const std::string& path) {
-  std::ifstream in(path);
-  std::string text;
-  if (!(in >> text) || text == "max") return -1;
-  int64_t v = -1;
-  auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-  return ec == std::errc() ? v : -1;
 }
 
 }  // namespace
@@ -179,122 +162,6 @@ int UsableCpus() {
   if (sched_getaffinity(0, sizeof(set), &set) == 0) return std::max(1, CPU_COUNT(&set));
   return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
 }
-
-int64_t PeakRssBytes() {
-  struct rusage usage;
-  getrusage(RUSAGE_SELF, &usage);
-  return static_cast<int64_t>(usage.ru_maxrss) * 1024;  // Linux reports KiB
-}
-
-StatusOr<int64_t> ParseMemorySize(const std::string& text) {
-  double value = 0;
-  const char* begin = text.data();
-  const char* end = begin + text.size();
-  auto [ptr, ec] = std::from_chars(begin, end, value);
-  double scale = 1;
-  if (ec == std::errc() && ptr + 1 == end) {
-    switch (*ptr) {
-      case 'K':
-      case 'k':
-        scale = 1024.0;
-        break;
-      case 'M':
-      case 'm':
-        scale = 1024.0 * 1024;
-        break;
-      case 'G':
-      case 'g':
-        scale = 1024.0 * 1024 * 1024;
-        break;
-      case 'T':
-      case 't':
-        scale = 1024.0 * 1024 * 1024 * 1024;
-        break;
-      default:
-        ec = std::errc::invalid_argument;
-    }
-  } else if (ptr != end) {
-    ec = std::errc::invalid_argument;
-  }
-  double bytes = value * scale;
-  if (ec != std::errc() || !std::isfinite(bytes) || bytes < 1 || bytes > 9.0e18) {
-    return InvalidArgumentError(
-        fmt::format("--memory-budget = {}: must be a size such as 512M, 8G or 1073741824",
-                    QuoteForMessage(text)));
-  }
-  return static_cast<int64_t>(bytes);
-}
-
-int64_t AvailableMemoryBytes(std::string* source) {
-  int64_t best = 0;
-  auto consider = [&](int64_t bytes, const char* what) {
-    if (bytes < 0) return;
-    if (best == 0 || bytes < best) {
-      best = std::max<int64_t>(bytes, 1);
-      if (source != nullptr) *source = what;
-    }
-  };
-  {
-    std::ifstream meminfo("/proc/meminfo");
-    std::string key, unit;
-    int64_t kib = 0;
-    while (meminfo >> key >> kib >> unit) {
-      if (key == "MemAvailable:") consider(kib * 1024, "memory available");
-    }
-  }
-  struct rlimit limit;
-  if (getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY) {
-    std::ifstream statm("/proc/self/statm");
-    int64_t pages = 0;
-    statm >> pages;
-    consider(static_cast<int64_t>(limit.rlim_cur) - pages * sysconf(_SC_PAGESIZE),
-             "address-space limit (ulimit -v)");
-  }
-  {
-    // cgroup v2: the process's own group, "0::/path".
-    std::ifstream cgroup("/proc/self/cgroup");
-    std::string line;
-    while (std::getline(cgroup, line)) {
-      if (line.rfind("0::", 0) != 0) continue;
-      const std::string dir = "/sys/fs/cgroup" + line.substr(3);
-      const int64_t max = ReadCgroupValue(dir + "/memory.max");
-      const int64_t current = ReadCgroupValue(dir + "/memory.current");
-      if (max >= 0 && current >= 0) consider(max - current, "cgroup memory limit");
-    }
-  }
-  return best;
-}
-
-SignalHandlers::SignalHandlers() {
-  g_stop_signal.store(0);
-  g_hangup.store(false);
-  struct sigaction stop = {};
-  stop.sa_handler = OnStopSignal;
-  sigemptyset(&stop.sa_mask);
-  stop.sa_flags = SA_RESETHAND | SA_RESTART;  // interrupted reads and writes resume
-  sigaction(SIGINT, &stop, &old_int_);
-  sigaction(SIGTERM, &stop, &old_term_);
-  struct sigaction hup = {};
-  hup.sa_handler = OnHangup;
-  sigemptyset(&hup.sa_mask);
-  hup.sa_flags = SA_RESTART;
-  sigaction(SIGHUP, &hup, &old_hup_);
-  struct sigaction pipe = {};
-  pipe.sa_handler = SIG_IGN;
-  sigemptyset(&pipe.sa_mask);
-  sigaction(SIGPIPE, &pipe, &old_pipe_);
-}
-
-SignalHandlers::~SignalHandlers() {
-  sigaction(SIGINT, &old_int_, nullptr);
-  sigaction(SIGTERM, &old_term_, nullptr);
-  sigaction(SIGHUP, &old_hup_, nullptr);
-  sigaction(SIGPIPE, &old_pipe_, nullptr);
-}
-
-bool StopRequested() { return g_stop_signal.load(std::memory_order_relaxed) != 0; }
-int StopSignal() { return g_stop_signal.load(std::memory_order_relaxed); }
-bool HangupSeen() { return g_hangup.load(std::memory_order_relaxed); }
 
 // Every rank's `mine`, in rank order (collective).
 template <typename T>
@@ -388,6 +255,11 @@ class RunLoop {
             options.resume_path.empty() ? "" : RankCheckpointPath(options.resume_path, rank())) {
     position_.input_name = job->InputName();
   }
+  // A run that did not succeed leaves no directory it made: those of the checkpoint here, the
+  // output directory's in OutputDirectory (only empty ones go: one holding a checkpoint stays).
+  ~RunLoop() {
+    if (!succeeded_) RemoveCreatedDirectories(checkpoint_dirs_made_);
+  }
 
   // Every output path is checked, and the output directory locked, before any work.
   int OpenOutputs() {
@@ -396,7 +268,8 @@ class RunLoop {
       StatusOr<OutputDirectory> opened = OutputDirectory::Open(options_.out_dir);
       if (opened.ok()) {
         out_dir_.emplace(std::move(opened).value());
-        paths_ok = CheckOutputPaths(*job_, options_.out_dir, checkpoint_path_);
+        paths_ok =
+            CheckOutputPaths(*job_, options_.out_dir, checkpoint_path_, &checkpoint_dirs_made_);
       } else {
         paths_ok = opened.status();
       }
@@ -410,17 +283,10 @@ class RunLoop {
   // Refuses a run that would not fit, before building anything.
   int CheckMemory() {
     const int64_t records = job_->ExpectedRecords();
-    budget_ = options_.memory_budget_bytes > 0 ? options_.memory_budget_bytes
-                                               : AvailableMemoryBytes(&budget_source_);
+    budget_ = MemoryBudget::Of(options_.memory_budget_bytes);
     predicted_ = job_->PredictPeakBytes(records);
-    Status fits;
-    if (budget_ > 0 && predicted_ > budget_) {
-      fits = ResourceExhaustedError(
-          fmt::format("the run is predicted to need {:.1f} MiB ({}), more than the {} of "
-                      "{:.1f} MiB; use fewer particles or raise --memory-budget",
-                      predicted_ / 1048576.0, job_->DescribePrediction(records), budget_source_,
-                      budget_ / 1048576.0));
-    }
+    Status fits = budget_.Check(predicted_, job_->DescribePrediction(records),
+                                "use fewer particles or raise --memory-budget");
     if (Status s = Agree(fits); !s.ok()) return Fail(kExitMemory, s.message());
     return -1;
   }
@@ -455,6 +321,7 @@ class RunLoop {
     StatusOr<InputPosition> at = InputPosition::FromJson(user, my_resume_path_);
     if (Status s = Agree(at.status()); !s.ok()) return Fail(kExitInput, s.message());
     resumed_at_ = *at;
+    last_checkpoint_steps_ = job_->steps();
     return -1;
   }
 
@@ -493,7 +360,7 @@ class RunLoop {
                     s.message());
       }
       if (show_progress && !HangupSeen()) progress.Update(position_.records);
-      if (options_.checkpoint_every > 0 && job_->steps() % options_.checkpoint_every == 0) {
+      if (CheckpointDue()) {
         if (Status s = WriteCheckpoint(); !s.ok()) return Fail(ExitCodeOf(s), s.message());
       }
     }
@@ -539,6 +406,7 @@ class RunLoop {
       return Fail(kExitOutput, s.message());
     }
     const std::string brief = job_->BriefReport();  // collective across ranks: every rank
+    succeeded_ = true;
     if (!lead_) return kExitOk;
     out_dir_->Keep();
     std::string names;
@@ -573,6 +441,14 @@ class RunLoop {
     return -1;
   }
 
+  // --checkpoint-every N: a checkpoint at the first record after which the step count has
+  // reached the next multiple of N, however many steps a record takes (a scan takes two, a
+  // control before the first none), so one at least every N steps and never two at one step.
+  bool CheckpointDue() const {
+    const int64_t n = options_.checkpoint_every;
+    return n > 0 && job_->steps() / n > last_checkpoint_steps_ / n;
+  }
+
   // Across ranks every rank writes its own file and the ranks agree on the outcome; a crash
   // between two ranks' renames leaves files of two steps, which a resume refuses.
   Status WriteCheckpoint() {
@@ -582,6 +458,7 @@ class RunLoop {
     if (s.ok()) s = WriteFileAtomically(my_checkpoint_path_, *bytes);
     GROVE_RETURN_IF_ERROR(Agree(s));
     if (out_dir_) out_dir_->Keep();  // it holds a checkpoint now (the default path)
+    last_checkpoint_steps_ = job_->steps();
     ++checkpoints_written_;
     checkpoint_bytes_ = static_cast<int64_t>(bytes->size());
     checkpoint_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -600,13 +477,14 @@ class RunLoop {
     Status s = WriteCheckpoint();
     if (!s.ok()) return Fail(kExitOutput, s.message());
     if (lead_) {
-      std::fprintf(stderr,
-                   "\ngrove: stopped by %s after step %lld: wrote %s%s; continue with the same "
-                   "command and --resume %s\n",
-                   strsignal(signal), static_cast<long long>(job_->steps()),
-                   checkpoint_path_.c_str(),
-                   ranks_ == nullptr ? "" : " (and one file per further rank beside it)",
-                   checkpoint_path_.c_str());
+      const std::string advice =
+          options_.resume_advice.empty()
+              ? "continue with the same command and --resume " + checkpoint_path_
+              : options_.resume_advice;
+      std::fprintf(
+          stderr, "\ngrove: stopped by %s after step %lld: wrote %s%s; %s\n", strsignal(signal),
+          static_cast<long long>(job_->steps()), checkpoint_path_.c_str(),
+          ranks_ == nullptr ? "" : " (and one file per further rank beside it)", advice.c_str());
     }
     return kExitSignalBase + signal;
   }
@@ -618,7 +496,7 @@ class RunLoop {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     s["peak_rss_bytes"] = PeakRssBytes();
     s["predicted_peak_bytes"] = predicted_;
-    s["memory_budget"] = {{"bytes", budget_}, {"source", budget_source_}};
+    s["memory_budget"] = {{"bytes", budget_.bytes}, {"source", budget_.source}};
     s["checkpoints"] = {{"written", checkpoints_written_},
                         {"seconds", checkpoint_s_},
                         {"last_bytes", checkpoint_bytes_},
@@ -635,11 +513,13 @@ class RunLoop {
   const std::string my_checkpoint_path_;
   const std::string my_resume_path_;
   std::optional<OutputDirectory> out_dir_;
-  std::string budget_source_ = "--memory-budget";
-  int64_t budget_ = 0;
+  MemoryBudget budget_;
   int64_t predicted_ = 0;
   InputPosition resumed_at_;
   InputPosition position_;
+  bool succeeded_ = false;
+  int64_t last_checkpoint_steps_ = 0;              // the step count of the last checkpoint
+  std::vector<std::string> checkpoint_dirs_made_;  // the checkpoint's directories this run made
   int64_t checkpoints_written_ = 0, checkpoint_bytes_ = 0;
   double checkpoint_s_ = 0;
 };

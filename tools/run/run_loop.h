@@ -1,16 +1,15 @@
 // The run loop of every model's `grove ... run` command, written once: output and checkpoint
 // paths checked before the first step, the output directory locked, the memory budget, create
 // or resume (with the input digest), the step loop with progress, periodic and signal
-// checkpoints, and the outputs written as a set (OutputSet) with summary.json last.
+// checkpoints, and the outputs written as a set (OutputSet) with summary.json last. A run that
+// does not succeed leaves no directory it made but those holding a checkpoint.
 //
-// Signals: SIGINT and SIGTERM stop the run at the next step boundary, or during the writing of
-// the outputs before anything is renamed into place; it writes a checkpoint and exits with
-// 128 + the signal. A second one kills at once. SIGHUP (the terminal closed) stops the progress
-// output and the run goes on; SIGPIPE is ignored, so a closed stderr does not kill a run.
+// Signals (tools/run/signal_policy.h): SIGINT and SIGTERM stop the run at the next step
+// boundary, or during the writing of the outputs before anything is renamed into place; it
+// writes a checkpoint and exits with 128 + the signal. Memory: tools/run/memory_budget.h.
 #ifndef GROVE_TOOLS_RUN_RUN_LOOP_H_
 #define GROVE_TOOLS_RUN_RUN_LOOP_H_
 
-#include <csignal>
 #include <cstdint>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -22,6 +21,8 @@
 #include "grove/status.h"
 #include "tools/io/output_set.h"
 #include "tools/report/map_render.h"
+#include "tools/run/memory_budget.h"
+#include "tools/run/signal_policy.h"
 
 namespace grove::tools {
 
@@ -43,20 +44,9 @@ enum ExitCode : int {
 int Fail(int code, std::string_view message);
 // The exit code of a run's or an output's error status.
 int ExitCodeOf(const Status& s);
-// Peak resident memory of this process, bytes.
-int64_t PeakRssBytes();
 // The CPUs this process may run on (its affinity mask: a scheduler's, mpirun's binding or
 // taskset's CPU set), at least 1.
 int UsableCpus();
-
-// Parses a memory size: a number of bytes with an optional binary suffix K, M, G or T
-// ("512M", "1.5G", "1073741824"). InvalidArgument naming the text otherwise.
-StatusOr<int64_t> ParseMemorySize(const std::string& text);
-
-// The memory this process may still use: the smallest of MemAvailable, the address-space
-// limit (RLIMIT_AS) less what is mapped now, and the cgroup's memory.max less its
-// memory.current; 0 when none can be read. *source names the limit that won.
-int64_t AvailableMemoryBytes(std::string* source = nullptr);
 
 // Options of a run that are not the model's configuration.
 struct RunOptions {
@@ -66,6 +56,9 @@ struct RunOptions {
   int64_t checkpoint_every = 0;     // steps between checkpoints; 0: only when stopped by a signal
   std::string checkpoint_path;      // empty: out_dir + "/checkpoint.grove"
   std::string resume_path;          // continue from this checkpoint
+  // What the message after a stop by a signal tells the user to do; empty: "continue with the
+  // same command and --resume CHECKPOINT".
+  std::string resume_advice;
   // Install SignalHandlers for the run; false when the caller has (runs side by side).
   bool handle_signals = true;
   // One filter across these ranks (null: one process). Rank 0 checks the output paths, writes
@@ -73,20 +66,6 @@ struct RunOptions {
   // signal, and all exit with the same code. Each rank checkpoints its own share
   // (RankCheckpointPath).
   Collective* ranks = nullptr;
-};
-
-// The run loop's handling of SIGINT, SIGTERM (stop: StopSignal()), SIGHUP (HangupSeen()) and
-// SIGPIPE (ignored), installed for the object's lifetime and the previous handlers restored
-// after. Construction clears the stop and hangup flags.
-class SignalHandlers {
- public:
-  SignalHandlers();
-  ~SignalHandlers();
-  SignalHandlers(const SignalHandlers&) = delete;
-  SignalHandlers& operator=(const SignalHandlers&) = delete;
-
- private:
-  struct sigaction old_int_ = {}, old_term_ = {}, old_hup_ = {}, old_pipe_ = {};
 };
 
 // What a model's run gives the loop.
@@ -199,12 +178,6 @@ std::string RankCheckpointPath(const std::string& path, int rank);
 // Runs `job` as `options` say; `config_json` is the effective configuration (ConfigToJson) for
 // summary.json. Returns the exit code after printing any error on stderr as one line.
 int RunCommand(RunJob* job, const RunOptions& options, const std::string& config_json);
-
-// True when SIGINT or SIGTERM asked the current run to stop; the signal (0: none); whether a
-// SIGHUP came.
-bool StopRequested();
-int StopSignal();
-bool HangupSeen();
 
 // Renders `image` as map.png and map.svg into `out`, stopping early (Ok, with what is done)
 // when StopRequested().

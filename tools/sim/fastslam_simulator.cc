@@ -341,7 +341,7 @@ int FastSlamSimulateCommand(const std::string& map_path, const std::string& pres
 }
 
 Status FeedSimulation(const BaileySimulation& sim, FastSlam* slam, size_t controls,
-                      FeedTimes* times, const std::function<void(double t_s)>& after_scan) {
+                      FeedTimes* times, const std::function<Status(double t_s)>& after_scan) {
   using Clock = std::chrono::steady_clock;
   auto seconds = [](Clock::duration d) { return std::chrono::duration<double>(d).count(); };
   controls = std::min(controls, sim.controls.size());
@@ -366,7 +366,7 @@ Status FeedSimulation(const BaileySimulation& sim, FastSlam* slam, size_t contro
       s = slam->Scan(t, scan);
       if (times != nullptr) times->scan_s += seconds(Clock::now() - t0);
       if (!s.ok()) return Status(s.code(), fmt::format("scan at t = {}: {}", t, s.message()));
-      if (after_scan) after_scan(t);
+      if (after_scan) GROVE_RETURN_IF_ERROR(after_scan(t));
     }
   }
   return Status::Ok();

@@ -238,10 +238,11 @@ struct FeedTimes {
 // Feeds the first `controls` control rows of `sim` into `slam`, each followed by the scans from
 // its time until the next row's (a control first at a shared time), as `grove fastslam run`
 // merges its files, and calls after_scan(t) (when given) after each scan. The first error stops
-// it (the message names the row). `times` may be null.
+// it (the message names the row), and so does an error after_scan returns (returned as it is).
+// `times` may be null.
 Status FeedSimulation(const BaileySimulation& sim, FastSlam* slam, size_t controls = SIZE_MAX,
                       FeedTimes* times = nullptr,
-                      const std::function<void(double t_s)>& after_scan = nullptr);
+                      const std::function<Status(double t_s)>& after_scan = nullptr);
 
 // `grove fastslam simulate`: reads the map (the bundled webmap when map_path is empty), takes the
 // preset (empty: "webmap") with `seed`, simulates and writes controls.csv, observations.csv,

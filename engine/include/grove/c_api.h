@@ -33,8 +33,9 @@
  * always NUL-terminated and cut to fit (nothing is written when `error` is NULL or
  * `error_size` is 0; "" on success).
  * A step that fails with GROVE_INVALID_ARGUMENT leaves the engine unchanged. Any other failure
- * of a step (a particle left the grid, the filter degenerated, out of memory) stops the engine:
- * later steps and checkpoints return GROVE_FAILED_PRECONDITION; the read-outs still work.
+ * of a step (a particle left the grid, the filter degenerated, out of memory) stops the engine,
+ * and its message says so: later steps and checkpoints return GROVE_FAILED_PRECONDITION; the
+ * read-outs still work. The bounds of every input value are grove/input_rules.h's.
  *
  * Arrays: the size-query rule. Every call that copies a variable number of items into a
  * caller's array (trajectories, maps, landmarks, checkpoint bytes) takes (out, capacity, count):
@@ -249,10 +250,10 @@ GROVE_EXPORT void grove_footslam_destroy(grove_footslam* slam);
 GROVE_EXPORT const char* grove_footslam_last_error(const grove_footslam* slam);
 
 /* Processes one odometry step (dx, dy in the odometry frame, metres) at time t_s.
- * GROVE_INVALID_ARGUMENT (engine unchanged) for a non-finite value or a time not after the
- * previous one; GROVE_OUT_OF_RANGE when a particle leaves a fixed grid or a step crosses more
- * than 8 x grid_size hexagons; GROVE_FAILED_PRECONDITION when the filter degenerated or an
- * earlier error stopped the engine. */
+ * GROVE_INVALID_ARGUMENT (engine unchanged) for a value outside grove/input_rules.h's bounds
+ * or a time not after the previous one; GROVE_OUT_OF_RANGE when a particle leaves a fixed grid or a
+ * step crosses more than 8 x grid_size hexagons; GROVE_FAILED_PRECONDITION when the filter
+ * degenerated or an earlier error stopped the engine. */
 GROVE_EXPORT grove_status grove_footslam_step(grove_footslam* slam, double t_s, double dx_m,
                                               double dy_m);
 /* Steps t_s[i], dx_m[i], dy_m[i] for i = 0 .. n-1 in order, as n calls of step; stops at the
@@ -441,15 +442,15 @@ GROVE_EXPORT const char* grove_fastslam_last_error(const grove_fastslam* slam);
 
 /* A control (speed m/s, steering angle rad) from t_s on: predicts from the last time to t_s
  * with the control held so far (the first control sets the start time), then holds this one.
- * GROVE_INVALID_ARGUMENT, engine unchanged, for a non-finite value or a time not after the
- * previous control's or before the last scan's. */
+ * GROVE_INVALID_ARGUMENT, engine unchanged, for a value outside grove/input_rules.h's bounds
+ * or a time not after the previous control's or before the last scan's. */
 GROVE_EXPORT grove_status grove_fastslam_control(grove_fastslam* slam, double t_s, double speed_mps,
                                                  double steer_rad);
 /* A scan at t_s: predicts to t_s with the held control, then updates with the n observations
  * (obs may be NULL only when n == 0; copied, the caller keeps them). GROVE_INVALID_ARGUMENT,
- * engine unchanged, before the first control, for a time before the last or equal to the
- * previous scan's, or a bad observation (named by its index); GROVE_FAILED_PRECONDITION when
- * the filter degenerated or an earlier error stopped the engine. */
+ * engine unchanged, before the first control, for a time outside the bounds, before the last
+ * or equal to the previous scan's, or an observation outside the bounds (named by its index);
+ * GROVE_FAILED_PRECONDITION when the filter degenerated or an earlier error stopped the engine. */
 GROVE_EXPORT grove_status grove_fastslam_scan(grove_fastslam* slam, double t_s,
                                               const grove_landmark_observation* obs, size_t n);
 /* Filter steps so far: one per prediction and one per scan update. */

@@ -208,9 +208,10 @@ GROVE_EXPORT const char* FastSlamVehicleName(FastSlamVehicle vehicle);  // "bail
 // Every field of FastSlamConfig: name, type, range, effect and meaning, in the struct's order.
 GROVE_EXPORT const std::vector<ConfigField<FastSlamConfig>>& FastSlamConfigFields();
 
-// One detection of a scan: range (m, >= 0), bearing (rad, in (-pi, pi], counter-clockwise from
-// the heading) and the landmark's id (known association: >= 0; unknown: -1 for none, or a
-// simulator's truth below 2^31 that only tags the landmarks it creates).
+// One detection of a scan: range (m, in [0, 1e6]), bearing (rad, in (-pi, pi], counter-clockwise
+// from the heading) and the landmark's id (known association: in [0, 2^31); unknown: -1 for
+// none, or a simulator's truth below 2^31 that only tags the landmarks it creates). The bounds
+// are grove/input_rules.h's.
 struct LandmarkObservation {
   double range_m = 0;
   double bearing_rad = 0;
@@ -261,6 +262,13 @@ struct GROVE_EXPORT FastSlamSummary : FilterSummary {
   std::string BriefReport() const;
 };
 
+// What a run will give an engine: the figures FastSlam::EstimatePeakBytes() predicts from.
+struct FastSlamWorkload {
+  int64_t controls = 0;      // Control() calls
+  int64_t scans = 0;         // Scan() calls
+  int64_t observations = 0;  // detections over all scans
+};
+
 class Collective;
 
 class GROVE_EXPORT FastSlam {
@@ -278,20 +286,30 @@ class GROVE_EXPORT FastSlam {
                                                     Collective* ranks);
   // What Create(config, ranks) checks of a configuration for `ranks` ranks beyond Validate().
   static Status CheckAcrossRanks(const FastSlamConfig& config, int ranks);
+  // A prediction of the peak memory, in bytes, of a process running an engine of `config` fed
+  // `work`: a fixed part, the particles' state and the map paths each scan copies (in two
+  // generations, growing with the detections a scan holds), and the per-step records. It stays
+  // above the peak RSS of `grove fastslam victoria-park` and of the webmap's `run`
+  // (engine/fastslam/README.md gives the runs). Across ranks, of a rank holding
+  // config.particles particles. REQUIRES: config.Validate() is ok.
+  static int64_t EstimatePeakBytes(const FastSlamConfig& config, const FastSlamWorkload& work);
   virtual ~FastSlam();
 
   // A control (speed m/s, steering angle rad) from time t_s on: predicts from the last time to
   // t_s with the control held so far (the first call sets the start time), then holds this one.
-  // InvalidArgument, the engine unchanged, for a non-finite value or a time not after the
-  // previous control's and not at or after the last scan's.
+  // InvalidArgument, the engine unchanged, for a value outside grove/input_rules.h's bounds
+  // (CheckInput, CheckSteering) or a time not after the previous control's and not at or after
+  // the last scan's. Any other error stopped the engine (its message says so): every later step
+  // returns FailedPrecondition.
   Status Control(double t_s, double speed_mps, double steer_rad);
 
   // A scan at t_s (at or after the last time): predicts to t_s with the held control, then
   // updates every particle with the observations. InvalidArgument, the engine unchanged, before
-  // the first control, for a bad time (before the last, or the time of the scan just before: one
-  // time's detections are one scan), or for an observation that is not finite, has a negative
-  // range, a bearing outside (-pi, pi] or a negative id (the message names its index).
-  // FailedPrecondition when the filter degenerated; the engine must then not be used again.
+  // the first control, for a bad time (outside grove/input_rules.h's bounds, before the last, or
+  // the time of the scan just before: one time's detections are one scan), or for an observation
+  // outside the bounds (CheckInput, CheckLandmarkId; the message names its index).
+  // FailedPrecondition when the filter degenerated: that and any other error stopped the engine
+  // (its message says so), and every later step returns FailedPrecondition.
   Status Scan(double t_s, std::span<const LandmarkObservation> observations);
 
   const FastSlamConfig& config() const;

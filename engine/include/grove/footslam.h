@@ -214,11 +214,12 @@ class GROVE_EXPORT FootSlam {
   virtual ~FootSlam();
 
   // Processes one odometry step (dx, dy in the odometry frame, metres) at time t_s.
-  // Returns InvalidArgument (engine unchanged) for a non-finite value or a time not after the
-  // previous one; OutOfRange when a particle leaves a fixed grid (or the largest a growing one
-  // reaches) or a particle's step crosses more than 8 x grid_size hexagons; FailedPrecondition
-  // when every weight became zero (the filter degenerated). After an OutOfRange or
-  // FailedPrecondition the engine must not be stepped again.
+  // Returns InvalidArgument (engine unchanged) for a value outside grove/input_rules.h's bounds
+  // (|t| <= 1e12 s, |dx|, |dy| <= 1e6 m) or a time not after the previous one; OutOfRange when
+  // a particle leaves a fixed grid (or the largest a growing one reaches) or a particle's step
+  // crosses more than 8 x grid_size hexagons; FailedPrecondition when every weight became zero
+  // (the filter degenerated). Every error but InvalidArgument stopped the engine (its message
+  // says so): every later step returns FailedPrecondition.
   Status Step(double t_s, double dx_m, double dy_m);
 
   // Sets a prior map: the cumulative map of an earlier walk through the same area, in this
