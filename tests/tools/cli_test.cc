@@ -741,6 +741,15 @@ TEST_F(CliTest, FastSlamSimulateWritesControlsObservationsAndTruth) {
   o = Grove("fastslam simulate --seed -2 --out " + (dir_ / "b").string());
   EXPECT_EQ(o.exit_code, 2) << o.err;
   EXPECT_FALSE(fs::exists(dir_ / "b" / "controls.csv"));
+  // A map whose only waypoint is the start: refused, not an empty simulation.
+  const fs::path still = dir_ / "still.txt";
+  std::ofstream(still) << "lm 2 1\n1 2\nwp 2 1\n0 0\n";
+  o = Grove("fastslam simulate --map " + still.string() + " --out " + (dir_ / "b").string());
+  EXPECT_EQ(o.exit_code, 3) << o.err;
+  EXPECT_NE(o.err.find(still.string() + ": wp: every waypoint lies within at_waypoint_m = 1 m"),
+            std::string::npos)
+      << o.err;
+  EXPECT_FALSE(fs::exists(dir_ / "b"));
 }
 
 // `grove fastslam run` end to end on the simulator's files: every output, the truth scored, the

@@ -642,6 +642,20 @@ TEST(BaileySimulatorTest, UnreachableWaypointFailsInsteadOfCirclingForEver) {
   EXPECT_FALSE(SimulateBailey(BaileyMap{}, o).ok());  // no waypoint
 }
 
+TEST(BaileySimulatorTest, WaypointsAllAtTheStartAreRefusedInsteadOfAnEmptyRun) {
+  BaileyMap map;
+  map.landmarks = {{1, 2}};
+  map.waypoints = {{0, 0}, {0.5, 0.2}};
+  StatusOr<BaileySimulation> sim = SimulateBailey(map, WebmapPreset());
+  ASSERT_FALSE(sim.ok());
+  EXPECT_EQ(sim.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(sim.status().message(),
+            "wp: every waypoint lies within at_waypoint_m = 1 m of the start (0, 0), so the "
+            "vehicle would not move: the path needs a waypoint farther from the start");
+  map.waypoints.push_back({30, 0});  // one waypoint away from the start is enough
+  EXPECT_TRUE(SimulateBailey(map, WebmapPreset()).ok());
+}
+
 // The command.
 
 class FastSlamSimulateCommandTest : public ::testing::Test {

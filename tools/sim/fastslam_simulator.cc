@@ -204,9 +204,22 @@ StatusOr<BaileySimulation> SimulateBailey(const BaileyMap& map, const BaileySimO
     }
   }
 
+  // Waypoints that all lie within reach of the start would end the run before its first step.
+  const double at_waypoint2 = o.at_waypoint_m * o.at_waypoint_m;
+  const bool drives = std::any_of(map.waypoints.begin(), map.waypoints.end(), [&](const auto& p) {
+    const double dx = p.x_m - o.start_x_m;
+    const double dy = p.y_m - o.start_y_m;
+    return dx * dx + dy * dy >= at_waypoint2;
+  });
+  if (!drives) {
+    return InvalidArgumentError(fmt::format(
+        "wp: every waypoint lies within at_waypoint_m = {} m of the start ({}, {}), so the "
+        "vehicle would not move: the path needs a waypoint farther from the start",
+        o.at_waypoint_m, o.start_x_m, o.start_y_m));
+  }
+
   const int64_t observe_every = std::llround(o.dt_observe_s / o.dt_control_s);
   const double max_delta = o.max_steer_rate_radps * o.dt_control_s;
-  const double at_waypoint2 = o.at_waypoint_m * o.at_waypoint_m;
   const auto n_waypoints = static_cast<int32_t>(map.waypoints.size());
   NormalSource control_noise(o.seed, kControlNoise);
   NormalSource observation_noise(o.seed, kObservationNoise);
