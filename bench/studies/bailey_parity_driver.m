@@ -5,7 +5,7 @@ function bailey_parity_driver(bailey_dir, sim_dir, filter, nparticles, seed, out
 % CSV rows; every filter step is a call of his own functions, with his configfile.m's settings.
 %
 %   octave-cli --no-gui -q --eval "addpath('bench/studies'); bailey_parity_driver( ...
-%       BAILEY_FASTSLAM_DIR, SIM_DIR, 'fastslam2', 100, 1, 'OUT.csv', 'log')"
+%       BAILEY_FASTSLAM_DIR, SIM_DIR, 'fastslam2', 100, 1, 'OUT.csv', 'log' [, 'percall'])"
 %
 % weights 'linear' runs his weight code as it is (sample_proposal.m, compute_weight.m): products
 % of densities, which underflow to 0 in every particle when a loop closes with a few metres of
