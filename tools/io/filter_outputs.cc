@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <iterator>
 
 namespace grove::tools {
@@ -20,6 +21,17 @@ std::string TrajectoryCsv(const std::vector<StampedPose>& poses) {
   for (const StampedPose& p : poses) {
     fmt::format_to(std::back_inserter(out), "{:.6f},{:.6f},{:.6f},{:.6f}\n", p.t_s, p.pose.x_m,
                    p.pose.y_m, p.pose.heading_rad);
+  }
+  return out;
+}
+
+std::string TrajectoryTum(const std::vector<StampedPose>& poses) {
+  std::string out = "# t x y z qx qy qz qw\n";
+  out.reserve(poses.size() * 96 + out.size());
+  for (const StampedPose& p : poses) {
+    const double half = 0.5 * p.pose.heading_rad;
+    fmt::format_to(std::back_inserter(out), "{:.9f} {:.9f} {:.9f} 0 0 0 {:.9f} {:.9f}\n", p.t_s,
+                   p.pose.x_m, p.pose.y_m, std::sin(half), std::cos(half));
   }
   return out;
 }

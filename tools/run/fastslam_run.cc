@@ -306,8 +306,10 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
     return paths;
   }
   std::vector<std::string> OutputNames() const override {
-    std::vector<std::string> names = {"trajectory.csv", "heaviest_trajectory.csv", "landmarks.csv",
-                                      "map.png", "map.svg"};
+    std::vector<std::string> names = {"trajectory.csv", "heaviest_trajectory.csv",
+                                      "trajectory.tum", "heaviest_trajectory.tum",
+                                      "landmarks.csv",  "map.png",
+                                      "map.svg"};
     if (park_ != nullptr) names.push_back("gps_error.csv");
     return names;
   }
@@ -378,6 +380,8 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
     if (out == nullptr) return Status::Ok();  // not rank 0
     GROVE_RETURN_IF_ERROR(out->Add("trajectory.csv", TrajectoryCsv(mean)));
     GROVE_RETURN_IF_ERROR(out->Add("heaviest_trajectory.csv", TrajectoryCsv(*heaviest)));
+    GROVE_RETURN_IF_ERROR(out->Add("trajectory.tum", TrajectoryTum(mean)));
+    GROVE_RETURN_IF_ERROR(out->Add("heaviest_trajectory.tum", TrajectoryTum(*heaviest)));
     GROVE_RETURN_IF_ERROR(out->Add("landmarks.csv", LandmarksCsv(*landmarks)));
     if (StopRequested()) return Status::Ok();
     MapImage image;

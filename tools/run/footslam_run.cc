@@ -79,6 +79,9 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
                                       "trajectory.csv",
                                       "mean_trajectory.csv",
                                       "smoothed_trajectory.csv",
+                                      "trajectory.tum",
+                                      "mean_trajectory.tum",
+                                      "smoothed_trajectory.tum",
                                       "map.png",
                                       "map.svg"};
     // Storage of diversity: the stored map alone (map.csv and map_best.csv include it).
@@ -146,6 +149,10 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
     GROVE_RETURN_IF_ERROR(
         out->Add("mean_trajectory.csv", TrajectoryCsv(engine_->MeanTrajectory())));
     GROVE_RETURN_IF_ERROR(out->Add("smoothed_trajectory.csv", TrajectoryCsv(*smoothed)));
+    GROVE_RETURN_IF_ERROR(out->Add("trajectory.tum", TrajectoryTum(*trajectory)));
+    GROVE_RETURN_IF_ERROR(
+        out->Add("mean_trajectory.tum", TrajectoryTum(engine_->MeanTrajectory())));
+    GROVE_RETURN_IF_ERROR(out->Add("smoothed_trajectory.tum", TrajectoryTum(*smoothed)));
     if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
     // The smoothed path: the best of the three paths on the simulator's walks
     // (engine/footslam/README.md).
