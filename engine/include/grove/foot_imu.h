@@ -53,7 +53,7 @@ enum class ZeroVelocityDetector {
 };
 
 struct GROVE_EXPORT FootImuConfig {
-  // ---- Options that change results (all of them) ----
+  // Every option below changes results.
 
   // Zero-velocity detection. The window and threshold suit about 200 Hz; scale the window with
   // the rate (e.g. 10 at 400 Hz).
