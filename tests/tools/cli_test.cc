@@ -649,6 +649,26 @@ TEST_F(CliTest, BenchScalingNamesTheGridInItsReport) {
   }
 }
 
+// --max-particles bounds every run of bench scaling, the thread sweep's included.
+TEST_F(CliTest, BenchScalingKeepsEveryRunWithinMaxParticles) {
+  const fs::path out = dir_ / "scaling";
+  Outcome o = Grove("bench scaling --steps 2 --max-particles 300 --out " + out.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  std::istringstream csv(Slurp(out / "scaling.csv"));
+  std::string line;
+  std::getline(csv, line);
+  ASSERT_EQ(line.rfind("sweep,particles,threads,", 0), 0u) << line;
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    const size_t a = line.find(',');
+    const size_t b = line.find(',', a + 1);
+    ASSERT_NE(b, std::string::npos) << line;
+    EXPECT_LE(std::stoll(line.substr(a + 1, b - a - 1)), 300) << line;
+    ++rows;
+  }
+  EXPECT_GE(rows, 1);
+}
+
 // 12, 17: hostile configuration files get short one-line errors.
 TEST_F(CliTest, HostileConfigurationsGetShortErrors) {
   std::string deep = "{\"particles\": " + std::string(100000, '[') + std::string(100000, ']') + "}";

@@ -333,11 +333,13 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
   };
   std::vector<Point> points;
   const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  // --max-particles limits the thread sweep too.
+  const int64_t sweep_particles = std::min(options.thread_sweep_particles, options.max_particles);
   for (int t = 1; t <= cores; ++t) {
     const double cpu0 = process_cpu_s();
-    auto r = run(options.thread_sweep_particles, t);
+    auto r = run(sweep_particles, t);
     if (!r.ok()) return Fail(kExitRun, r.status().message());
-    points.push_back({options.thread_sweep_particles, t, *r, process_cpu_s() - cpu0});
+    points.push_back({sweep_particles, t, *r, process_cpu_s() - cpu0});
   }
   for (int64_t n : {1000, 3000, 10000, 30000, 100000, 300000, 1000000}) {
     if (n > options.max_particles) break;
@@ -354,7 +356,7 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
                         .x_label = "particles",
                         .y_label = "ns per particle-step",
                         .log_x = true};
-  ChartSeries tp{.label = fmt::format("{} particles", options.thread_sweep_particles)};
+  ChartSeries tp{.label = fmt::format("{} particles", sweep_particles)};
   ChartSeries pp{.label = fmt::format("{} threads", cores)};
   std::vector<ChartSeries> phase_series;
   for (const char* phase : {"advance", "resample", "release", "normalise"}) {
