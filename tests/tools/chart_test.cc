@@ -273,6 +273,24 @@ int DarkPixels(const DecodedPng& png) {
   return dark;
 }
 
+// A thread axis shows whole numbers only, and a y axis from zero draws a 20 % gain as 20 %.
+TEST_F(ChartTest, IntegerXAndYFromZeroSetTheAxes) {
+  Chart chart{.title = "threads", .series = {{.label = "s", .x = {1, 2}, .y = {3.0, 3.6}}}};
+  const std::string plain = ChartScript(chart, {}, "a.png", "");
+  EXPECT_EQ(plain.find("set xtics 1"), std::string::npos) << plain;
+  EXPECT_EQ(plain.find("set yrange"), std::string::npos) << plain;
+  chart.integer_x = true;
+  chart.y_from_zero = true;
+  const std::string script = ChartScript(chart, {}, "a.png", "");
+  EXPECT_NE(script.find("set xtics 1\n"), std::string::npos) << script;
+  EXPECT_NE(script.find("set xrange [0.5:2.5]\n"), std::string::npos) << script;
+  EXPECT_NE(script.find("set yrange [0:*]\n"), std::string::npos) << script;
+  // gnuplot takes the settings.
+  Status s = WriteChart(chart, out_ / "threads.png", "");
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  EXPECT_TRUE(fs::exists(out_ / "threads.png"));
+}
+
 TEST_F(ChartTest, EmptyChartHasAxesAndTitle) {
   Chart linear{.title = "Nothing yet", .x_label = "x", .y_label = "y"};
   // Log axes, and a box whose only value is unusable: its category stays on the axis.

@@ -351,7 +351,9 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
   std::vector<std::vector<std::string>> rows;
   Chart threads_chart{.title = "Throughput against threads",
                       .x_label = "threads",
-                      .y_label = "M particle-steps / s"};
+                      .y_label = "M particle-steps / s",
+                      .integer_x = true,
+                      .y_from_zero = true};
   Chart particles_chart{.title = "Cost against particles",
                         .x_label = "particles",
                         .y_label = "ns per particle-step",

@@ -292,6 +292,11 @@ std::string Settings(const Chart& chart, const PlotData& p, double scale, int fo
     if (p.min_y >= 1) s += "set format y \"%.0s%c\"\n";
     if (p.min_y <= p.max_y) s += fmt::format("set yrange {}\n", DecadeRange(p.min_y, p.max_y));
   }
+  if (chart.integer_x && !chart.log_x && chart.boxes.empty() && p.min_x <= p.max_x) {
+    s += fmt::format("set xtics 1\nset mxtics 1\nset format x \"%.0f\"\nset xrange [{}:{}]\n",
+                     std::floor(p.min_x) - 0.5, std::ceil(p.max_x) + 0.5);
+  }
+  if (chart.y_from_zero && !chart.log_y) s += "set yrange [0:*]\n";
   s += "set border 3 lc rgb \"#404040\"\nset tics nomirror\n";
   s += fmt::format(
       "set grid {}ytics mytics lt 1 lc rgb \"#e4e4e4\" lw 1, lt 1 lc rgb \"#f2f2f2\" lw 1\n",
@@ -508,6 +513,11 @@ Status WriteChartOrThrow(const Chart& chart, const std::string& png_path,
 }
 
 }  // namespace
+
+std::string ChartScript(const Chart& chart, const ChartOptions& options,
+                        const std::string& png_path, const std::string& svg_path) {
+  return Script(chart, options, png_path, svg_path);
+}
 
 Status WriteChart(const Chart& chart, const std::string& png_path, const std::string& svg_path,
                   const ChartOptions& options) {

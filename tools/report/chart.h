@@ -52,6 +52,11 @@ struct Chart {
   // Box k (from 0) stands at x = k + 1, and the x axis then shows the box labels instead of
   // numbers; series and bands, if any, are drawn on that same axis.
   std::vector<ChartBox> boxes = {};
+  // A linear x axis of whole numbers (thread counts): tics only at integers, half a unit of room
+  // either side of the data.
+  bool integer_x = false;
+  // A linear y axis that starts at zero, so that differences are drawn to scale.
+  bool y_from_zero = false;
 };
 
 struct ChartOptions {
@@ -72,6 +77,11 @@ struct ChartOptions {
 // Thread safety: calls may run concurrently; each has its own temporary directory and gnuplot.
 Status WriteChart(const Chart& chart, const std::string& png_path, const std::string& svg_path,
                   const ChartOptions& options = {});
+
+// The gnuplot script WriteChart runs to draw `chart` into the two paths (for tests; it does not
+// check the chart: WriteChart does).
+std::string ChartScript(const Chart& chart, const ChartOptions& options,
+                        const std::string& png_path, const std::string& svg_path);
 
 }  // namespace grove::tools
 
