@@ -6,11 +6,11 @@
 # no rpath, no LD_LIBRARY_PATH) against /usr, imports the Python module with /usr/bin/python3,
 # and finally removes the package and checks that none of its files is left.
 # Installs into /usr system-wide: run it as root on a throwaway machine (CI does), never where a
-# grove package is installed already. Environment: BUILD_DIR as for setup.sh.
+# grove package is installed already. Environment: BUILD_DIR as for setup.sh package.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 src=$PWD
-build_dir="${BUILD_DIR:-build}"
+build_dir="${BUILD_DIR:-build-package}"
 if [ "$(id -u)" -ne 0 ]; then
   echo "package_test: installs into /usr; run as root on a throwaway machine" >&2
   exit 2

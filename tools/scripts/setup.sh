@@ -4,7 +4,7 @@
 #   tools/scripts/setup.sh run    FootSLAM, 30,000 particles, on the bundled walk -> build/footslam/
 #   tools/scripts/setup.sh test   every test (ctest)
 #   tools/scripts/setup.sh build  just build
-#   tools/scripts/setup.sh package  the Debian package (prefix /usr) -> build/grove_VERSION_ARCH.deb
+#   tools/scripts/setup.sh package  the Debian package (prefix /usr) -> build-package/grove_VERSION_ARCH.deb
 # Environment: BUILD_DIR (default build), BUILD_TYPE (Release, Debug, RelWithDebInfo; default
 # Release), SANITIZE=1 for the ASan + UBSan configuration (pooling off), EXTRA_CMAKE_ARGS for
 # anything else (e.g. -DGROVE_BUILD_BENCHMARKS=OFF).
@@ -34,6 +34,8 @@ if ((${#missing[@]})); then
 fi
 
 build_dir="${BUILD_DIR:-build}"
+# The package is configured for /usr: a build of its own, so build/ keeps its install layout.
+[ "$job" = package ] && build_dir="${BUILD_DIR:-build-package}"
 cmake_args=(-DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}")
 [ "$job" = package ] && cmake_args+=(-DCMAKE_INSTALL_PREFIX=/usr)
 if [ "${SANITIZE:-0}" = 1 ]; then
