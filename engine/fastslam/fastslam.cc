@@ -20,6 +20,7 @@ namespace grove {
 
 using fastslam::ControlStep;
 using fastslam::FastSlamModel;
+using fastslam::PredictStep;
 using fastslam::ScanStep;
 using fastslam::SegmentHistory;
 using fastslam::VehiclePose;
@@ -85,7 +86,7 @@ class FastSlam::Impl {
     if (!s.ok()) {
       return InvalidArgumentError(fmt::format("control at t = {}: {}", t_s, s.message()));
     }
-    GROVE_RETURN_IF_ERROR(driver_.CheckNotFailed("cannot take another control"));
+    GROVE_RETURN_IF_ERROR(CheckNotFailed("cannot take another control"));
     if (controls_ == 0) {
       GROVE_RETURN_IF_ERROR(driver_.SetStartTime(t_s));
       reported_.front().t_s = t_s;
@@ -96,11 +97,11 @@ class FastSlam::Impl {
                         "times must be strictly increasing",
                         t_s, last_control_s_));
       }
-      if (t_s < driver_.times().back()) {
-        return InvalidArgumentError(fmt::format(
-            "control at t = {} is before the last scan at t = {}", t_s, driver_.times().back()));
+      if (t_s < LastTime()) {
+        return InvalidArgumentError(
+            fmt::format("control at t = {} is before the last scan at t = {}", t_s, LastTime()));
       }
-      GROVE_RETURN_IF_ERROR(PredictTo(t_s, kControlPredict));
+      GROVE_RETURN_IF_ERROR(Guarded([&] { return Defer(t_s, kControlPredict); }));
     }
     held_ = {v, g};
     last_control_s_ = t_s;
@@ -118,12 +119,13 @@ class FastSlam::Impl {
                       "time and no control to predict with",
                       t_s));
     }
-    if (t_s < driver_.times().back()) {
+    if (t_s < LastTime()) {
       return InvalidArgumentError(
           fmt::format("scan at t = {} is before the previous time {}: times must not decrease", t_s,
-                      driver_.times().back()));
+                      LastTime()));
     }
-    if (!log_.empty() && log_.back().kind == kScanUpdate && t_s == driver_.times().back()) {
+    if (pending_.empty() && !log_.empty() && log_.back().kind == kScanUpdate &&
+        t_s == driver_.times().back()) {
       return InvalidArgumentError(fmt::format(
           "scan at t = {} follows the scan at the same time: the detections of one time are "
           "one scan",
@@ -133,9 +135,10 @@ class FastSlam::Impl {
       Status s = CheckObservation(k, z[k], !model_.unknown_association());
       if (!s.ok()) return Status(s.code(), fmt::format("scan at t = {}: {}", t_s, s.message()));
     }
-    GROVE_RETURN_IF_ERROR(driver_.CheckNotFailed("cannot take another scan"));
-    return driver_.Guarded([&]() -> Status {
-      if (t_s > driver_.times().back()) GROVE_RETURN_IF_ERROR(PredictTo(t_s, kScanPredict));
+    GROVE_RETURN_IF_ERROR(CheckNotFailed("cannot take another scan"));
+    return Guarded([&]() -> Status {
+      if (t_s > LastTime()) GROVE_RETURN_IF_ERROR(Defer(t_s, kScanPredict));
+      GROVE_RETURN_IF_ERROR(Settle());
       StepRecord record;
       record.kind = kScanUpdate;
       log_.push_back(record);
@@ -151,6 +154,48 @@ class FastSlam::Impl {
       observations_ += static_cast<int64_t>(z.size());
       return Status::Ok();
     });
+  }
+
+  // Runs the deferred predictions (Defer()): every read-out and Scan() first settles. Their
+  // error stops the engine; it is returned here and, when a read-out without a status ran
+  // them, by the next Control() or Scan() (SettleQuietly()).
+  Status Settle() {
+    if (pending_.empty()) return Status::Ok();
+    return Guarded([&]() -> Status {
+      std::vector<PendingStep> run;
+      run.swap(pending_);
+      std::vector<double> times(run.size());
+      std::vector<PredictStep> steps(run.size());
+      for (size_t j = 0; j < run.size(); ++j) {
+        times[j] = run[j].t_s;
+        steps[j] = {run[j].record.control, j == 0 && model_.segment_start()};
+      }
+      const size_t logged = log_.size();
+      const int64_t before = driver_.steps();
+      log_.reserve(logged + run.size());
+      reported_.reserve(reported_.size() + run.size());
+      for (const PendingStep& p : run) log_.push_back(p.record);
+      Status s =
+          driver_.PredictRun(std::span<const double>(times), std::span<const PredictStep>(steps));
+      // The records of the steps done (a failed step has none, as before a failure).
+      const int64_t added = driver_.steps() - before;
+      const size_t done =
+          s.ok() ? run.size() : static_cast<size_t>(std::max<int64_t>(0, added - 1));
+      log_.resize(logged + done);
+      if (done > 0) model_.set_segment_start(false);
+      const std::vector<StampedPose>& mean = driver_.mean_trajectory();
+      for (size_t j = 0; j < done; ++j) {
+        if (run[j].record.kind == kControlPredict) {
+          reported_.push_back(mean[mean.size() - done + j]);
+        }
+      }
+      return s;
+    });
+  }
+  // Settle() for a read-out that returns no status: its error waits for the next step.
+  void SettleQuietly() {
+    Status s = Settle();
+    if (!s.ok() && deferred_error_.ok()) deferred_error_ = s;
   }
 
   const FastSlamConfig& config() const { return config_; }
@@ -392,22 +437,35 @@ class FastSlam::Impl {
     double steer_rad = 0;
   };
 
-  // One prediction with the held control from the last time to t_s.
-  Status PredictTo(double t_s, StepKind kind) {
-    return driver_.Guarded([&]() -> Status {
-      StepRecord record;
-      record.control = ControlStep{held_.v_mps, held_.steer_rad, t_s - driver_.times().back()};
-      record.kind = kind;
-      log_.push_back(record);
-      Status s = driver_.Predict(t_s, record.control);
-      if (!s.ok()) {
-        log_.pop_back();
-        return s;
-      }
-      model_.set_segment_start(false);
-      if (kind == kControlPredict) reported_.push_back(driver_.mean_trajectory().back());
-      return Status::Ok();
-    });
+  // The time of the last step, deferred ones included.
+  double LastTime() const {
+    return pending_.empty() ? driver_.times().back() : pending_.back().t_s;
+  }
+
+  // A prediction with the held control from the last time to t_s, deferred to the next Settle():
+  // the predictions between two scans then run in one pass over the particles.
+  Status Defer(double t_s, StepKind kind) {
+    PendingStep p;
+    p.t_s = t_s;
+    p.record.control = ControlStep{held_.v_mps, held_.steer_rad, t_s - LastTime()};
+    p.record.kind = kind;
+    pending_.push_back(p);
+    return Status::Ok();
+  }
+
+  // The driver's CheckNotFailed(), with the error a quiet Settle() kept (once).
+  Status CheckNotFailed(const char* what) {
+    if (!deferred_error_.ok()) {
+      Status s = std::move(deferred_error_);
+      deferred_error_ = Status::Ok();
+      return s;
+    }
+    return driver_.CheckNotFailed(what);
+  }
+
+  template <typename F>
+  Status Guarded(F&& f) {
+    return driver_.Guarded(std::forward<F>(f));
   }
 
   FastSlamConfig config_;
@@ -417,7 +475,13 @@ class FastSlam::Impl {
   Model model_;
   FilterDriver<Model> driver_;
   fastslam::VehicleGeometry geometry_;
-  std::vector<StepRecord> log_;        // one per filter step
+  std::vector<StepRecord> log_;  // one per filter step
+  struct PendingStep {
+    double t_s = 0;
+    StepRecord record;
+  };
+  std::vector<PendingStep> pending_;   // deferred predictions (Defer())
+  Status deferred_error_;              // SettleQuietly()'s, for the next step
   std::vector<StampedPose> reported_;  // the mean pose at the start and each reported step
   Held held_;
   double last_control_s_ = 0;
@@ -480,22 +544,53 @@ Status FastSlam::Scan(double t_s, std::span<const LandmarkObservation> observati
   return NoThrow([&] { return impl_->Scan(t_s, observations); });
 }
 const FastSlamConfig& FastSlam::config() const { return impl_->config(); }
-int64_t FastSlam::steps() const { return impl_->steps(); }
-Pose2 FastSlam::MeanPose() const { return impl_->MeanPose(); }
-Pose2 FastSlam::HeaviestPose() const { return impl_->HeaviestPose(); }
-const std::vector<StampedPose>& FastSlam::MeanTrajectory() const { return impl_->MeanTrajectory(); }
-Pose2Covariance FastSlam::PoseCovariance() const { return impl_->PoseCovariance(); }
+// Every read-out first runs the deferred predictions (Impl::Settle()).
+int64_t FastSlam::steps() const {
+  impl_->SettleQuietly();
+  return impl_->steps();
+}
+Pose2 FastSlam::MeanPose() const {
+  impl_->SettleQuietly();
+  return impl_->MeanPose();
+}
+Pose2 FastSlam::HeaviestPose() const {
+  impl_->SettleQuietly();
+  return impl_->HeaviestPose();
+}
+const std::vector<StampedPose>& FastSlam::MeanTrajectory() const {
+  impl_->SettleQuietly();
+  return impl_->MeanTrajectory();
+}
+Pose2Covariance FastSlam::PoseCovariance() const {
+  impl_->SettleQuietly();
+  return impl_->PoseCovariance();
+}
 StatusOr<std::vector<StampedPose>> FastSlam::HeaviestTrajectory() const {
-  return NoThrow([&]() { return impl_->HeaviestTrajectory(); });
+  return NoThrow([&]() -> StatusOr<std::vector<StampedPose>> {
+    GROVE_RETURN_IF_ERROR(impl_->Settle());
+    return impl_->HeaviestTrajectory();
+  });
 }
 StatusOr<std::vector<LandmarkEstimate>> FastSlam::HeaviestLandmarks() const {
-  return NoThrow([&]() { return impl_->HeaviestLandmarks(); });
+  return NoThrow([&]() -> StatusOr<std::vector<LandmarkEstimate>> {
+    GROVE_RETURN_IF_ERROR(impl_->Settle());
+    return impl_->HeaviestLandmarks();
+  });
 }
-FastSlamSummary FastSlam::Summary() const { return impl_->Summary(); }
-Status FastSlam::CheckInvariants() const { return impl_->CheckInvariants(); }
+FastSlamSummary FastSlam::Summary() const {
+  impl_->SettleQuietly();
+  return impl_->Summary();
+}
+Status FastSlam::CheckInvariants() const {
+  GROVE_RETURN_IF_ERROR(impl_->Settle());
+  return impl_->CheckInvariants();
+}
 
 StatusOr<std::string> FastSlam::Checkpoint(std::string_view user_data) const {
-  return NoThrow([&] { return impl_->Checkpoint(user_data); });
+  return NoThrow([&]() -> StatusOr<std::string> {
+    GROVE_RETURN_IF_ERROR(impl_->Settle());
+    return impl_->Checkpoint(user_data);
+  });
 }
 
 StatusOr<std::unique_ptr<FastSlam>> FastSlam::Resume(const FastSlamConfig& config,

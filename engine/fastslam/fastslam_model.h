@@ -117,14 +117,18 @@ class FastSlamModel {
   const AssociationCounts& counts(size_t i) const { return association_.counts(i); }
   const EvolutionCounts& evolution_counts() const { return evolution_.counts(); }
 
-  // The next Predict() is the first of a path segment (after the start or a scan).
+  // Whether the next prediction is the first of a path segment (after the start or a scan): the
+  // facade marks that PredictStep (PredictStep::starts_segment); kept here for checkpoints.
+  bool segment_start() const { return segment_start_; }
   void set_segment_start(bool v) { segment_start_ = v; }
 
   // The prediction of particles [begin, end) over control c (FilterSteps::PredictPose() redoes
   // one of them).
-  Status Predict(const ControlStep& c, uint64_t step, size_t begin, size_t end, int slot) {
+  Status Predict(const PredictStep& prediction, uint64_t step, size_t begin, size_t end, int slot) {
+    const ControlStep& c = prediction.control;
+    if (prediction.starts_segment) GROVE_RETURN_IF_ERROR(StartSegments(step, begin, end, slot));
     if (traits().pose == FilterTraits::Pose::kSampledMotion) {
-      return PredictSampled(c, step, begin, end, slot);
+      return PredictSampled(c, step, prediction.starts_segment, begin, end);
     }
     const bool ekf = traits().pose == FilterTraits::Pose::kEkf;
     const bool sigma_points = traits().draws_every_scan();
@@ -139,7 +143,6 @@ class FastSlamModel {
       shared = ControlTermsOf(geometry, c.v_mps, c.steer_rad, c.dt_s);
       turn = HeadingUnit{std::cos(shared.turn_rad), std::sin(shared.turn_rad)};
     }
-    if (segment_start_) GROVE_RETURN_IF_ERROR(StartSegments(step, begin, end, slot));
     for (size_t i = begin; i < end; ++i) {
       const VehiclePose p = poses_.pose(i);
       VehiclePose next;
@@ -294,6 +297,15 @@ class FastSlamModel {
     maps_.ReleaseDead(workers);
     paths_.ReleaseDead(workers);
   }
+  // ReleaseDead() in pieces, inside the next step's batches (PieceReleasingModel).
+  void ReleaseDeadRange(size_t lo, size_t hi, int slot) {
+    maps_.ReleaseDeadRange(lo, hi, slot);
+    paths_.ReleaseDeadRange(lo, hi, slot);
+  }
+  void DeadReleased() {
+    maps_.DeadReleased();
+    paths_.DeadReleased();
+  }
 
   Status CheckCounts() const {
     GROVE_RETURN_IF_ERROR(trie_.CheckCounts(maps_.AllReferences()));
@@ -429,10 +441,10 @@ class FastSlamModel {
   }
 
   // FastSLAM 1.0's Predict(): every particle of [begin, end) at once (MoveSampled()).
-  Status PredictSampled(const ControlStep& c, uint64_t step, size_t begin, size_t end, int slot) {
-    if (segment_start_) GROVE_RETURN_IF_ERROR(StartSegments(step, begin, end, slot));
+  Status PredictSampled(const ControlStep& c, uint64_t step, bool segment_start, size_t begin,
+                        size_t end) {
     const MotionResult r =
-        steps_.PredictSampled(c, step, static_cast<uint32_t>(first_ + begin), segment_start_,
+        steps_.PredictSampled(c, step, static_cast<uint32_t>(first_ + begin), segment_start,
                               &poses_.pose(begin), &poses_.unit(begin), end - begin);
     if (r.first_failed == end - begin) return Status::Ok();
     const size_t i = begin + r.first_failed;

@@ -52,6 +52,13 @@ struct ControlStep {
   double dt_s = 0;
 };
 
+// One prediction: a control, and whether it is the first after the start or a scan (it starts
+// a path segment: fastslam_model.h).
+struct PredictStep {
+  ControlStep control;
+  bool starts_segment = false;
+};
+
 // One scan's observations (validated by the facade).
 struct ScanStep {
   std::span<const LandmarkObservation> observations;

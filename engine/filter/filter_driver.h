@@ -27,6 +27,7 @@
 #include <exception>
 #include <memory>
 #include <new>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -90,6 +91,36 @@ class FilterDriver {
   template <typename Input>
   Status Predict(double t_s, const Input& input) {
     return Step(t_s, [&] { return filter_.Predict(input); });
+  }
+
+  // Predict(times[j], inputs[j]) for each j in turn, with the same state, times, mean poses and
+  // errors, in one pass over the particles (ParticleFilter::PredictRun): what a facade uses for
+  // the predictions between two weighting steps. The particles' poses after each input are
+  // kept for the mean poses, in runs of at most kRunSampleBytes. InvalidArgument, nothing
+  // changed, for a bad time (as Predict()). Across ranks, input by input.
+  template <typename Input>
+  Status PredictRun(std::span<const double> times, std::span<const Input> inputs) {
+    GROVE_DCHECK(times.size() == inputs.size());
+    if (filter_.options().collective != nullptr || inputs.size() == 1) {
+      for (size_t j = 0; j < inputs.size(); ++j) {
+        GROVE_RETURN_IF_ERROR(Predict(times[j], inputs[j]));
+      }
+      return Status::Ok();
+    }
+    for (size_t j = 0; j < times.size(); ++j) {
+      GROVE_RETURN_IF_ERROR(CheckTime(times[j], j == 0 ? times_.back() : times[j - 1],
+                                      steps() + 1 + static_cast<int64_t>(j)));
+    }
+    GROVE_RETURN_IF_ERROR(CheckNotFailed("cannot be stepped again"));
+    const size_t n = model_->size();
+    const size_t per_run = std::max<size_t>(1, kRunSampleBytes / (sizeof(PoseSample) * n));
+    return Guarded([&]() -> Status {
+      for (size_t first = 0; first < inputs.size(); first += per_run) {
+        const size_t count = std::min(per_run, inputs.size() - first);
+        GROVE_RETURN_IF_ERROR(RunPart(times.subspan(first, count), inputs.subspan(first, count)));
+      }
+      return Status::Ok();
+    });
   }
 
   // Sets the time of the start pose; the first step must not come before it. Without it the
@@ -236,31 +267,91 @@ class FilterDriver {
   }
 
  private:
+  // A particle's pose after one input of a run, for the mean pose.
+  struct PoseSample {
+    double x, y, c, s;
+  };
+  static constexpr size_t kRunSampleBytes = size_t{32} << 20;
+
+  // InvalidArgument unless step `step`'s time t_s is finite and in order after `previous`.
+  Status CheckTime(double t_s, double previous, int64_t step) const {
+    if (Status s = CheckInput(InputField::kTime, t_s); !s.ok()) {
+      return InvalidArgumentError(fmt::format("step {}: {}", step, s.message()));
+    }
+    if (start_time_unset_ && step == steps() + 1) return Status::Ok();
+    const bool ok = order_ == TimeOrder::kIncreasing ? t_s > previous : t_s >= previous;
+    if (ok) return Status::Ok();
+    return InvalidArgumentError(
+        fmt::format("step {}: t = {} is {} the previous time {}: times must be {}", step, t_s,
+                    order_ == TimeOrder::kIncreasing ? "not after" : "before", previous,
+                    order_ == TimeOrder::kIncreasing ? "strictly increasing" : "non-decreasing"));
+  }
+
+  // Before `count` steps from time t_s on: the start time if it was unset, and room for their
+  // times and mean poses (growing geometrically), so that nothing after fails half-way for want
+  // of memory.
+  void StartStepping(double t_s, size_t count) {
+    if (start_time_unset_) {
+      times_.front() = t_s;
+      mean_.front().t_s = t_s;
+      start_time_unset_ = false;
+    }
+    if (times_.size() + count > times_.capacity()) {
+      times_.reserve(std::max(2 * times_.size() + 16, times_.size() + count));
+    }
+    if (mean_.size() + count > mean_.capacity()) {
+      mean_.reserve(std::max(2 * mean_.size() + 16, mean_.size() + count));
+    }
+  }
+
+  // One part of PredictRun(): the filter's run with the poses sampled after each input, then
+  // the times and mean poses of the inputs it completed (and the time of a failed one, as Step()).
+  template <typename Input>
+  Status RunPart(std::span<const double> times, std::span<const Input> inputs) {
+    StartStepping(times.front(), times.size());
+    const size_t n = model_->size();
+    samples_.resize(inputs.size() * n);
+    const bool current = weights_current_ && weights_.size() == n;
+    std::span<const double> lw = filter_.log_weights();
+    weights_.resize(n);
+    size_t done = 0;
+    Status status = filter_.PredictRun(
+        inputs,
+        [&](size_t j, size_t begin, size_t end) {
+          if (j == 0 && !current) FillWeights(lw, begin, end);
+          PoseSample* out = &samples_[j * n];
+          for (size_t i = begin; i < end; ++i) {
+            out[i] = {model_->x(i), model_->y(i), model_->cos_heading(i), model_->sin_heading(i)};
+          }
+        },
+        &done);
+    // A failed first input leaves batches without weights.
+    weights_current_ = current || done > 0;
+    auto t0 = std::chrono::steady_clock::now();
+    const size_t blocks = (n + kSumBlock - 1) / kSumBlock;
+    std::vector<Sum> sums =
+        workers_->template MapBlocks<Sum>(done * blocks, 1, [&](size_t k, size_t, size_t) {
+          const size_t j = k / blocks, b = (k % blocks) * kSumBlock;
+          const PoseSample* in = &samples_[j * n];
+          return SumOf(b, std::min(n, b + kSumBlock), [&](size_t i) { return in[i]; });
+        });
+    for (size_t j = 0; j < done; ++j) {
+      times_.push_back(times[j]);
+      mean_.push_back({times[j], PoseOf(std::span<const Sum>(sums).subspan(j * blocks, blocks))});
+    }
+    bookkeeping_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (status.ok()) return Status::Ok();
+    times_.push_back(times[done]);
+    return Stop(Status(status.code(), fmt::format("step {} (t = {} s): {}", filter_.steps(),
+                                                  times[done], status.message())));
+  }
+
   template <typename Run>
   Status Step(double t_s, Run&& run) {
-    if (Status s = CheckInput(InputField::kTime, t_s); !s.ok()) {
-      return InvalidArgumentError(fmt::format("step {}: {}", steps() + 1, s.message()));
-    }
     GROVE_RETURN_IF_ERROR(CheckNotFailed("cannot be stepped again"));
-    if (!start_time_unset_) {
-      const bool ok = order_ == TimeOrder::kIncreasing ? t_s > times_.back() : t_s >= times_.back();
-      if (!ok) {
-        return InvalidArgumentError(fmt::format(
-            "step {}: t = {} is {} the previous time {}: times must be {}", steps() + 1, t_s,
-            order_ == TimeOrder::kIncreasing ? "not after" : "before", times_.back(),
-            order_ == TimeOrder::kIncreasing ? "strictly increasing" : "non-decreasing"));
-      }
-    }
+    GROVE_RETURN_IF_ERROR(CheckTime(t_s, times_.back(), steps() + 1));
     return Guarded([&]() -> Status {
-      if (start_time_unset_) {
-        times_.front() = t_s;
-        mean_.front().t_s = t_s;
-        start_time_unset_ = false;
-      }
-      // Room first (growing geometrically), so that nothing below fails half-way for want of
-      // memory.
-      if (times_.size() == times_.capacity()) times_.reserve(2 * times_.size() + 16);
-      if (mean_.size() == mean_.capacity()) mean_.reserve(2 * mean_.size() + 16);
+      StartStepping(t_s, 1);
       Status status = run();
       times_.push_back(t_s);
       if (!status.ok()) {
@@ -298,31 +389,20 @@ class FilterDriver {
   // Weighted mean pose over fixed blocks (circular mean for the heading); across ranks, every
   // rank's blocks in rank order, which is block order. The weights exp(log w_i) are kept from one
   // step to the next until a weighting step changes them (a prediction does not).
+  struct Sum {
+    double w = 0, x = 0, y = 0, c = 0, s = 0;
+  };
   StatusOr<Pose2> ComputeMeanPose() {
     auto lw = filter_.log_weights();
-    struct Sum {
-      double w = 0, x = 0, y = 0, c = 0, s = 0;
-    };
     const bool current = weights_current_ && weights_.size() == lw.size();
     weights_.resize(lw.size());
     std::vector<Sum> sums = workers_->template MapBlocks<Sum>(
         model_->size(), kSumBlock, [&](size_t, size_t b, size_t e) {
-          if (!current) {
-            // After resampling every weight is the same: one exp, not one per particle.
-            for (size_t i = b; i < e; ++i) {
-              weights_[i] = i == b || lw[i] != lw[i - 1] ? std::exp(lw[i]) : weights_[i - 1];
-            }
-          }
-          Sum s;
-          for (size_t i = b; i < e; ++i) {
-            const double w = weights_[i];
-            s.w += w;
-            s.x += w * model_->x(i);
-            s.y += w * model_->y(i);
-            s.c += w * model_->cos_heading(i);
-            s.s += w * model_->sin_heading(i);
-          }
-          return s;
+          if (!current) FillWeights(lw, b, e);
+          return SumOf(b, e, [&](size_t i) {
+            return PoseSample{model_->x(i), model_->y(i), model_->cos_heading(i),
+                              model_->sin_heading(i)};
+          });
         });
     weights_current_ = true;
     if (Collective* ranks = filter_.options().collective; ranks != nullptr) {
@@ -330,6 +410,35 @@ class FilterDriver {
       GROVE_RETURN_IF_ERROR(AllGatherValues<Sum>(*ranks, sums, &all));
       sums.swap(all);
     }
+    return PoseOf(sums);
+  }
+
+  // weights_[i] = exp(lw[i]) for i in [b, e); after resampling every weight is the same: one
+  // exp, not one per particle. (The same values however [b, e) is cut.)
+  void FillWeights(std::span<const double> lw, size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) {
+      weights_[i] = i == b || lw[i] != lw[i - 1] ? std::exp(lw[i]) : weights_[i - 1];
+    }
+  }
+
+  // The weighted sums of particles [b, e), added in index order; pose(i) gives a PoseSample.
+  template <typename PoseOfParticle>
+  Sum SumOf(size_t b, size_t e, PoseOfParticle&& pose) const {
+    Sum s;
+    for (size_t i = b; i < e; ++i) {
+      const double w = weights_[i];
+      const PoseSample p = pose(i);
+      s.w += w;
+      s.x += w * p.x;
+      s.y += w * p.y;
+      s.c += w * p.c;
+      s.s += w * p.s;
+    }
+    return s;
+  }
+
+  // The mean pose of the blocks' sums, added in block order.
+  static Pose2 PoseOf(std::span<const Sum> sums) {
     Sum total;
     for (const Sum& s : sums) {
       total.w += s.w;
@@ -349,8 +458,9 @@ class FilterDriver {
   std::vector<double> times_;  // times_[k]: time of the state after step k (k = 0: the start)
   std::vector<StampedPose> mean_;
   double bookkeeping_s_ = 0;
-  std::vector<double> weights_;   // exp of the log weights, for the mean pose
-  bool weights_current_ = false;  // weights_ holds the filter's weights now
+  std::vector<double> weights_;      // exp of the log weights, for the mean pose
+  std::vector<PoseSample> samples_;  // PredictRun(): the poses after each input of a part
+  bool weights_current_ = false;     // weights_ holds the filter's weights now
   bool start_time_unset_ = true;
   bool failed_ = false;
 };

@@ -8,14 +8,16 @@
 //   3. resample when ESS / N < threshold (threshold 1 resamples every step): parents are drawn
 //      (systematic by default, in parallel), the model gathers the new generation (O(1) per
 //      particle: maps are shared) and releases the dead one, both in parallel (a
-//      PieceReleasingModel in a filter alone releases it during the next advance instead);
+//      PieceReleasingModel in a filter alone releases it in pieces inside the next parallel
+//      loop over the particles instead: complete, or the next step's);
 //   4. complete (optional): a model whose weights do not depend on what it draws (FastSLAM
 //      2.0) draws and updates after resampling, in parallel over batches;
 //   5. population (optional): a model that needs the whole population once its particles are
 //      drawn (moving them towards the best one, as differential evolution does) gets it last:
 //      after complete, or for a model without it after advance (then before normalising).
 // One Predict() propagates every particle without weighting (a landmark filter predicts at the
-// control rate and weights only at scans). Both count as one step of the random streams.
+// control rate and weights only at scans); PredictRun() does several in one parallel loop. Each
+// input counts as one step of the random streams.
 // Sums over particles are taken over fixed blocks and every draw comes from a counter-based
 // stream, so the same seed gives bit-identical weights at any thread count. A batch that fails
 // returns a Status; the step's result is the failure of the lowest failing batch, so the same
@@ -36,6 +38,7 @@
 #include <utility>
 #include <vector>
 
+#include "alloc/check.h"
 #include "concurrency/worker_pool.h"
 #include "engine/filter/filter_model.h"
 #include "engine/filter/filter_options.h"
@@ -166,9 +169,18 @@ class ParticleFilter {
     }
     if constexpr (CompletingModel<Model, Input>) {
       auto t3 = Clock::now();
+      // A generation just resampled is freed here, in pieces, before the draws copy the maps.
+      const bool release_now = release_pending_;
       status = ForBatches([&](int slot, size_t begin, size_t end) {
+        if constexpr (PieceReleasingModel<Model>) {
+          if (release_now) model_->ReleaseDeadRange(DeadFrom(begin), DeadFrom(end), slot);
+        }
         return model_->Complete(input, step_, begin, end, slot);
       });
+      if constexpr (PieceReleasingModel<Model>) {
+        if (release_now) model_->DeadReleased();
+      }
+      release_pending_ = false;
       if constexpr (PopulationModel<Model, Input>) {
         if (status.ok()) status = model_->Population(input, step_, *workers_);
       }
@@ -181,14 +193,65 @@ class ParticleFilter {
   // Runs one predict-only step: every particle is propagated on `input`, no weight changes.
   template <typename Input>
   requires PredictingModel<Model, Input> Status Predict(const Input& input) {
+    size_t done = 0;
+    return PredictRun(
+        std::span<const Input>(&input, 1), [](size_t, size_t, size_t) {}, &done);
+  }
+
+  // Predict() on each of `inputs` in turn, in one pass over the particles: each batch runs
+  // through every input before it ends, so a run costs one parallel loop, not one per input.
+  // after(j, begin, end) runs on a batch once input j has moved it. *done gets the inputs every
+  // particle completed; on an error it is the failing input's index, the error is that of its
+  // lowest failing particle (as Predict() on each in turn would return) and the particles are
+  // partly advanced. Across ranks, one input at a time (the ranks agree on each step's status).
+  template <typename Input, typename After>
+  requires PredictingModel<Model, Input> Status PredictRun(std::span<const Input> inputs,
+                                                           After&& after, size_t* done) {
+    GROVE_DCHECK(options_.collective == nullptr || inputs.size() == 1);
     auto t0 = std::chrono::steady_clock::now();
-    FinishRelease();
+    bool release = release_pending_;
+    if constexpr (!PieceReleasingModel<Model>) {
+      FinishRelease();
+      release = false;
+    }
+    const size_t batch = BatchSize(*workers_, log_w_.size(), options_.batch);
+    failed_input_.assign((log_w_.size() + batch - 1) / batch, inputs.size());
     Status status = ForBatches([&](int slot, size_t begin, size_t end) {
-      return model_->Predict(input, step_, begin, end, slot);
+      if constexpr (PieceReleasingModel<Model>) {
+        if (release) model_->ReleaseDeadRange(DeadFrom(begin), DeadFrom(end), slot);
+      }
+      for (size_t j = 0; j < inputs.size(); ++j) {
+        Status s = model_->Predict(inputs[j], step_ + j, begin, end, slot);
+        if (!s.ok()) {
+          failed_input_[begin / batch] = j;
+          return s;
+        }
+        after(j, begin, end);
+      }
+      return Status::Ok();
     });
+    if constexpr (PieceReleasingModel<Model>) {
+      if (release) model_->DeadReleased();
+    }
+    release_pending_ = false;
+    *done = inputs.size();
+    if (!status.ok()) {
+      // `status` is the lowest failing batch's (moved out); the lowest failing input's lowest
+      // failing batch may be a later one.
+      size_t lowest = failed_input_.size(), best = 0;
+      for (size_t b = 0; b < failed_input_.size(); ++b) {
+        if (failed_input_[b] == inputs.size()) continue;
+        if (lowest == failed_input_.size()) lowest = b;
+        if (failed_input_[b] < *done) {
+          *done = failed_input_[b];
+          best = b;
+        }
+      }
+      if (best != lowest) status = std::move(batch_status_[best]);
+    }
     if (options_.collective != nullptr) status = AgreeStatus(*options_.collective, status);
     times_.advance_s += Seconds(std::chrono::steady_clock::now() - t0);
-    ++step_;
+    step_ += status.ok() ? inputs.size() : *done + 1;
     return status;
   }
 
@@ -504,6 +567,7 @@ class ParticleFilter {
   bool options_checked_ = false;
   bool release_pending_ = false;  // the dead generation waits for the next advance
   std::vector<Status> batch_status_;
+  std::vector<size_t> failed_input_;  // PredictRun(): per batch, the input it failed at
   size_t heaviest_ = 0;
   uint64_t step_ = 0;
   uint64_t resamplings_ = 0;

@@ -186,8 +186,8 @@ TEST(ParticleFilterTest, ReleasingInPiecesGivesTheSameResults) {
 }
 
 // Each batch of the next advance releases a piece; the pieces partition the dead generation.
-// Between steps the dead generation is still held (and counted), and a step without an advance
-// (Predict) releases it whole first.
+// Between steps the dead generation is still held (and counted); a prediction releases it in
+// pieces as a weighting step does.
 TEST(ParticleFilterTest, TheNextAdvanceReleasesTheDeadGenerationInPieces) {
   WorkerPool workers(2);
   PieceToyModel model(2000, workers.num_slots());
@@ -202,8 +202,11 @@ TEST(ParticleFilterTest, TheNextAdvanceReleasesTheDeadGenerationInPieces) {
   EXPECT_EQ(model.generations_, 19);  // the 20th waits for the next advance
   EXPECT_EQ(model.whole_releases_, 0);
   EXPECT_EQ(model.bad_partitions_, 0);
+  // A prediction is an advance too: it releases the 20th in pieces.
   ASSERT_TRUE(filter.Predict(Shift{1.0}).ok());
-  EXPECT_EQ(model.whole_releases_, 1);
+  EXPECT_EQ(model.generations_, 20);
+  EXPECT_EQ(model.whole_releases_, 0);
+  EXPECT_EQ(model.bad_partitions_, 0);
   ASSERT_TRUE(model.CheckCounts().ok()) << model.CheckCounts().ToString();
 }
 
@@ -253,6 +256,82 @@ TEST(ParticleFilterTest, PredictMovesWithoutWeightingOrResampling) {
   for (size_t i = 0; i < before.size(); ++i) moved += model.x()[i] - before[i];
   EXPECT_NEAR(moved / before.size(), 2.0, 0.05);
   EXPECT_TRUE(model.CheckCounts().ok()) << model.CheckCounts().ToString();
+}
+
+// A run of predictions in one pass gives the state and step count of one Predict() per input,
+// and calls after(j, ...) once per input on batches that cover every particle.
+TEST(ParticleFilterTest, PredictRunEqualsOnePredictPerInput) {
+  const std::vector<Shift> shifts = {{0.5}, {-1.0}, {2.0}, {0.25}};
+  std::vector<double> x_each;
+  for (int threads : {1, 2}) {
+    WorkerPool workers(threads);
+    ToyModel a(1000, workers.num_slots()), b(1000, workers.num_slots());
+    FilterOptions options;
+    options.resample_threshold = 1.0;
+    ParticleFilter<ToyModel> each(&a, &workers, options), run(&b, &workers, options);
+    ASSERT_TRUE(each.Update(0.5).ok());
+    ASSERT_TRUE(run.Update(0.5).ok());
+    for (const Shift& s : shifts) ASSERT_TRUE(each.Predict(s).ok());
+    std::vector<size_t> covered(shifts.size(), 0);
+    std::mutex mu;
+    size_t done = 0;
+    ASSERT_TRUE(run.PredictRun(
+                       std::span<const Shift>(shifts),
+                       [&](size_t j, size_t begin, size_t end) {
+                         std::lock_guard<std::mutex> lock(mu);
+                         covered[j] += end - begin;
+                       },
+                       &done)
+                    .ok());
+    EXPECT_EQ(done, shifts.size());
+    EXPECT_EQ(run.steps(), each.steps());
+    EXPECT_EQ(b.x(), a.x()) << threads << " threads";
+    EXPECT_EQ(covered, std::vector<size_t>(shifts.size(), 1000));
+    if (threads == 1) x_each = a.x();
+    EXPECT_EQ(b.x(), x_each) << "the run depends on the thread count";
+    EXPECT_TRUE(b.CheckCounts().ok()) << b.CheckCounts().ToString();
+  }
+}
+
+// A run's error is the lowest failing input's, of its lowest failing particle, as one Predict()
+// per input would return it, whatever the batches.
+class FailingPredictModel {
+ public:
+  size_t size() const { return 3000; }
+  Status Advance(const int&, uint64_t, size_t, size_t, int, double*) { return Status::Ok(); }
+  // Input j fails at particles i with i % 1000 == fail_at[j] (none if negative).
+  Status Predict(const std::vector<int>& fail_at, uint64_t step, size_t b, size_t e, int) {
+    const int f = fail_at[step % fail_at.size()];
+    for (size_t i = b; i < e; ++i) {
+      if (f >= 0 && static_cast<int>(i % 1000) == f) {
+        return OutOfRangeError("step " + std::to_string(step) + " particle " + std::to_string(i));
+      }
+    }
+    return Status::Ok();
+  }
+  void Gather(std::span<const uint32_t>, WorkerPool&) {}
+  void ReleaseDead(WorkerPool&) {}
+};
+
+TEST(ParticleFilterTest, PredictRunReportsTheLowestFailingInputAndParticle) {
+  // Input 1 fails late in the particles, input 2 early: the run stops at input 1's particle 900.
+  const std::vector<int> fail_at = {-1, 900, 5, -1};
+  std::vector<std::vector<int>> inputs(4, fail_at);
+  for (int threads : {1, 2}) {
+    for (size_t batch : {64, 4096}) {
+      WorkerPool workers(threads);
+      FailingPredictModel model;
+      FilterOptions options;
+      options.batch = batch;
+      ParticleFilter<FailingPredictModel> filter(&model, &workers, options);
+      size_t done = 0;
+      Status s = filter.PredictRun(
+          std::span<const std::vector<int>>(inputs), [](size_t, size_t, size_t) {}, &done);
+      EXPECT_EQ(s.message(), "step 1 particle 900") << threads << " threads, batch " << batch;
+      EXPECT_EQ(done, 1u);
+      EXPECT_EQ(filter.steps(), 2u);  // the failed step counts, as Predict()'s does
+    }
+  }
 }
 
 // A model whose particles fail in several batches: the step reports the lowest failing

@@ -28,10 +28,9 @@ class Evolution {
     uint64_t step = 0;
     Scan(step++);
     EXPECT_TRUE(model_.Population(ScanStep{first_}, step - 1, workers_).ok());
-    model_.set_segment_start(true);
     for (int k = 0; k < 16; ++k) {
-      EXPECT_TRUE(model_.Predict(ControlStep{3.0, 0.05, 0.025}, step++, 0, model_.size(), 0).ok());
-      model_.set_segment_start(false);
+      const PredictStep c{{3.0, 0.05, 0.025}, /*starts_segment=*/k == 0};
+      EXPECT_TRUE(model_.Predict(c, step++, 0, model_.size(), 0).ok());
     }
     step_ = step;
     Scan(step_);

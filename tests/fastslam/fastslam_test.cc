@@ -314,6 +314,69 @@ TEST(FastSlamInput, BadInputLeavesTheEngineUnchanged) {
   EXPECT_TRUE((*slam)->Control(0.05, 3, 0).ok());  // a control at the scan's time is not
 }
 
+// The predictions between two scans wait for the next scan or read-out and then run in one
+// pass: reading the mean pose after every control (one pass per control) changes nothing.
+TEST_P(ByFilter, ReadingAfterEveryControlGivesTheSameRun) {
+  tools::BaileySimOptions o = tools::WebmapPreset();
+  o.loops = 1;
+  const BaileySimulation sim = Simulate(o);
+  auto deferred = FastSlam::Create(Config(GetParam(), 60, 2));
+  auto settled = FastSlam::Create(Config(GetParam(), 60, 2));
+  ASSERT_TRUE(deferred.ok() && settled.ok());
+  Feed(sim, deferred->get(), 1500);
+  size_t z = 0;
+  std::vector<LandmarkObservation> scan;
+  for (size_t k = 0; k < 1500; ++k) {
+    const tools::BaileyControl& c = sim.controls[k];
+    ASSERT_TRUE((*settled)->Control(c.t_s, c.speed_mps, c.steer_rad).ok());
+    EXPECT_EQ((*settled)->MeanPose().x_m, (*settled)->MeanTrajectory().back().pose.x_m);
+    const double upper = sim.controls[k + 1].t_s;
+    while (z < sim.observations.size() && sim.observations[z].t_s < upper) {
+      const double t = sim.observations[z].t_s;
+      scan.clear();
+      for (; z < sim.observations.size() && sim.observations[z].t_s == t; ++z) {
+        scan.push_back(
+            {sim.observations[z].range_m, sim.observations[z].bearing_rad, sim.observations[z].id});
+      }
+      ASSERT_TRUE((*settled)->Scan(t, scan).ok());
+    }
+  }
+  EXPECT_EQ((*settled)->steps(), (*deferred)->steps());
+  EXPECT_EQ(Fingerprint(**settled), Fingerprint(**deferred));
+  // One pass per control takes more parallel loops than one pass per scan interval.
+  EXPECT_GT((*settled)->Summary().loops, (*deferred)->Summary().loops);
+}
+
+// A prediction that fails (here a noisy steering angle outside what the vehicle model can use)
+// is reported by the scan or read-out that ran it, with its step and time; after a read-out
+// without a status, by the next step.
+TEST(FastSlamInput, ADeferredPredictionErrorReachesTheNextCall) {
+  FastSlamConfig config = Config(FastSlamFilter::kFastSlam1, 50);
+  config.vehicle = FastSlamVehicle::kGuivantNebot;  // its steering must keep tan(G) H / L < 1
+  config.sigma_steer_rad = 1.0;
+  for (bool read_out_first : {false, true}) {
+    auto slam = FastSlam::Create(config);
+    ASSERT_TRUE(slam.ok());
+    ASSERT_TRUE((*slam)->Control(0.0, 3.0, 1.2).ok());
+    ASSERT_TRUE((*slam)->Control(0.025, 3.0, 1.2).ok());  // deferred: not yet run
+    Status s;
+    if (read_out_first) {
+      (void)(*slam)->MeanPose();
+      s = (*slam)->Control(0.05, 3.0, 0.0);
+    } else {
+      s = (*slam)->Scan(0.04, {});
+    }
+    EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition) << s.message();
+    EXPECT_NE(s.message().find("step 1 (t = 0.025 s): particle "), std::string::npos)
+        << s.message();
+    EXPECT_NE(s.message().find("steering angle is outside"), std::string::npos) << s.message();
+    Status later = (*slam)->Control(1.0, 3.0, 0.0);
+    EXPECT_EQ(later.code(), StatusCode::kFailedPrecondition);
+    EXPECT_NE(later.message().find("stopped at an earlier error"), std::string::npos)
+        << later.message();
+  }
+}
+
 TEST(FastSlamConfigTest, ValidateNamesTheField) {
   FastSlamConfig c;
   c.sigma_range_m = -1;

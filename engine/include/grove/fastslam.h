@@ -15,6 +15,10 @@
 // Time: the first Control() sets the start time (the start pose is at it). A control holds
 // from its time until the next control's (zero-order hold); every call predicts from the last
 // time to its own with the held control, one Euler step per call. Scan() then updates.
+// Predictions are deferred: Control() checks its input and records the step; the next Scan()
+// or read-out runs every recorded prediction in one pass over the particles (one parallel loop
+// for the controls between two scans, not one per control), with the same result as running
+// each at once.
 //
 // Thread safety: a FastSlam is driven by one thread at a time (no two calls overlap, const
 // read-outs included); it runs its own worker threads inside each call. Two engines in one
@@ -299,8 +303,11 @@ class GROVE_EXPORT FastSlam {
   // t_s with the control held so far (the first call sets the start time), then holds this one.
   // InvalidArgument, the engine unchanged, for a value outside grove/input_rules.h's bounds
   // (CheckInput, CheckSteering) or a time not after the previous control's and not at or after
-  // the last scan's. Any other error stopped the engine (its message says so): every later step
-  // returns FailedPrecondition.
+  // the last scan's. The prediction itself runs with the next Scan() or read-out (see Time
+  // above): an error inside it (a particle's pose not finite, its noisy steering outside what
+  // the vehicle model can use) stops the engine and is returned, with the step and time it
+  // happened at, by that Scan() or read-out, or by the next Control() or Scan() when the
+  // read-out returns no status. Every later step returns FailedPrecondition.
   Status Control(double t_s, double speed_mps, double steer_rad);
 
   // A scan at t_s (at or after the last time): predicts to t_s with the held control, then
