@@ -304,13 +304,23 @@ class FilterDriver {
     }
   }
 
-  // One part of PredictRun(): the filter's run with the poses sampled after each input, then
-  // the times and mean poses of the inputs it completed (and the time of a failed one, as Step()).
+  // One part of PredictRun(): the filter's run, then the times and mean poses of the inputs it
+  // completed (and the time of a failed one, as Step()). With one thread the batches run in
+  // particle order, so each input's block sums are added up as the run goes, in the order
+  // SumOf() adds them; with more, the poses after each input are kept (samples_) and summed
+  // over (input, block) in parallel afterwards.
   template <typename Input>
   Status RunPart(std::span<const double> times, std::span<const Input> inputs) {
     StartStepping(times.front(), times.size());
     const size_t n = model_->size();
-    samples_.resize(inputs.size() * n);
+    const size_t blocks = (n + kSumBlock - 1) / kSumBlock;
+    const bool in_order = workers_->num_threads() == 1;
+    std::vector<Sum> sums;
+    if (in_order) {
+      sums.assign(inputs.size() * blocks, Sum{});
+    } else {
+      samples_.resize(inputs.size() * n);
+    }
     const bool current = weights_current_ && weights_.size() == n;
     std::span<const double> lw = filter_.log_weights();
     weights_.resize(n);
@@ -319,22 +329,32 @@ class FilterDriver {
         inputs,
         [&](size_t j, size_t begin, size_t end) {
           if (j == 0 && !current) FillWeights(lw, begin, end);
-          PoseSample* out = &samples_[j * n];
-          for (size_t i = begin; i < end; ++i) {
-            out[i] = {model_->x(i), model_->y(i), model_->cos_heading(i), model_->sin_heading(i)};
+          if (in_order) {
+            // In a local per block: the compiler keeps the chain of adds in registers.
+            for (size_t b = begin; b < end;) {
+              const size_t e = std::min(end, (b / kSumBlock + 1) * kSumBlock);
+              Sum& total = sums[j * blocks + b / kSumBlock];
+              Sum local = total;
+              for (size_t i = b; i < e; ++i) Add(&local, weights_[i], SampleOf(i));
+              total = local;
+              b = e;
+            }
+            return;
           }
+          PoseSample* out = &samples_[j * n];
+          for (size_t i = begin; i < end; ++i) out[i] = SampleOf(i);
         },
         &done);
     // A failed first input leaves batches without weights.
     weights_current_ = current || done > 0;
     auto t0 = std::chrono::steady_clock::now();
-    const size_t blocks = (n + kSumBlock - 1) / kSumBlock;
-    std::vector<Sum> sums =
-        workers_->template MapBlocks<Sum>(done * blocks, 1, [&](size_t k, size_t, size_t) {
-          const size_t j = k / blocks, b = (k % blocks) * kSumBlock;
-          const PoseSample* in = &samples_[j * n];
-          return SumOf(b, std::min(n, b + kSumBlock), [&](size_t i) { return in[i]; });
-        });
+    if (!in_order) {
+      sums = workers_->template MapBlocks<Sum>(done * blocks, 1, [&](size_t k, size_t, size_t) {
+        const size_t j = k / blocks, b = (k % blocks) * kSumBlock;
+        const PoseSample* in = &samples_[j * n];
+        return SumOf(b, std::min(n, b + kSumBlock), [&](size_t i) { return in[i]; });
+      });
+    }
     for (size_t j = 0; j < done; ++j) {
       times_.push_back(times[j]);
       mean_.push_back({times[j], PoseOf(std::span<const Sum>(sums).subspan(j * blocks, blocks))});
@@ -399,10 +419,7 @@ class FilterDriver {
     std::vector<Sum> sums = workers_->template MapBlocks<Sum>(
         model_->size(), kSumBlock, [&](size_t, size_t b, size_t e) {
           if (!current) FillWeights(lw, b, e);
-          return SumOf(b, e, [&](size_t i) {
-            return PoseSample{model_->x(i), model_->y(i), model_->cos_heading(i),
-                              model_->sin_heading(i)};
-          });
+          return SumOf(b, e, [&](size_t i) { return SampleOf(i); });
         });
     weights_current_ = true;
     if (Collective* ranks = filter_.options().collective; ranks != nullptr) {
@@ -421,19 +438,21 @@ class FilterDriver {
     }
   }
 
+  PoseSample SampleOf(size_t i) const {
+    return {model_->x(i), model_->y(i), model_->cos_heading(i), model_->sin_heading(i)};
+  }
+  static void Add(Sum* s, double w, const PoseSample& p) {
+    s->w += w;
+    s->x += w * p.x;
+    s->y += w * p.y;
+    s->c += w * p.c;
+    s->s += w * p.s;
+  }
   // The weighted sums of particles [b, e), added in index order; pose(i) gives a PoseSample.
   template <typename PoseOfParticle>
   Sum SumOf(size_t b, size_t e, PoseOfParticle&& pose) const {
     Sum s;
-    for (size_t i = b; i < e; ++i) {
-      const double w = weights_[i];
-      const PoseSample p = pose(i);
-      s.w += w;
-      s.x += w * p.x;
-      s.y += w * p.y;
-      s.c += w * p.c;
-      s.s += w * p.s;
-    }
+    for (size_t i = b; i < e; ++i) Add(&s, weights_[i], pose(i));
     return s;
   }
 
