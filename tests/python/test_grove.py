@@ -637,6 +637,7 @@ class FastSlamTest(unittest.TestCase):
         self.assertEqual(resumed.landmarks().tobytes(), whole.landmarks().tobytes())
         self.assertEqual(repr(whole), "grove.FastSlam(particles=50, seed=3, threads=1)")
         self.assertEqual(grove.FastSlam(filter="fastslam1").config["filter"], "fastslam1")
+        self.assertEqual(grove.FastSlam(association="jcbb").config["association"], "jcbb")
 
     def test_errors(self):
         f = grove.FastSlam(self.CONFIG)
