@@ -178,7 +178,8 @@ struct GROVE_EXPORT FastSlamConfig : FilterConfig {
   // Default: kKnown.
   FastSlamAssociation association = FastSlamAssociation::kKnown;
   // Gates, in gate_unit. Range: (0, 1e6] (probabilities: (0, 1)); augment >= reject.
-  // Defaults: Bailey's 4 and 25 (squared Mahalanobis distances).
+  // Defaults: Bailey's 4 and 25 (squared Mahalanobis distances). Under kJointCompatibility the
+  // reject gate is each pair's individual gate, and its chi-square confidence the joint test's.
   double reject_gate = 4.0;
   double augment_gate = 25.0;
   FastSlamGateUnit gate_unit = FastSlamGateUnit::kDistance2;
