@@ -6,7 +6,8 @@ webmap is simulated (2 loops) and filtered once with the simulator's ids (known 
 and once per association rule given, the ids then only tagging the landmarks they create. Per
 seed it prints the path RMSE of the weighted-mean pose, the landmarks mapped twice (the
 heaviest map's landmarks whose source id another landmark also has) against the landmarks seen,
-what the association did along the heaviest particle's ancestry (new, ignored, removed), and the
+what the association did along the heaviest particle's ancestry (new, ignored, removed; under
+jcbb the scans whose search stopped at its node budget, when the summary has them), and the
 drift at the loop: the weighted-mean position and heading error when the vehicle first comes
 back within 10 m of its start, with a lower bound on the squared Mahalanobis distance at which a
 landmark of the first loop then appears, |position error|^2 / (2 (r sb)^2) for a landmark at
@@ -14,7 +15,7 @@ r = 20 m (the sensor's larger axis doubled for the landmark's own covariance; he
 adds to it). The augment gate is 25.
 
   bench/studies/fastslam_loop_closure.py GROVE [--seeds 1-10] [--particles 100]
-      [--filter fastslam2] [--associations ml,sampled] [-- extra run flags]
+      [--filter fastslam2] [--associations ml,sampled,jcbb] [-- extra run flags]
 
 Prints Markdown tables: one row per seed, then the mean and the range over seeds.
 """
@@ -82,6 +83,7 @@ def run(grove, sim, out, association, seed, args, extra):
         "new": a.get("created", 0),
         "ignored": a.get("ignored", 0),
         "removed": a.get("removed", 0),
+        "truncated": a.get("truncated", 0),
         "dp": dp,
         "dh_deg": math.degrees(dh),
         "d2": dp * dp / (2 * (20 * sb) ** 2),
@@ -140,7 +142,8 @@ def main():
               f"({ul:.2f}..{uh:.2f}), ratio of means {um / km:.2f} (target <= 1.2); mapped "
               f"twice {twice} of {seen} seen ({100 * twice / seen:.1f} %, target <= 5 %); "
               f"per seed {min(r['twice'] for r in results[a])}.."
-              f"{max(r['twice'] for r in results[a])}\n")
+              f"{max(r['twice'] for r in results[a])}; scans at the search's node budget "
+              f"{sum(r['truncated'] for r in results[a])}\n")
 
 
 if __name__ == "__main__":

@@ -30,7 +30,7 @@ namespace {
 // FastSLAM's checkpoints. The body layout's version is bumped whenever it changes.
 // Version 3: the seed's filters (their configuration fields, evolution counts).
 // Version 4: the rank and rank count of the share it holds.
-constexpr CheckpointFormat kFastSlamCheckpoint = {"grove fastslam", "FastSLAM", 4};
+constexpr CheckpointFormat kFastSlamCheckpoint = {"grove fastslam", "FastSLAM", 5};
 
 // The landmark trees' degree, 2^kLog2Degree (engine/fastslam/README.md, "FastSLAM 1.0 and 2.0:
 // accuracy and speed", has the measurement).

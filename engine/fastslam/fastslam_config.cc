@@ -69,13 +69,14 @@ const std::vector<ConfigField<FastSlamConfig>>& FastSlamConfigFields() {
                        "de_srcd: differential evolution's crossover probability Cr"),
              IntegerField("de_generations", &C::de_generations, 0, 255, kChangesResults,
                           "de_srcd: differential evolution's generations per scan"),
-             ChoiceField("association", &C::association, {"known", "ml", "ml_exclusive", "sampled"},
-                         kChangesResults,
+             ChoiceField("association", &C::association,
+                         {"known", "ml", "ml_exclusive", "sampled", "jcbb"}, kChangesResults,
                          "Data association: known (observation ids), ml (maximum likelihood with "
                          "gates), ml_exclusive (ml, one landmark per detection in a scan), sampled "
-                         "(each particle draws its associations, a new landmark included)"),
+                         "(each particle draws its associations, a new landmark included), jcbb "
+                         "(joint compatibility branch and bound per scan)"),
              RealField("reject_gate", &C::reject_gate, I::LeftOpen(0, 1e6), kChangesResults,
-                       "ml: associate inside this gate (gate_unit)"),
+                       "ml, jcbb: associate inside this gate (gate_unit)"),
              RealField("augment_gate", &C::augment_gate, I::LeftOpen(0, 1e6), kChangesResults,
                        "ml: a new landmark beyond this gate of every landmark (gate_unit)"),
              ChoiceField("gate_unit", &C::gate_unit, {"distance2", "probability"}, kChangesResults,
@@ -172,6 +173,10 @@ std::string FastSlamSummary::BriefReport() const {
                             association.associated, association.created, association.ignored,
                             association.removed, association.dropped, association.wrong,
                             association.tagged)) +
+         (association.truncated == 0
+              ? std::string()
+              : fmt::format(" {} scans stopped at the joint compatibility search's node budget.",
+                            association.truncated)) +
          (evolution.trials == 0 ? std::string()
                                 : fmt::format(" Differential evolution: {} of {} trial poses "
                                               "accepted.",

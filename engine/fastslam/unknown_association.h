@@ -3,8 +3,10 @@
 //
 // The map is keyed by SpatialKey (a landmark's cell and a slot in it) instead of by id. At a
 // scan each particle finds the candidates of every detection with a range query of its own trie,
-// decides with the gates (data_association.h; Decide()) or, under `sampled`, draws the
-// decisions (association_sampling.h; kept with the query, since a draw is not redone), adds the
+// decides with the gates (data_association.h; Decide()) or, under `jcbb`, by joint compatibility
+// (joint_compatibility.h; both redone from the kept matches when needed again) or, under
+// `sampled`, draws the decisions (association_sampling.h; kept with the query, since a draw is
+// not redone), adds the
 // associated detections' likelihoods and p0 for the others (FastSlamModel), and then (FastSLAM 1.0
 // in Advance, 2.0 in Complete from the drawn pose; Apply()) updates the associated landmarks,
 // lowers the evidence of those in view and not seen (removing the ones below the threshold; the
@@ -34,6 +36,7 @@
 #include "engine/fastslam/data_association.h"
 #include "engine/fastslam/filter_steps.h"
 #include "engine/fastslam/filter_traits.h"
+#include "engine/fastslam/joint_compatibility.h"
 #include "engine/fastslam/spatial_key.h"
 #include "engine/filter/generation.h"
 #include "engine/io/checkpoint_io.h"
@@ -64,6 +67,8 @@ class UnknownAssociation {
     // Sampled association: the scan's log T - log L_drawn summed over detections
     // (association_sampling.h), to add to the particle's log-weight.
     double log_correction = 0;
+    JointCompatibility jcbb;
+    bool truncated = false;  // jcbb: the decisions' search stopped at its node budget
   };
 
   // The association state of `n` particles, the first of them the filter's particle `first`,
@@ -82,6 +87,7 @@ class UnknownAssociation {
                 traits.map == FilterTraits::Map::kCentralDifference ? config.cd_step : 0},
         log_p0_(NewLandmarkLogLikelihood(params_.noise, params_.augment_gate)),
         sampled_(config.association == FastSlamAssociation::kSampled),
+        joint_(config.association == FastSlamAssociation::kJointCompatibility),
         seed_(config.seed),
         evidence_(config.evidence == FastSlamEvidence::kOn),
         evidence_threshold_(config.evidence_threshold),
@@ -100,11 +106,12 @@ class UnknownAssociation {
   Scratch& scratch(int slot) const { return scratch_[slot]; }
 
   // Before each scan's update: the longest range so far bounds the landmarks' covariances
-  // (SearchRadius()).
+  // (SearchRadius()); jcbb's joint gates reach the scan's size.
   void NoteScan(const ScanStep& scan) {
     for (const LandmarkObservation& z : scan.observations)
       max_range_ = std::max(max_range_, z.range_m);
     scan_size_ = scan.observations.size();
+    if (joint_) ExtendJointGates(params_.reject_gate, scan_size_, &joint_gates_);
   }
 
   // The query and decisions of particle i's scan (filter step `step`) against its map `root`
@@ -125,7 +132,7 @@ class UnknownAssociation {
       sc->decisions = sc->query.drawn;
       return Status::Ok();
     }
-    Decide(sc->query.matches, scan.observations.size(), params_, &sc->decisions);
+    DecideBy(sc->query.matches, scan.observations.size(), sc);
     return Status::Ok();
   }
 
@@ -138,7 +145,7 @@ class UnknownAssociation {
     Scratch& sc = scratch_[slot];
     if (sampled_) return pending_[i].drawn;
     sc.query.matches = pending_[i].matches;  // Decide() reorders them
-    Decide(sc.query.matches, scan.observations.size(), params_, &sc.decisions);
+    DecideBy(sc.query.matches, scan.observations.size(), &sc);
     return sc.decisions;
   }
 
@@ -150,7 +157,7 @@ class UnknownAssociation {
     if (sampled_) {
       sc.decisions = sc.query.drawn;
     } else {
-      Decide(sc.query.matches, scan.observations.size(), params_, &sc.decisions);
+      DecideBy(sc.query.matches, scan.observations.size(), &sc);
     }
     return ApplyScan(steps, trie, root, scan, i, pose, slot, &sc);
   }
@@ -160,6 +167,7 @@ class UnknownAssociation {
   Status ApplyScan(const FilterSteps& steps, Trie* trie, Node** root, const ScanStep& scan,
                    size_t i, VehiclePose pose, int slot, Scratch* sc) {
     sc->keys.clear();
+    if (sc->truncated) ++counts_[i].truncated;
     GROVE_RETURN_IF_ERROR(UpdateAssociated(steps, trie, root, scan, i, slot, pose, sc));
     if (evidence_) GROVE_RETURN_IF_ERROR(LowerMissed(trie, root, i, slot, sc));
     GROVE_RETURN_IF_ERROR(MoveToNewCells(trie, root, i, slot, &sc->keys));
@@ -300,8 +308,8 @@ class UnknownAssociation {
 
  private:
   static Status CheckCounts(ByteReader* r, const AssociationCounts& c) {
-    for (int64_t v :
-         {c.associated, c.created, c.ignored, c.removed, c.dropped, c.tagged, c.wrong}) {
+    for (int64_t v : {c.associated, c.created, c.ignored, c.removed, c.dropped, c.tagged, c.wrong,
+                      c.truncated}) {
       if (v < 0) return r->Error("association counts", "a count is negative");
     }
     return Status::Ok();
@@ -349,6 +357,18 @@ class UnknownAssociation {
       if (std::isnan(d.log_likelihood)) return r->Error("decisions", "a bad likelihood");
     }
     return Status::Ok();
+  }
+
+  // The decisions of `detections` detections from their matches under ml, ml_exclusive or jcbb,
+  // into sc (sc->truncated: jcbb's search stopped at its node budget).
+  void DecideBy(std::span<Match> matches, size_t detections, Scratch* sc) const {
+    if (joint_) {
+      sc->truncated = sc->jcbb.Decide(matches, detections, params_.reject_gate, joint_gates_,
+                                      JointCompatibility::kDefaultNodeBudget, &sc->decisions);
+    } else {
+      sc->truncated = false;
+      Decide(matches, detections, params_, &sc->decisions);
+    }
   }
 
   // The first free slot of `cell` in the map `root`, or -1.
@@ -439,12 +459,14 @@ class UnknownAssociation {
   const AssociationParams params_;
   const double log_p0_;
   const bool sampled_;   // association = sampled
+  const bool joint_;     // association = jcbb
   const uint64_t seed_;  // the random streams' (sampled association)
   const bool evidence_;
   const int64_t evidence_threshold_;
   const SensorView view_;
   double max_range_ = 0;                   // the longest detection range so far
   size_t scan_size_ = 0;                   // the last scan's detections (NoteScan())
+  std::vector<double> joint_gates_;        // jcbb: chi2(2k) for k = 1.. (NoteScan())
   std::vector<AssociationCounts> counts_;  // per particle, along its ancestry
   // Each particle's query of the current scan, from Advance() to Complete().
   std::vector<ScanQuery> pending_;

@@ -801,6 +801,16 @@ static void TestFastErrors(void) {
       grove_fastslam_config_from_json("{\"association\": \"ml\"}", &c, error, sizeof error),
       GROVE_OK, error);
   CHECK(c.association == GROVE_FASTSLAM_ASSOCIATION_MAXIMUM_LIKELIHOOD && c.particles == 50);
+  CHECK_STATUS_MSG(
+      grove_fastslam_config_from_json("{\"association\": \"jcbb\"}", &c, error, sizeof error),
+      GROVE_OK, error);
+  CHECK(c.association == GROVE_FASTSLAM_ASSOCIATION_JCBB);
+  h = NewFast(&c); /* and back: the engine reports the association it was given */
+  c = FastConfig();
+  CHECK_FAST(h, grove_fastslam_get_config(h, &c), GROVE_OK);
+  CHECK(c.association == GROVE_FASTSLAM_ASSOCIATION_JCBB);
+  grove_fastslam_destroy(h);
+  h = NULL;
   CHECK_STATUS(grove_fastslam_config_from_json("{}", NULL, error, sizeof error),
                GROVE_INVALID_ARGUMENT);
   CHECK_STATUS_MSG(

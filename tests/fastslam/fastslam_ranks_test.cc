@@ -129,7 +129,7 @@ FastSlamConfig ConfigOf(FastSlamFilter filter, FastSlamAssociation association, 
 
 using FilterAndAssociation = std::tuple<FastSlamFilter, FastSlamAssociation>;
 std::string ParamName(const FilterAndAssociation& p) {
-  const char* names[] = {"_known", "_ml", "_ml_exclusive", "_sampled"};
+  const char* names[] = {"_known", "_ml", "_ml_exclusive", "_sampled", "_jcbb"};
   return std::string(FastSlamFilterName(std::get<0>(p))) + names[static_cast<int>(std::get<1>(p))];
 }
 class AcrossRanks : public ::testing::TestWithParam<FilterAndAssociation> {};
@@ -141,7 +141,8 @@ INSTANTIATE_TEST_SUITE_P(
                                          FastSlamFilter::kDeSrcd),
                        ::testing::Values(FastSlamAssociation::kKnown,
                                          FastSlamAssociation::kMaximumLikelihood,
-                                         FastSlamAssociation::kSampled)),
+                                         FastSlamAssociation::kSampled,
+                                         FastSlamAssociation::kJointCompatibility)),
     [](const auto& info) { return ParamName(info.param); });
 
 // 4,100 particles on 2 ranks: the second holds 4, so every resampling moves particles.

@@ -176,7 +176,7 @@ std::vector<double> Fingerprint(const FastSlam& slam) {
 }
 
 std::string FilterAndAssociationName(const std::tuple<FastSlamFilter, FastSlamAssociation>& p) {
-  const char* names[] = {"known", "ml", "ml_exclusive", "sampled"};
+  const char* names[] = {"known", "ml", "ml_exclusive", "sampled", "jcbb"};
   return std::string(FastSlamFilterName(std::get<0>(p))) + "_" +
          names[static_cast<int>(std::get<1>(p))];
 }
@@ -196,7 +196,8 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Combine(kAllFilters, ::testing::Values(FastSlamAssociation::kKnown,
                                                       FastSlamAssociation::kMaximumLikelihood,
                                                       FastSlamAssociation::kExclusive,
-                                                      FastSlamAssociation::kSampled)),
+                                                      FastSlamAssociation::kSampled,
+                                                      FastSlamAssociation::kJointCompatibility)),
     [](const auto& info) { return FilterAndAssociationName(info.param); });
 
 TEST_P(ByFilterAndAssociation, SameResultAtAnyThreadCount) {

@@ -637,6 +637,9 @@ class FastSlamTest(unittest.TestCase):
         self.assertEqual(resumed.landmarks().tobytes(), whole.landmarks().tobytes())
         self.assertEqual(repr(whole), "grove.FastSlam(particles=50, seed=3, threads=1)")
         self.assertEqual(grove.FastSlam(filter="fastslam1").config["filter"], "fastslam1")
+        jcbb = grove.FastSlam(association="jcbb")
+        self.assertEqual(jcbb.config["association"], "jcbb")
+        self.assertEqual(jcbb.summary()["association"]["truncated"], 0)
 
     def test_errors(self):
         f = grove.FastSlam(self.CONFIG)

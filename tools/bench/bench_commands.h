@@ -42,8 +42,9 @@ struct FastSlamAccuracyOptions {
   int seeds = 10;
   std::vector<int64_t> particles = {10, 100, 1000, 10000};
   int threads = 0;
-  // "known", or "ml" / "ml_exclusive" / "sampled": unknown association, the ids only tags (the
-  // table then also gives the detections associated wrongly and the landmarks created).
+  // "known", or "ml" / "ml_exclusive" / "sampled" / "jcbb": unknown association, the ids only
+  // tags (the table then also gives the detections associated wrongly and the landmarks
+  // created).
   std::string association = "known";
 };
 int FastSlamAccuracyBenchCommand(const FastSlamAccuracyOptions& options);

@@ -65,9 +65,11 @@ int FastSlamAccuracyBenchCommand(const FastSlamAccuracyOptions& options) {
     association = FastSlamAssociation::kExclusive;
   } else if (options.association == "sampled") {
     association = FastSlamAssociation::kSampled;
+  } else if (options.association == "jcbb") {
+    association = FastSlamAssociation::kJointCompatibility;
   } else if (options.association != "known") {
     return Fail(kExitUsage,
-                fmt::format("--association = {}: must be known, ml, ml_exclusive or sampled",
+                fmt::format("--association = {}: must be known, ml, ml_exclusive, sampled or jcbb",
                             QuoteForMessage(options.association)));
   }
   const bool unknown = association != FastSlamAssociation::kKnown;

@@ -75,7 +75,7 @@ class FastSlamAccuracyCli : public BenchCli<FastSlamAccuracyOptions, FastSlamAcc
                        particles.max_integer, "Particle counts");
     typed_.Integer("--threads", &options_.threads, 0, 256, "Worker threads; 0: all cores");
     typed_.Choice("--association", &options_.association, FastSlamField("association").choices,
-                  "Data association: known, ml, ml_exclusive or sampled");
+                  "Data association: known, ml, ml_exclusive, sampled or jcbb");
   }
 };
 

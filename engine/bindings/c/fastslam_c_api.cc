@@ -30,6 +30,8 @@ static_assert(GROVE_FASTSLAM_ASSOCIATION_EXCLUSIVE ==
               static_cast<int>(FastSlamAssociation::kExclusive));
 static_assert(GROVE_FASTSLAM_ASSOCIATION_SAMPLED ==
               static_cast<int>(FastSlamAssociation::kSampled));
+static_assert(GROVE_FASTSLAM_ASSOCIATION_JCBB ==
+              static_cast<int>(FastSlamAssociation::kJointCompatibility));
 static_assert(GROVE_FASTSLAM_GATE_DISTANCE2 == static_cast<int>(FastSlamGateUnit::kDistance2));
 static_assert(GROVE_FASTSLAM_GATE_PROBABILITY == static_cast<int>(FastSlamGateUnit::kProbability));
 static_assert(GROVE_FASTSLAM_EVIDENCE_OFF == static_cast<int>(FastSlamEvidence::kOff));
@@ -93,6 +95,7 @@ grove_fastslam_summary SummaryToC(const FastSlamSummary& s) {
   out.dropped = s.association.dropped;
   out.tagged = s.association.tagged;
   out.wrong = s.association.wrong;
+  out.truncated = s.association.truncated;
   out.evolution_trials = s.evolution.trials;
   out.evolution_accepted = s.evolution.accepted;
   out.map_memory = MemoryToC(s.map_memory);

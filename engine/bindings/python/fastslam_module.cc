@@ -82,6 +82,7 @@ py::dict FastSlamSummaryDict(const FastSlamSummary& s) {
   a["dropped"] = s.association.dropped;
   a["tagged"] = s.association.tagged;
   a["wrong"] = s.association.wrong;
+  a["truncated"] = s.association.truncated;
   d["association"] = a;
   py::dict ev;
   ev["trials"] = s.evolution.trials;

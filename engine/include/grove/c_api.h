@@ -343,7 +343,8 @@ enum {
   GROVE_FASTSLAM_ASSOCIATION_KNOWN = 0,
   GROVE_FASTSLAM_ASSOCIATION_MAXIMUM_LIKELIHOOD = 1,
   GROVE_FASTSLAM_ASSOCIATION_EXCLUSIVE = 2,
-  GROVE_FASTSLAM_ASSOCIATION_SAMPLED = 3
+  GROVE_FASTSLAM_ASSOCIATION_SAMPLED = 3,
+  GROVE_FASTSLAM_ASSOCIATION_JCBB = 4
 };
 enum { GROVE_FASTSLAM_GATE_DISTANCE2 = 0, GROVE_FASTSLAM_GATE_PROBABILITY = 1 };
 enum { GROVE_FASTSLAM_EVIDENCE_OFF = 0, GROVE_FASTSLAM_EVIDENCE_ON = 1 };
@@ -419,7 +420,7 @@ typedef struct grove_fastslam_summary {
   int64_t predict_steps; /* filter steps that only predicted */
   int64_t landmarks;     /* in the heaviest particle's map */
   /* Unknown association along the heaviest particle's ancestry (grove::AssociationCounts). */
-  int64_t associated, created, ignored, removed, dropped, tagged, wrong;
+  int64_t associated, created, ignored, removed, dropped, tagged, wrong, truncated;
   /* Differential evolution (DE_SRCD): trial poses and those accepted. */
   int64_t evolution_trials, evolution_accepted;
   grove_memory_use map_memory;

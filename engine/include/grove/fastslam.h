@@ -104,6 +104,12 @@ enum class FastSlamAssociation {
   // likelihoods, a new landmark (p0) included, and weighted by their sum
   // (engine/fastslam/association_sampling.h).
   kSampled,
+  // Unknown association, per particle and scan: joint compatibility branch and bound (Neira and
+  // Tardós 2001): the most detections paired with distinct landmarks inside their reject gates
+  // whose summed d2 passes the chi-square test of 2k degrees of freedom at the reject gate's
+  // confidence; the others new or ignored as under kMaximumLikelihood
+  // (engine/fastslam/joint_compatibility.h).
+  kJointCompatibility,
 };
 
 // How the gates are given.
@@ -176,7 +182,8 @@ struct GROVE_EXPORT FastSlamConfig : FilterConfig {
   // Default: kKnown.
   FastSlamAssociation association = FastSlamAssociation::kKnown;
   // Gates, in gate_unit. Range: (0, 1e6] (probabilities: (0, 1)); augment >= reject.
-  // Defaults: Bailey's 4 and 25 (squared Mahalanobis distances).
+  // Defaults: Bailey's 4 and 25 (squared Mahalanobis distances). Under kJointCompatibility the
+  // reject gate is each pair's individual gate, and its chi-square confidence the joint test's.
   double reject_gate = 4.0;
   double augment_gate = 25.0;
   FastSlamGateUnit gate_unit = FastSlamGateUnit::kDistance2;
@@ -244,6 +251,7 @@ struct AssociationCounts {
   int64_t dropped = 0;     // landmarks not stored: their cell of the index was full
   int64_t tagged = 0;      // associations of a detection and a landmark that both carry an id
   int64_t wrong = 0;       // ... whose ids differ
+  int64_t truncated = 0;   // scans whose joint compatibility search stopped at its node budget
 };
 
 // What differential evolution did (kDeSrcd), over the whole run.
