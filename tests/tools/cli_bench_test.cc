@@ -35,8 +35,9 @@ class CliBenchTest : public CliTest {
  protected:
   // The bundled walk's first 100 steps.
   std::string SmallWalk() {
-    return Write("steps.csv",
-                 Head(Slurp(fs::path(GROVE_SOURCE_DIR) / "tools/data/building_walk_steps.csv"), 101));
+    return Write(
+        "steps.csv",
+        Head(Slurp(fs::path(GROVE_SOURCE_DIR) / "tools/data/building_walk_steps.csv"), 101));
   }
 
   // Checks the outputs of a sweep of `particles` x `threads` counts run `repeat` times each.
@@ -96,9 +97,10 @@ TEST_F(CliBenchTest, FastSlamBenchReportsEveryPairOfItsInputs) {
   }
   const std::string observations = Write("observations.csv", observations_text);
   const fs::path out = dir_ / "bench";
+  // A list's values separated by spaces, as by commas in the FootSLAM test.
   const Outcome o =
       Grove("bench fastslam --controls " + controls + " --observations " + observations +
-            " --filter fastslam1 --particles 20 --threads 1,2 --repeat 2 --out " + out.string());
+            " --filter fastslam1 --particles 20 --threads 1 2 --repeat 2 --out " + out.string());
   ExpectSweep(o, out, {"20"}, {"1", "2"}, 2);
   EXPECT_NE(Slurp(out / "bench.md").find("filter = \"fastslam1\""), std::string::npos);
 }
@@ -113,8 +115,8 @@ TEST_F(CliBenchTest, BadSweepValuesAreRefusedNamingTheFlagValueAndRule) {
   const Case cases[] = {
       {" --threads 0", "--threads = 0: must be in 1..256"},
       {" --threads -2", "--threads = -2: must be in 1..256"},
-      {" --threads 1,,2", "--threads = \"1,,2\": an empty item; must be a list of values, each in "
-                          "1..256"},
+      {" --threads 1,,2",
+       "--threads = \"1,,2\": an empty item; must be a list of values, each in 1..256"},
       {" --threads 1,", "--threads = \"1,\": an empty item"},
       {" --threads 2,2", "--threads: 2 is given twice"},
       {" --particles 0", "--particles = 0: must be in 1..2147483648"},
@@ -126,8 +128,8 @@ TEST_F(CliBenchTest, BadSweepValuesAreRefusedNamingTheFlagValueAndRule) {
     EXPECT_EQ(o.exit_code, 2) << c.args << ": " << o.err;
     EXPECT_NE(o.err.find(c.message), std::string::npos) << c.args << ": " << o.err;
   }
-  const Outcome o = Grove("bench fastslam --controls c.csv --observations o.csv --threads 1,,2 "
-                          "--out " + out.string());
+  const std::string fastslam = "bench fastslam --controls c.csv --observations o.csv";
+  const Outcome o = Grove(fastslam + " --threads 1,,2 --out " + out.string());
   EXPECT_EQ(o.exit_code, 2) << o.err;
   EXPECT_NE(o.err.find("--threads = \"1,,2\": an empty item"), std::string::npos) << o.err;
   EXPECT_FALSE(fs::exists(out));

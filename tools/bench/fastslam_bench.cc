@@ -402,7 +402,9 @@ int FastSlamBenchCommand(const FastSlamConfig& config, const FastSlamBenchOption
       .defaults_json = ConfigToJson(FastSlamConfigFields(), FastSlamConfig()),
       .check = [&](int64_t particles, int threads) { return with(particles, threads).Validate(); },
       .predict_peak_bytes =
-          [&](int64_t particles) { return FastSlam::EstimatePeakBytes(with(particles, 1), work); },
+          [&](int64_t particles, int threads) {
+            return FastSlam::EstimatePeakBytes(with(particles, threads), work);
+          },
       .run = [&](int64_t particles, int threads) -> StatusOr<FilterSummary> {
         auto slam = FastSlam::Create(with(particles, threads));
         if (!slam.ok()) return slam.status();

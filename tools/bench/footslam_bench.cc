@@ -464,8 +464,8 @@ int FootSlamBenchCommand(const FootSlamConfig& config, const FootSlamBenchOption
       .defaults_json = ConfigToJson(FootSlamConfigFields(), FootSlamConfig()),
       .check = [&](int64_t particles, int threads) { return with(particles, threads).Validate(); },
       .predict_peak_bytes =
-          [&](int64_t particles) {
-            return FootSlam::EstimatePeakBytes(with(particles, 1), records) +
+          [&](int64_t particles, int threads) {
+            return FootSlam::EstimatePeakBytes(with(particles, threads), records) +
                    records * kCommandBytesPerStep;
           },
       .run = [&](int64_t particles, int threads) -> StatusOr<FilterSummary> {

@@ -43,9 +43,9 @@ struct SweepPair {
   double median_s = 0, min_s = 0, max_s = 0;
   double particle_steps_per_s = 0;  // at the median time
   double ns_per_particle_step = 0;
-  double step_ms = 0;        // median time per filter step
-  double speedup = 0;        // the same particles' median at the smallest thread count / this one
-  double ideal_speedup = 0;  // threads / the smallest thread count
+  double step_ms = 0;          // median time per filter step
+  double speedup = 0;          // the same particles' median at the smallest thread count / this one
+  double ideal_speedup = 0;    // threads / the smallest thread count
   int64_t peak_rss_bytes = 0;  // the largest of the runs'
 };
 
@@ -105,7 +105,7 @@ StatusOr<SweepRun> RunInChild(const SweepBenchModel& model, int64_t particles, i
   close(fds[0]);
   const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
   if (code != 0 || !j.is_object()) {
-    return InternalError(fmt::format(
+    return FailedPreconditionError(fmt::format(
         "bench: the run with {} particles on {} threads ended without a result ({})", particles,
         threads, code < 0 ? "killed by a signal" : fmt::format("exit status {}", code)));
   }
@@ -207,8 +207,8 @@ std::string Report(const SweepBenchModel& model, const SweepBenchOptions& option
     rows.push_back({std::to_string(p.particles), std::to_string(p.threads),
                     fmt::format("{:.4f}", p.median_s), fmt::format("{:.4f}", p.min_s),
                     fmt::format("{:.4f}", p.max_s), fmt::format("{:.3g}", p.particle_steps_per_s),
-                    fmt::format("{:.1f}", p.ns_per_particle_step),
-                    fmt::format("{:.2f}", p.speedup), fmt::format("{:.2f}", p.ideal_speedup),
+                    fmt::format("{:.1f}", p.ns_per_particle_step), fmt::format("{:.2f}", p.speedup),
+                    fmt::format("{:.2f}", p.ideal_speedup),
                     fmt::format("{:.0f}", static_cast<double>(p.peak_rss_bytes) / 1048576.0)});
   }
   return fmt::format(
@@ -250,8 +250,7 @@ nlohmann::json SummaryJson(const SweepBenchModel& model, const SweepBenchOptions
 using Points = std::vector<std::pair<double, double>>;
 
 // A series through `xy` sorted by x: the command line's lists may come in any order.
-ChartSeries SortedSeries(std::string label, Points xy,
-                         ChartStyle style = ChartStyle::kLinePoints) {
+ChartSeries SortedSeries(std::string label, Points xy, ChartStyle style = ChartStyle::kLinePoints) {
   std::sort(xy.begin(), xy.end());
   ChartSeries s{.label = std::move(label), .style = style};
   for (const auto& [x, y] : xy) {
@@ -312,8 +311,7 @@ Status WriteOutputs(const SweepBenchModel& model, const SweepBenchOptions& optio
     if (s.ok()) {
       GROVE_RETURN_IF_ERROR(out->Adopt(name));
     } else {
-      std::fprintf(stderr, "grove: warning: %s not drawn: %s\n", name.c_str(),
-                   s.message().c_str());
+      std::fprintf(stderr, "grove: warning: %s not drawn: %s\n", name.c_str(), s.message().c_str());
     }
   }
   return out->Commit(SummaryJson(model, options, pairs));
@@ -341,8 +339,10 @@ int RunSweepBench(const SweepBenchModel& model, const SweepBenchOptions& options
     }
   }
   const int64_t most = *std::max_element(particles.begin(), particles.end());
+  const auto most_threads = static_cast<int>(*std::max_element(threads.begin(), threads.end()));
   const MemoryBudget budget = MemoryBudget::Of(options.memory_budget_bytes);
-  Status fits = budget.Check(model.predict_peak_bytes(most), fmt::format("{} particles", most),
+  Status fits = budget.Check(model.predict_peak_bytes(most, most_threads),
+                             fmt::format("{} particles, {} threads", most, most_threads),
                              "use fewer particles or raise --memory-budget");
   if (!fits.ok()) return Fail(kExitMemory, fits.message());
   StatusOr<OutputDirectory> dir = OutputDirectory::Open(options.out_dir);

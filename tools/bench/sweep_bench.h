@@ -33,9 +33,9 @@ namespace grove::tools {
 // What the command line asks of the sweep.
 struct SweepBenchOptions {
   std::string out_dir;
-  std::vector<int64_t> particles;    // each runs at every thread count; not empty
-  std::vector<int64_t> threads;      // empty: DefaultThreadCounts()
-  int repeat = 3;                    // runs per pair
+  std::vector<int64_t> particles;   // each runs at every thread count; not empty
+  std::vector<int64_t> threads;     // empty: DefaultThreadCounts()
+  int repeat = 3;                   // runs per pair
   int64_t memory_budget_bytes = 0;  // 0: the memory available
 };
 
@@ -45,14 +45,14 @@ std::vector<int64_t> DefaultThreadCounts();
 // What a model gives the sweep.
 struct SweepBenchModel {
   std::string command;  // "footslam": the report's title is "grove bench footslam"
-  std::string input;  // what bench.md's header says of the input (Markdown)
+  std::string input;    // what bench.md's header says of the input (Markdown)
   // The configuration of every run but its particles and threads (ConfigToJson), and the
   // model's defaults: bench.md names the fields that differ.
   std::string config_json, defaults_json;
   // The configuration's Validate() for a pair, before anything runs.
   std::function<Status(int64_t particles, int threads)> check;
-  // Predicted peak bytes of one run with `particles` particles (the memory budget's check).
-  std::function<int64_t(int64_t particles)> predict_peak_bytes;
+  // Predicted peak bytes of one run of a pair (the memory budget's check).
+  std::function<int64_t(int64_t particles, int threads)> predict_peak_bytes;
   // One run: a new engine of `particles` and `threads` fed the whole input; its summary.
   // Runs in the child process.
   std::function<StatusOr<FilterSummary>(int64_t particles, int threads)> run;

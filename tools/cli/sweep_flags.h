@@ -35,8 +35,9 @@ class SweepFlags {
     const FieldInfo& particles = FindField(fields, "particles")->info;
     typed_
         .IntegerList("--particles", &options_.particles, particles.min_integer,
-                     particles.max_integer, "Particle counts, e.g. 1000,10000; each runs at every "
-                                            "thread count")
+                     particles.max_integer,
+                     "Particle counts, e.g. 1000,10000; each runs at every "
+                     "thread count")
         ->default_str("the configuration's particles");
     const FieldInfo& threads = FindField(fields, "threads")->info;
     typed_
@@ -67,9 +68,9 @@ class SweepFlags {
          {std::pair{"--particles", &options_.particles}, {"--threads", &options_.threads}}) {
       for (auto it = list->begin(); it != list->end(); ++it) {
         if (std::find(list->begin(), it, *it) != it) {
-          return Fail(kExitUsage,
-                      fmt::format("{}: {} is given twice: each count must be given once", flag,
-                                  *it));
+          return Fail(
+              kExitUsage,
+              fmt::format("{}: {} is given twice: each count must be given once", flag, *it));
         }
       }
     }
