@@ -1,11 +1,16 @@
-// `grove bench paper` and `grove bench scaling`: the paper's run-time and memory figures
-// (Garcia Puyol et al., Figs. 9 and 10) and throughput across cores and particle counts.
+// The `grove bench` commands: the paper's run-time and memory figures (Garcia Puyol et al.,
+// Figs. 9 and 10), throughput across cores and particle counts, FastSLAM's accuracy and speed on
+// Bailey's webmap and Victoria Park, and either filter's speed on the user's own input.
 #ifndef GROVE_TOOLS_BENCH_BENCH_COMMANDS_H_
 #define GROVE_TOOLS_BENCH_BENCH_COMMANDS_H_
 
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include "grove/fastslam.h"
+#include "grove/footslam.h"
+#include "tools/bench/sweep_bench.h"
 
 namespace grove::tools {
 
@@ -73,6 +78,25 @@ struct VictoriaParkBenchOptions {
   double until_s = 1e9;
 };
 int VictoriaParkBenchCommand(const VictoriaParkBenchOptions& options);
+
+// `grove bench footslam`: FootSLAM on the user's step file (read as `grove footslam run
+// --steps` reads it, --max-step included) for every pair of `sweep` (tools/bench/sweep_bench.h).
+struct FootSlamBenchOptions {
+  SweepBenchOptions sweep;
+  std::string steps_path;
+  double max_step_m = 5.0;
+};
+int FootSlamBenchCommand(const FootSlamConfig& config, const FootSlamBenchOptions& options);
+
+// `grove bench fastslam`: FastSLAM on the user's controls and observations (read as `grove
+// fastslam run` reads them; observations without ids make the association unknown) for every
+// pair of `sweep`.
+struct FastSlamBenchOptions {
+  SweepBenchOptions sweep;
+  std::string controls_path;
+  std::string observations_path;
+};
+int FastSlamBenchCommand(const FastSlamConfig& config, const FastSlamBenchOptions& options);
 
 }  // namespace grove::tools
 

@@ -22,11 +22,16 @@ std::string MachineDescription();
 // User plus system CPU time, in seconds.
 double CpuSeconds(const rusage& usage);
 
+// This process's command line, as a shell would take it back: the program's file name, then
+// each argument (quoted when it needs to be).
+std::string CommandLine();
+
 // Runs `body` in a child process so that its memory (peak RSS) is its own; the child writes its
-// result to `result_path`. Returns the child's exit status; *cpu_s (when given) receives the
-// child's CPU time, user and system, summed over its threads.
+// result to `result_path`. Returns the child's exit status (-1 when a signal ended it);
+// *cpu_s (when given) receives the child's CPU time, user and system, summed over its threads,
+// and *peak_rss_bytes (when given) its peak resident set.
 template <typename F>
-int InChild(F&& body, double* cpu_s = nullptr) {
+int InChild(F&& body, double* cpu_s = nullptr, int64_t* peak_rss_bytes = nullptr) {
   std::fflush(nullptr);
   pid_t pid = fork();
   if (pid < 0) return -1;
@@ -35,6 +40,7 @@ int InChild(F&& body, double* cpu_s = nullptr) {
   rusage usage{};
   wait4(pid, &status, 0, &usage);
   if (cpu_s != nullptr) *cpu_s = CpuSeconds(usage);
+  if (peak_rss_bytes != nullptr) *peak_rss_bytes = int64_t{usage.ru_maxrss} * 1024;  // KiB
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 

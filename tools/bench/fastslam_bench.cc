@@ -1,4 +1,4 @@
-// `grove bench fastslam-accuracy`, `fastslam-speed` and `victoria-park`
+// `grove bench fastslam-accuracy`, `fastslam-speed`, `victoria-park` and `fastslam`
 // (tools/bench/bench_commands.h).
 #include <fmt/format.h>
 
@@ -10,11 +10,13 @@
 #include <thread>
 #include <vector>
 
+#include "grove/config_json.h"
 #include "grove/fastslam.h"
 #include "tools/bench/bench_commands.h"
 #include "tools/bench/bench_process.h"
 #include "tools/io/atomic_file.h"
 #include "tools/io/csv_reader.h"
+#include "tools/io/fastslam_inputs.h"
 #include "tools/io/output_set.h"
 #include "tools/io/victoria_park.h"
 #include "tools/report/chart.h"
@@ -359,6 +361,61 @@ int VictoriaParkBenchCommand(const VictoriaParkBenchOptions& options) {
   if (!s.ok()) return Fail(kExitOutput, s.message());
   std::printf("%s", md.c_str());
   return kExitOk;
+}
+
+int FastSlamBenchCommand(const FastSlamConfig& config, const FastSlamBenchOptions& options) {
+  StatusOr<FastSlamInputReader> reader =
+      FastSlamInputReader::Open(options.controls_path, options.observations_path, config);
+  if (!reader.ok()) return Fail(kExitInput, reader.status().message());
+  FastSlamConfig adapted = config;
+  if (const std::string note = AdaptAssociationToIds(*reader, &adapted); !note.empty()) {
+    std::fprintf(stderr, "%s\n", note.c_str());
+  }
+  std::vector<FastSlamEvent> events;
+  FastSlamWorkload work;
+  for (FastSlamEvent e;;) {
+    StatusOr<bool> more = reader->Next(&e);
+    if (!more.ok()) return Fail(kExitInput, more.status().message());
+    if (!*more) break;
+    if (e.is_scan) {
+      ++work.scans;
+      work.observations += static_cast<int64_t>(e.scan.size());
+    } else {
+      ++work.controls;
+    }
+    events.push_back(e);
+  }
+  if (events.empty()) {
+    return Fail(kExitInput, fmt::format("{} and {}: no input", options.controls_path,
+                                        options.observations_path));
+  }
+  const auto with = [&adapted](int64_t particles, int threads) {
+    FastSlamConfig c = adapted;
+    c.particles = particles;
+    c.threads = threads;
+    return c;
+  };
+  SweepBenchModel model{
+      .command = "fastslam",
+      .input =
+          fmt::format("`{}` and `{}`: {} controls, {} scans, {} detections", options.controls_path,
+                      options.observations_path, work.controls, work.scans, work.observations),
+      .config_json = ConfigToJson(FastSlamConfigFields(), adapted),
+      .defaults_json = ConfigToJson(FastSlamConfigFields(), FastSlamConfig()),
+      .check = [&](int64_t particles, int threads) { return with(particles, threads).Validate(); },
+      .predict_peak_bytes =
+          [&](int64_t particles, int threads) {
+            return FastSlam::EstimatePeakBytes(with(particles, threads), work);
+          },
+      .run = [&](int64_t particles, int threads) -> StatusOr<FilterSummary> {
+        auto slam = FastSlam::Create(with(particles, threads));
+        if (!slam.ok()) return slam.status();
+        for (const FastSlamEvent& e : events) {
+          GROVE_RETURN_IF_ERROR(FeedEvent(e, *reader, slam->get()));
+        }
+        return (*slam)->Summary();
+      }};
+  return RunSweepBench(model, options.sweep);
 }
 
 }  // namespace grove::tools

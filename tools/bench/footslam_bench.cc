@@ -1,4 +1,4 @@
-// `grove bench paper` and `grove bench scaling` (tools/bench/bench_commands.h).
+// `grove bench paper`, `scaling` and `footslam` (tools/bench/bench_commands.h).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -9,12 +9,14 @@
 #include <thread>
 #include <vector>
 
+#include "grove/config_json.h"
 #include "grove/footslam.h"
 #include "tools/bench/bench_commands.h"
 #include "tools/bench/bench_process.h"
 #include "tools/io/atomic_file.h"
 #include "tools/io/csv_reader.h"
 #include "tools/io/output_set.h"
+#include "tools/io/step_reader.h"
 #include "tools/report/chart.h"
 #include "tools/report/report_tables.h"
 #include "tools/run/footslam_run.h"
@@ -438,6 +440,43 @@ int ScalingBenchCommand(const ScalingBenchOptions& options) {
   if (!s.ok()) return Fail(kExitOutput, s.message());
   std::printf("%s", md.c_str());
   return kExitOk;
+}
+
+int FootSlamBenchCommand(const FootSlamConfig& config, const FootSlamBenchOptions& options) {
+  StepReaderOptions reader_options;
+  reader_options.max_step_m = options.max_step_m;
+  double start_s = 0;
+  StatusOr<std::vector<StepRecord>> steps =
+      ReadAllSteps(options.steps_path, reader_options, &start_s);
+  if (!steps.ok()) return Fail(kExitInput, steps.status().message());
+  if (steps->empty()) return Fail(kExitInput, options.steps_path + ": no steps");
+  const auto with = [&config](int64_t particles, int threads) {
+    FootSlamConfig c = config;
+    c.particles = particles;
+    c.threads = threads;
+    return c;
+  };
+  const auto records = static_cast<int64_t>(steps->size());
+  SweepBenchModel model{
+      .command = "footslam",
+      .input = fmt::format("`{}`, {} steps", options.steps_path, records),
+      .config_json = ConfigToJson(FootSlamConfigFields(), config),
+      .defaults_json = ConfigToJson(FootSlamConfigFields(), FootSlamConfig()),
+      .check = [&](int64_t particles, int threads) { return with(particles, threads).Validate(); },
+      .predict_peak_bytes =
+          [&](int64_t particles, int threads) {
+            return FootSlam::EstimatePeakBytes(with(particles, threads), records) +
+                   records * kCommandBytesPerStep;
+          },
+      .run = [&](int64_t particles, int threads) -> StatusOr<FilterSummary> {
+        auto slam = FootSlam::Create(with(particles, threads));
+        if (!slam.ok()) return slam.status();
+        for (const StepRecord& step : *steps) {
+          GROVE_RETURN_IF_ERROR(FeedStep(step, options.steps_path, start_s, slam->get()));
+        }
+        return (*slam)->Summary();
+      }};
+  return RunSweepBench(model, options.sweep);
 }
 
 }  // namespace grove::tools

@@ -1,11 +1,14 @@
-// `grove bench paper|scaling|fastslam-accuracy|fastslam-speed|victoria-park`: their options and
-// what runs them.
+// `grove bench paper|scaling|fastslam-accuracy|fastslam-speed|victoria-park|footslam|fastslam`:
+// their options and what runs them.
 #include <cstdint>
 #include <limits>
 
 #include "grove/fastslam.h"
+#include "grove/footslam.h"
 #include "tools/bench/bench_commands.h"
 #include "tools/cli/command.h"
+#include "tools/cli/fastslam_input_flags.h"
+#include "tools/cli/sweep_flags.h"
 #include "tools/cli/typed_flags.h"
 #include "tools/run/run_loop.h"
 
@@ -105,6 +108,51 @@ class VictoriaParkBenchCli : public BenchCli<VictoriaParkBenchOptions, VictoriaP
   }
 };
 
+class FootSlamBenchCli {
+ public:
+  explicit FootSlamBenchCli(CLI::App* app)
+      : steps_(AddPath(app, "--steps", &options_.steps_path, "Step file: CSV 't,dx,dy' or 't,x,y'")
+                   ->required()),
+        typed_(app),
+        max_step_(typed_.Real("--max-step", &options_.max_step_m, Interval::Above(0),
+                              "Reject input steps longer than this many metres")),
+        flags_(app, FootSlamConfigFields()) {}
+  int Run() {
+    if (Status s = typed_.Apply(); !s.ok()) return Fail(kExitUsage, s.message());
+    FootSlamConfig config;
+    const int code = flags_.Prepare(&config, &options_.sweep, {{steps_, "--steps"}});
+    if (code >= 0) return code;
+    return FootSlamBenchCommand(config, options_);
+  }
+
+ private:
+  FootSlamBenchOptions options_;
+  CLI::Option* steps_;
+  TypedFlags typed_;
+  CLI::Option* max_step_;
+  SweepFlags<FootSlamConfig> flags_;  // after the input's flags on the help page
+};
+
+class FastSlamBenchCli {
+ public:
+  explicit FastSlamBenchCli(CLI::App* app)
+      : inputs_(app, &options_.controls_path, &options_.observations_path),
+        flags_(app, FastSlamConfigFields()) {}
+  int Run() {
+    FastSlamConfig config;
+    const int code = flags_.Prepare(
+        &config, &options_.sweep,
+        {{inputs_.controls, "--controls"}, {inputs_.observations, "--observations"}});
+    if (code >= 0) return code;
+    return FastSlamBenchCommand(config, options_);
+  }
+
+ private:
+  FastSlamBenchOptions options_;
+  FastSlamInputFlags inputs_;
+  SweepFlags<FastSlamConfig> flags_;
+};
+
 }  // namespace
 
 std::vector<Command> AddBenchCommands(CLI::App* grove) {
@@ -122,6 +170,11 @@ std::vector<Command> AddBenchCommands(CLI::App* grove) {
       AddCommand<VictoriaParkBenchCli>(
           bench, "victoria-park",
           "Victoria Park: GPS error, landmarks, time and memory per particle count"),
+      AddCommand<FootSlamBenchCli>(
+          bench, "footslam", "FootSLAM's time on your step file against threads and particles"),
+      AddCommand<FastSlamBenchCli>(
+          bench, "fastslam",
+          "FastSLAM's time on your controls and observations against threads and particles"),
   };
 }
 

@@ -19,11 +19,13 @@ namespace grove::tools {
 template <typename Config>
 class ConfigFlags {
  public:
-  // `defaults`: the values the help page gives as each flag's default.
+  // `defaults`: the values the help page gives as each flag's default. The fields named in
+  // `except` get no flag (the command has its own for them).
   ConfigFlags(CLI::App* app, const std::vector<ConfigField<Config>>& fields,
-              const Config& defaults = Config())
+              const Config& defaults = Config(), const std::vector<std::string>& except = {})
       : flags_(app) {
     for (const ConfigField<Config>& f : fields) {
+      if (std::find(except.begin(), except.end(), f.info.name) != except.end()) continue;
       std::string flag = std::string("--") + f.info.name;
       std::replace(flag.begin(), flag.end(), '_', '-');
       flags_.Add(flag, f.info, f.info.help, FormatFieldValue(f.info, f.get(defaults)),

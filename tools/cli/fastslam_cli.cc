@@ -8,6 +8,7 @@
 #include "grove/fastslam.h"
 #include "tools/cli/across_ranks.h"
 #include "tools/cli/command.h"
+#include "tools/cli/fastslam_input_flags.h"
 #include "tools/cli/mpi_world.h"
 #include "tools/cli/run_flags.h"
 #include "tools/cli/typed_flags.h"
@@ -26,11 +27,7 @@ const std::vector<std::string>& Choices(const char* field) {
 class FastSlamRunCli {
  public:
   explicit FastSlamRunCli(CLI::App* app)
-      : controls_(AddPath(app, "--controls", &options_.controls_path, "controls.csv (t,v,steer)")
-                      ->required()),
-        observations_(AddPath(app, "--observations", &options_.observations_path,
-                              "observations.csv (t,range,bearing,id)")
-                          ->required()),
+      : inputs_(app, &options_.controls_path, &options_.observations_path),
         truth_(AddPath(app, "--truth", &options_.truth_path,
                        "truth.csv (t,x,y,heading): scored and drawn")),
         landmarks_truth_(AddPath(app, "--landmarks-truth", &options_.landmarks_truth_path,
@@ -40,8 +37,8 @@ class FastSlamRunCli {
   int Run() {
     FastSlamConfig config;
     const int code = flags_.Prepare(&config, &options_.run,
-                                    {{controls_, "--controls"},
-                                     {observations_, "--observations"},
+                                    {{inputs_.controls, "--controls"},
+                                     {inputs_.observations, "--observations"},
                                      {truth_, "--truth"},
                                      {landmarks_truth_, "--landmarks-truth"}});
     if (code >= 0) return code;
@@ -50,8 +47,7 @@ class FastSlamRunCli {
 
  private:
   FastSlamRunOptions options_;
-  CLI::Option* controls_;
-  CLI::Option* observations_;
+  FastSlamInputFlags inputs_;
   CLI::Option* truth_;
   CLI::Option* landmarks_truth_;
   RunFlags<FastSlamConfig> flags_;

@@ -50,12 +50,8 @@ class ImuFlags {
       return Fail(kExitUsage, "--imu-config: the path is empty");
     if (*imu_ && imu_path_.empty()) return Fail(kExitUsage, "--imu: the path is empty");
     if (!config_path_.empty()) {
-      Status s = LoadConfigFile(FootImuConfigFields(), config_path_, config);
-      if (!s.ok()) {
-        return Fail(s.code() == StatusCode::kNotFound || s.code() == StatusCode::kIoError
-                        ? kExitInput
-                        : kExitUsage,
-                    s.message());
+      if (const int code = LoadConfigFlag(FootImuConfigFields(), config_path_, config); code >= 0) {
+        return code;
       }
     }
     if (Status s = flags_->Apply(config); !s.ok()) return Fail(kExitUsage, s.message());
@@ -177,12 +173,9 @@ class FootSlamBatchCli {
     if (Status s = typed_.Apply(); !s.ok()) return Fail(kExitUsage, s.message());
     FootSlamConfig config;
     if (!config_path_.empty()) {
-      Status s = LoadConfigFile(FootSlamConfigFields(), config_path_, &config);
-      if (!s.ok()) {
-        return Fail(s.code() == StatusCode::kNotFound || s.code() == StatusCode::kIoError
-                        ? kExitInput
-                        : kExitUsage,
-                    s.message());
+      if (const int code = LoadConfigFlag(FootSlamConfigFields(), config_path_, &config);
+          code >= 0) {
+        return code;
       }
     }
     if (Status s = flags_->Apply(&config); !s.ok()) return Fail(kExitUsage, s.message());

@@ -40,6 +40,29 @@ inline int ParseMemoryBudgetFlag(const std::string& text, int64_t* bytes) {
   return -1;
 }
 
+// Refuses a path option given empty (never "use the default"). Returns -1 to go on, or the
+// exit code after printing the error.
+inline int RefuseEmptyPaths(const std::vector<std::pair<CLI::Option*, const char*>>& paths) {
+  for (const auto& [option, name] : paths) {
+    if (*option && option->template as<std::string>().empty()) {
+      return Fail(kExitUsage, fmt::format("{}: the path is empty", name));
+    }
+  }
+  return -1;
+}
+
+// Sets *config from the --config file at `path`. Returns -1 to go on, or the exit code after
+// printing the error: a file that cannot be read is an input error, a bad value a usage error.
+template <typename Config>
+int LoadConfigFlag(const std::vector<ConfigField<Config>>& fields, const std::string& path,
+                   Config* config) {
+  Status s = LoadConfigFile(fields, path, config);
+  if (s.ok()) return -1;
+  return Fail(s.code() == StatusCode::kNotFound || s.code() == StatusCode::kIoError ? kExitInput
+                                                                                    : kExitUsage,
+              s.message());
+}
+
 template <typename Config>
 class RunFlags {
  public:
@@ -72,20 +95,9 @@ class RunFlags {
     paths.insert(paths.end(), {{config_option_, "--config"},
                                {resume_option_, "--resume"},
                                {checkpoint_option_, "--checkpoint"}});
-    // An option given with an empty path is an error, never "use the default".
-    for (const auto& [option, name] : paths) {
-      if (*option && option->template as<std::string>().empty()) {
-        return Fail(kExitUsage, fmt::format("{}: the path is empty", name));
-      }
-    }
+    if (const int code = RefuseEmptyPaths(paths); code >= 0) return code;
     if (*config_option_) {
-      Status s = LoadConfigFile(fields_, config_path_, config);
-      if (!s.ok()) {
-        return Fail(s.code() == StatusCode::kNotFound || s.code() == StatusCode::kIoError
-                        ? kExitInput
-                        : kExitUsage,
-                    s.message());
-      }
+      if (const int code = LoadConfigFlag(fields_, config_path_, config); code >= 0) return code;
     }
     if (Status s = config_flags_.Apply(config); !s.ok()) return Fail(kExitUsage, s.message());
     if (Status s = run_flags_.Apply(); !s.ok()) return Fail(kExitUsage, s.message());

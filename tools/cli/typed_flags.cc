@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
 #include <variant>
@@ -157,11 +158,41 @@ CLI::Option* TypedFlags::ChoiceList(const std::string& flag, std::vector<std::st
   return Document(e.option, doc);
 }
 
+namespace {
+
+// A list's items: each word given, split at commas (`--threads 1,2,4` or `--threads 1 2 4`).
+// InvalidArgument for an empty item (`1,,2`, a trailing comma).
+StatusOr<std::vector<std::string>> ListItems(const FieldInfo& info,
+                                             const std::vector<std::string>& words) {
+  std::vector<std::string> items;
+  for (const std::string& word : words) {
+    size_t begin = 0;
+    for (;;) {
+      const size_t end = std::min(word.find(',', begin), word.size());
+      if (end == begin) {
+        return InvalidArgumentError(fmt::format(
+            "{} = {}: an empty item; must be a list of values, each {}", info.name,
+            QuoteForMessage(word),
+            info.type == FieldType::kChoice ? "one of the choices" : FieldRangeText(info)));
+      }
+      items.push_back(word.substr(begin, end - begin));
+      if (end == word.size()) break;
+      begin = end + 1;
+    }
+  }
+  return items;
+}
+
+}  // namespace
+
 Status TypedFlags::Apply() const {
   for (const Entry& e : entries_) {
     if (e.option->count() == 0) continue;
+    StatusOr<std::vector<std::string>> texts =
+        e.list ? ListItems(e.info, e.texts) : std::vector<std::string>{e.text};
+    if (!texts.ok()) return texts.status();
     std::vector<FieldValue> values;
-    for (const std::string& text : e.list ? e.texts : std::vector<std::string>{e.text}) {
+    for (const std::string& text : *texts) {
       StatusOr<FieldValue> v = ParseOptionValue(e.info, text);
       if (!v.ok()) return v.status();
       values.push_back(*v);

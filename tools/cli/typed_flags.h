@@ -70,10 +70,11 @@ class TypedFlags {
   // One of `choices` into *target.
   CLI::Option* Choice(const std::string& flag, std::string* target,
                       std::vector<std::string> choices, const std::string& help);
-  // One or more integers in [min, max] (`--flag 10 100 1000`) into *target.
+  // One or more integers in [min, max] (`--flag 10 100 1000` or `--flag 10,100,1000`) into
+  // *target.
   CLI::Option* IntegerList(const std::string& flag, std::vector<int64_t>* target, int64_t min,
                            int64_t max, const std::string& help);
-  // One or more of `choices` (`--flag a b`) into *target.
+  // One or more of `choices` (`--flag a b` or `--flag a,b`) into *target.
   CLI::Option* ChoiceList(const std::string& flag, std::vector<std::string>* target,
                           std::vector<std::string> choices, const std::string& help);
 

@@ -148,4 +148,27 @@ StatusOr<bool> FastSlamInputReader::Next(FastSlamEvent* out) {
   return true;
 }
 
+std::string AdaptAssociationToIds(const FastSlamInputReader& reader, FastSlamConfig* config) {
+  if (reader.has_ids() || config->association != FastSlamAssociation::kKnown) return "";
+  config->association = FastSlamAssociation::kMaximumLikelihood;
+  return reader.ScanSource() + " has no id column: unknown association (association = ml)";
+}
+
+Status FeedEvent(const FastSlamEvent& event, const FastSlamEventSource& source, FastSlam* slam) {
+  if (event.is_scan) {
+    Status s = slam->Scan(event.scan_t_s, event.scan);
+    if (!s.ok()) {
+      return Status(s.code(),
+                    fmt::format("{}:{}: {}", source.ScanSource(), event.scan_line, s.message()));
+    }
+    return Status::Ok();
+  }
+  Status s = slam->Control(event.control.t_s, event.control.v_mps, event.control.steer_rad);
+  if (!s.ok()) {
+    return Status(s.code(), fmt::format("{}:{}: {}", source.ControlSource(), event.control.line,
+                                        s.message()));
+  }
+  return Status::Ok();
+}
+
 }  // namespace grove::tools

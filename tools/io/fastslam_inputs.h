@@ -116,6 +116,14 @@ class FastSlamInputReader final : public FastSlamEventSource {
   ObservationRecord observation_;
 };
 
+// Observations without ids leave the association unknown: a configuration asking for known
+// association runs maximum likelihood instead (`grove fastslam run`'s rule). Returns the line
+// that says so, or "" when *config is unchanged.
+std::string AdaptAssociationToIds(const FastSlamInputReader& reader, FastSlamConfig* config);
+
+// Feeds `event` to `slam`; an error names the file and line of `source` the event came from.
+Status FeedEvent(const FastSlamEvent& event, const FastSlamEventSource& source, FastSlam* slam);
+
 }  // namespace grove::tools
 
 #endif  // GROVE_TOOLS_IO_FASTSLAM_INPUTS_H_

@@ -220,9 +220,11 @@ StatusOr<bool> StepReader::Next(StepRecord* step) {
 }
 
 StatusOr<std::vector<StepRecord>> ReadAllSteps(const std::string& path,
-                                               const StepReaderOptions& options) {
+                                               const StepReaderOptions& options,
+                                               double* start_time_s) {
   StatusOr<StepReader> reader = StepReader::Open(path, options);
   if (!reader.ok()) return reader.status();
+  if (start_time_s != nullptr) *start_time_s = reader->start_time_s();
   std::vector<StepRecord> steps;
   StepRecord step;
   for (;;) {

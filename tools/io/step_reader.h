@@ -120,9 +120,11 @@ class StepReader {
   std::vector<CsvField> fields_;  // scratch, reused across rows
 };
 
-// Reads every step of a file; for tests and small files. A file without steps is an error.
+// Reads every step of a file; for tests and small files. *start_time_s (when given) receives
+// the walk's start time (StepReader::start_time_s()).
 StatusOr<std::vector<StepRecord>> ReadAllSteps(const std::string& path,
-                                               const StepReaderOptions& options = {});
+                                               const StepReaderOptions& options = {},
+                                               double* start_time_s = nullptr);
 
 }  // namespace grove::tools
 

@@ -249,12 +249,9 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
     StatusOr<FastSlamInputReader> reader =
         FastSlamInputReader::Open(options_.controls_path, options_.observations_path, config_);
     if (!reader.ok()) return reader.status();
-    if (!reader->has_ids() && config_.association == FastSlamAssociation::kKnown) {
-      if (ranks_ == nullptr || ranks_->rank() == 0) {  // one line, not one per rank
-        std::fprintf(stderr, "%s has no id column: unknown association (association = ml)\n",
-                     options_.observations_path.c_str());
-      }
-      config_.association = FastSlamAssociation::kMaximumLikelihood;
+    const std::string note = AdaptAssociationToIds(*reader, &config_);
+    if (!note.empty() && (ranks_ == nullptr || ranks_->rank() == 0)) {  // one line, not per rank
+      std::fprintf(stderr, "%s\n", note.c_str());
     }
     source_ = std::make_unique<FastSlamInputReader>(std::move(reader).value());
     records_ = CountRegularFileLines(options_.controls_path) +
@@ -352,22 +349,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
     return true;
   }
   void Replay() override {}
-  Status Step() override {
-    if (event_.is_scan) {
-      Status s = engine_->Scan(event_.scan_t_s, event_.scan);
-      if (!s.ok()) {
-        return Status(s.code(), fmt::format("{}:{}: {}", source_->ScanSource(), event_.scan_line,
-                                            s.message()));
-      }
-      return Status::Ok();
-    }
-    Status s = engine_->Control(event_.control.t_s, event_.control.v_mps, event_.control.steer_rad);
-    if (!s.ok()) {
-      return Status(s.code(), fmt::format("{}:{}: {}", source_->ControlSource(),
-                                          event_.control.line, s.message()));
-    }
-    return Status::Ok();
-  }
+  Status Step() override { return FeedEvent(event_, *source_, engine_.get()); }
 
   Status WriteOutputs(OutputSet* out, nlohmann::json* summary) override {
     // Every read-out first: across ranks they are collective, and every rank takes them.

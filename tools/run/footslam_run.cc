@@ -114,14 +114,10 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   }
   void Replay() override { odometry_.Add(step_.dx_m, step_.dy_m); }
   Status Step() override {
-    if (engine_->steps() == 0) {
-      Status st = engine_->SetStartTime(imu_ ? imu_->origin_time_s() : reader_->start_time_s());
-      if (!st.ok()) return Status(st.code(), fmt::format("{}: {}", steps_name_, st.message()));
-    }
-    Status s = engine_->Step(step_.t_s, step_.dx_m, step_.dy_m);
-    if (!s.ok()) {
-      return Status(s.code(), fmt::format("{}:{}: {}", steps_name_, step_.line, s.message()));
-    }
+    const double start_s = engine_->steps() > 0 ? 0
+                           : imu_               ? imu_->origin_time_s()
+                                                : reader_->start_time_s();
+    GROVE_RETURN_IF_ERROR(FeedStep(step_, steps_name_, start_s, engine_.get()));
     odometry_.Add(step_.dx_m, step_.dy_m);
     return Status::Ok();
   }
@@ -247,6 +243,19 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
 };
 
 }  // namespace
+
+Status FeedStep(const StepRecord& step, const std::string& input_name, double start_time_s,
+                FootSlam* slam) {
+  if (slam->steps() == 0) {
+    Status s = slam->SetStartTime(start_time_s);
+    if (!s.ok()) return Status(s.code(), fmt::format("{}: {}", input_name, s.message()));
+  }
+  Status s = slam->Step(step.t_s, step.dx_m, step.dy_m);
+  if (!s.ok()) {
+    return Status(s.code(), fmt::format("{}:{}: {}", input_name, step.line, s.message()));
+  }
+  return Status::Ok();
+}
 
 int RunFootSlamCommand(const FootSlamConfig& config, const FootSlamRunOptions& options) {
   if (Status s = config.Validate(); !s.ok()) return Fail(kExitUsage, s.message());

@@ -9,6 +9,7 @@
 #include "grove/footslam.h"
 #include "grove/status.h"
 #include "tools/io/imu_reader.h"
+#include "tools/io/step_reader.h"
 #include "tools/run/foot_imu_commands.h"
 #include "tools/run/run_loop.h"
 
@@ -29,6 +30,12 @@ struct FootSlamRunOptions {
 // Runs FootSLAM and writes every output; returns an exit code after printing any error to
 // stderr as one line.
 int RunFootSlamCommand(const FootSlamConfig& config, const FootSlamRunOptions& options);
+
+// Feeds `step`, read from `input_name`, to `slam`, after setting the walk's start time
+// `start_time_s` when it is the first step; an error names the file and line (`grove footslam
+// run`'s messages).
+Status FeedStep(const StepRecord& step, const std::string& input_name, double start_time_s,
+                FootSlam* slam);
 
 // Bytes the grove command itself keeps per step of a run (odometry, outputs built in memory),
 // on top of FootSlam::EstimatePeakBytes.
