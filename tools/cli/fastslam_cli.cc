@@ -32,7 +32,7 @@ class FastSlamRunCli {
                               "observations.csv (t,range,bearing,id)")
                           ->required()),
         truth_(AddPath(app, "--truth", &options_.truth_path,
-                       "truth.csv (t,x,y,heading): scored and drawn")),
+                       "True path, CSV (t,x,y[,heading]) or TUM: scored and drawn")),
         landmarks_truth_(AddPath(app, "--landmarks-truth", &options_.landmarks_truth_path,
                                  "landmarks_truth.csv (id,x,y): scored and drawn")),
         flags_(app, FastSlamConfigFields()) {}
