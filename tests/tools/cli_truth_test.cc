@@ -49,8 +49,8 @@ nlohmann::json Accuracy(const fs::path& out) {
 
 TEST_F(CliTest, FootSlamRunScoresTheSmoothedPathAgainstTheTruth) {
   fs::path out = dir_ / "m";
-  Outcome o = Grove("footslam run --no-progress --particles 200 --truth " + kWalkTruth +
-                    " --out " + out.string());
+  Outcome o = Grove("footslam run --no-progress --particles 200 --truth " + kWalkTruth + " --out " +
+                    out.string());
   ASSERT_EQ(o.exit_code, 0) << o.err;
   const nlohmann::json a = Accuracy(out);
   EXPECT_EQ(a.at("estimate"), "smoothed_trajectory");
@@ -97,8 +97,8 @@ TEST_F(CliTest, FootSlamRunScoresTheSmoothedPathAgainstTheTruth) {
 
 TEST_F(CliTest, FootSlamTruthAsTumGivesTheSameScoreAsCsv) {
   const std::string tum = Write("truth.tum", CsvToTum(Slurp(kWalkTruth)));
-  Outcome a = Grove("footslam run --no-progress --particles 100 --truth " + kWalkTruth +
-                    " --out " + (dir_ / "a").string());
+  Outcome a = Grove("footslam run --no-progress --particles 100 --truth " + kWalkTruth + " --out " +
+                    (dir_ / "a").string());
   ASSERT_EQ(a.exit_code, 0) << a.err;
   Outcome b = Grove("footslam run --no-progress --particles 100 --truth " + tum + " --out " +
                     (dir_ / "b").string());
@@ -133,8 +133,8 @@ TEST_F(CliTest, BadTruthStopsTheRunBeforeItStarts) {
     fs::path out = dir_ / "new" / "out";
     for (const char* command : {"footslam run --particles 50", "fastslam run --particles 5"}) {
       SCOPED_TRACE(command);
-      std::string args = std::string(command) + " --no-progress --truth " + truth + " --out " +
-                         out.string();
+      std::string args =
+          std::string(command) + " --no-progress --truth " + truth + " --out " + out.string();
       if (std::string(command).starts_with("fastslam")) {
         args += " --controls " + Write("controls.csv", "t,v,steer\n0,1,0\n1,1,0\n") +
                 " --observations " + Write("observations.csv", "t,range,bearing,id\n");
@@ -150,10 +150,10 @@ TEST_F(CliTest, BadTruthStopsTheRunBeforeItStarts) {
   ASSERT_EQ(Grove("footslam run --no-progress --particles 50 --out " + out.string()).exit_code, 0);
   const std::string summary = Slurp(out / "summary.json");
   const std::string truth = Write("t.csv", cases[0].text);
-  EXPECT_EQ(Grove("footslam run --no-progress --particles 60 --truth " + truth + " --out " +
-                  out.string())
-                .exit_code,
-            3);
+  EXPECT_EQ(
+      Grove("footslam run --no-progress --particles 60 --truth " + truth + " --out " + out.string())
+          .exit_code,
+      3);
   EXPECT_EQ(Slurp(out / "summary.json"), summary);
   EXPECT_FALSE(fs::exists(out / "error.csv"));
 }

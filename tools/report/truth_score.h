@@ -29,7 +29,8 @@ TruthScore ScoreAgainstTruth(const TruthTrajectory& truth,
 // The names AddTruthScoreFiles writes.
 inline constexpr const char* kTruthScoreFiles[] = {"error.csv", "error.png"};
 // Adds error.csv (`t,error`: each matched truth time and the aligned position error, metres) and
-// error.png (that error against time, axes from zero; `title` on top) to `out`.
+// error.png (that error against time, the y axis from zero; `title` on top) to `out`. Without
+// gnuplot error.png is left out with a note on stderr: a run's other outputs are worth more.
 Status AddTruthScoreFiles(OutputSet* out, const TruthScore& score, const std::string& title);
 
 // The terminal's last line after a run with a truth: "error against truth: RMSE 1.23 m (aligned
