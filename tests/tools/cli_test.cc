@@ -20,6 +20,7 @@ namespace {
 using grove::testing::CliTest;
 using grove::testing::Outcome;
 using grove::testing::Slurp;
+using grove::testing::WithoutLastColumn;
 namespace fs = std::filesystem;
 
 TEST_F(CliTest, MalformedStepFilesStopWithFileLineColumn) {
@@ -889,9 +890,7 @@ TEST_F(CliTest, FastSlamResumesFromAPeriodicCheckpoint) {
 TEST_F(CliTest, FastSlamUnknownAssociationFromTheFileOrTheFlag) {
   fs::path sim = dir_ / "sim";
   ASSERT_EQ(Grove("fastslam simulate --out " + sim.string()).exit_code, 0);
-  std::istringstream with_ids(Slurp(sim / "observations.csv"));
-  std::string line, without_ids;
-  while (std::getline(with_ids, line)) without_ids += line.substr(0, line.rfind(',')) + "\n";
+  const std::string without_ids = WithoutLastColumn(Slurp(sim / "observations.csv"));
   ASSERT_EQ(without_ids.rfind("t,range,bearing\n", 0), 0u);
   const std::string observations = Write("no_ids.csv", without_ids);
   const std::string controls = " --controls " + (sim / "controls.csv").string();

@@ -30,6 +30,14 @@ inline std::string Slurp(const fs::path& p) {
   return s.str();
 }
 
+// A CSV text without its last column.
+inline std::string WithoutLastColumn(const std::string& csv) {
+  std::istringstream in(csv);
+  std::string line, out;
+  while (std::getline(in, line)) out += line.substr(0, line.rfind(',')) + "\n";
+  return out;
+}
+
 class CliTest : public ::testing::Test {
  protected:
   void SetUp() override {

@@ -1,5 +1,6 @@
 #include "tools/report/trajectory_metrics.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,6 +12,8 @@
 #include <random>
 #include <string>
 #include <vector>
+
+#include "tools/io/truth_trajectory.h"
 
 namespace grove::tools {
 namespace {
@@ -257,6 +260,68 @@ TEST(TrajectoryMetricsTest, UnknownHeaderIsEscapedAndCut) {
       << message;
   EXPECT_EQ(message.find('\x1b'), std::string::npos) << message;
   EXPECT_LT(message.size(), path.size() + 200) << message;
+}
+
+TEST(TruthTrajectoryTest, TumFileGivesPositionsAndTheQuaternionsYaw) {
+  const double h = 0.7;
+  const std::string text = fmt::format(
+      "# t x y z qx qy qz qw\n\n0 1 2 3 0 0 0 1\n 0.5\t-1.5  2e-1 0 0 0 {} {}\n"
+      "1 0 0 0 0 0 {} {}\n",
+      std::sin(h / 2), std::cos(h / 2), 2 * std::sin(-h / 2), 2 * std::cos(-h / 2));
+  for (const char* name : {"truth.tum", "truth.txt", "truth.poses"}) {
+    SCOPED_TRACE(name);
+    StatusOr<TruthTrajectory> truth = ReadTruthTrajectory(WriteTempFile(text, name));
+    ASSERT_TRUE(truth.ok()) << truth.status().ToString();
+    EXPECT_TRUE(truth->has_heading);
+    ASSERT_EQ(truth->poses.size(), 3u);
+    EXPECT_EQ(truth->poses[0].pose.x_m, 1);
+    EXPECT_EQ(truth->poses[0].pose.y_m, 2);
+    EXPECT_EQ(truth->poses[0].pose.heading_rad, 0);
+    EXPECT_EQ(truth->poses[1].t_s, 0.5);
+    EXPECT_EQ(truth->poses[1].pose.x_m, -1.5);
+    EXPECT_EQ(truth->poses[1].pose.y_m, 0.2);
+    EXPECT_NEAR(truth->poses[1].pose.heading_rad, h, 1e-15);
+    EXPECT_NEAR(truth->poses[2].pose.heading_rad, -h, 1e-15);  // not a unit quaternion
+  }
+}
+
+TEST(TruthTrajectoryTest, CsvHeadingColumnIsReadWhenNamedSo) {
+  StatusOr<TruthTrajectory> with =
+      ReadTruthTrajectory(WriteTempFile("t,x,y,heading\n0,1,2,0.25\n1,2,3,-0.5\n"));
+  ASSERT_TRUE(with.ok()) << with.status().ToString();
+  EXPECT_TRUE(with->has_heading);
+  EXPECT_EQ(with->poses[1].pose.heading_rad, -0.5);
+  StatusOr<TruthTrajectory> without =
+      ReadTruthTrajectory(WriteTempFile("t,x,y,yaw\n0,1,2,0.25\n", "other.csv"));
+  ASSERT_TRUE(without.ok()) << without.status().ToString();
+  EXPECT_FALSE(without->has_heading);
+  EXPECT_EQ(without->poses[0].pose.heading_rad, 0);
+}
+
+TEST(TruthTrajectoryTest, TumErrorsGiveFileLineAndColumn) {
+  struct Case {
+    const char* content;
+    const char* expected;  // after the path
+  };
+  const Case cases[] = {
+      {"0 0 0 0 0 0 0 1\n1 0 0 0 0 0 1\n",
+       ":2:1: expected 8 numbers \"t x y z qx qy qz qw\" separated by spaces, found 7 field(s)"},
+      {"0 0 0 0 0 0 0 1\n1 0  nan 0 0 0 0 1\n", ":2:6: y = nan: must be finite"},
+      {"1 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n",
+       ":2:1: t = 1 is not after the previous time 1: times must be strictly increasing"},
+      {"0 0 0 0 0 0 0 0\n",
+       ":1:9: qx, qy, qz, qw = 0, 0, 0, 0: a rotation needs a non-zero quaternion"},
+      {"# only a comment\n", ": no poses: expected lines \"t x y z qx qy qz qw\""},
+  };
+  int index = 0;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.content);
+    const std::string path = WriteTempFile(c.content, "case" + std::to_string(index++) + ".tum");
+    StatusOr<TruthTrajectory> truth = ReadTruthTrajectory(path);
+    ASSERT_FALSE(truth.ok());
+    EXPECT_EQ(truth.status().code(), StatusCode::kInvalidArgument);
+    EXPECT_EQ(truth.status().message(), path + c.expected);
+  }
 }
 
 }  // namespace

@@ -29,7 +29,7 @@ class FastSlamRunCli {
   explicit FastSlamRunCli(CLI::App* app)
       : inputs_(app, &options_.controls_path, &options_.observations_path),
         truth_(AddPath(app, "--truth", &options_.truth_path,
-                       "truth.csv (t,x,y,heading): scored and drawn")),
+                       "True path, CSV (t,x,y[,heading]) or TUM: scored and drawn")),
         landmarks_truth_(AddPath(app, "--landmarks-truth", &options_.landmarks_truth_path,
                                  "landmarks_truth.csv (id,x,y): scored and drawn")),
         flags_(app, FastSlamConfigFields()) {}

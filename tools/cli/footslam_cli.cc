@@ -86,6 +86,9 @@ class FootSlamRunCli {
     prior_ = AddPath(app, "--prior-map", &options_.prior_map_path,
                      "map.csv of an earlier walk through the same area, in this run's map frame: "
                      "prior counts (weighted by prior_map_confidence)");
+    truth_ = AddPath(app, "--truth", &options_.truth_path,
+                     "True path, CSV (t,x,y,...) or TUM: the smoothed path's error against it "
+                     "goes into summary.json, error.csv, error.png and the last line");
     imu_ = std::make_unique<ImuFlags>(
         app,
         "Foot-mounted IMU recording (CSV, CSV.gz or PyShoe MAT) instead of --steps: its steps "
@@ -101,7 +104,8 @@ class FootSlamRunCli {
     options_.imu_path = imu_->imu_path();
     FootSlamConfig config;
     const int code =
-        flags_.Prepare(&config, &options_.run, {{steps_, "--steps"}, {prior_, "--prior-map"}});
+        flags_.Prepare(&config, &options_.run,
+                       {{steps_, "--steps"}, {prior_, "--prior-map"}, {truth_, "--truth"}});
     if (code >= 0) return code;
     return RunOnRanks<FootSlam>(config, options_, RunFootSlamCommand);
   }
@@ -112,6 +116,7 @@ class FootSlamRunCli {
   RunFlags<FootSlamConfig> flags_;
   TypedFlags typed_;
   CLI::Option* prior_ = nullptr;
+  CLI::Option* truth_ = nullptr;
   std::unique_ptr<ImuFlags> imu_;  // after the run's flags on the help page
 };
 

@@ -238,6 +238,18 @@ void SplitCsvLine(std::string_view line, std::vector<CsvField>* fields) {
   }
 }
 
+void SplitAtBlanks(std::string_view line, std::vector<CsvField>* fields) {
+  fields->clear();
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && IsBlank(line[i])) ++i;
+    if (i == line.size()) break;
+    const size_t start = i;
+    while (i < line.size() && !IsBlank(line[i])) ++i;
+    fields->push_back({line.substr(start, i - start), static_cast<int64_t>(start) + 1});
+  }
+}
+
 bool IsBlankLine(std::string_view line) { return std::all_of(line.begin(), line.end(), IsBlank); }
 
 bool IsSkippedLine(std::string_view line) {

@@ -102,6 +102,8 @@ struct CsvField {
 
 // Splits a line at every ',' (no quoting) into *fields, which it clears first.
 void SplitCsvLine(std::string_view line, std::vector<CsvField>* fields);
+// Splits a line at runs of spaces and tabs into *fields (none empty), which it clears first.
+void SplitAtBlanks(std::string_view line, std::vector<CsvField>* fields);
 // True for a line of spaces and tabs only, or an empty one.
 bool IsBlankLine(std::string_view line);
 // True for a blank line or one whose first non-blank character is '#'.

@@ -36,6 +36,53 @@ std::string TrajectoryTum(const std::vector<StampedPose>& poses) {
   return out;
 }
 
+std::string TrajectoryKitti(const std::vector<StampedPose>& poses) {
+  std::string out;
+  out.reserve(poses.size() * 160);
+  for (const StampedPose& p : poses) {
+    const double c = std::cos(p.pose.heading_rad), s = std::sin(p.pose.heading_rad);
+    // + 0.0 turns -0 into 0.
+    fmt::format_to(std::back_inserter(out), "{} {} 0 {} {} {} 0 {} 0 0 1 0\n", c, -s + 0.0,
+                   p.pose.x_m, s, c, p.pose.y_m);
+  }
+  return out;
+}
+
+namespace {
+
+// The formats of a trajectory file, in the order the files are written.
+struct TrajectoryFormat {
+  const char* extension;
+  std::string (*write)(const std::vector<StampedPose>&);
+};
+constexpr TrajectoryFormat kTrajectoryFormats[] = {
+    {".csv", TrajectoryCsv}, {".tum", TrajectoryTum}, {".kitti", TrajectoryKitti}};
+
+}  // namespace
+
+std::vector<std::string> TrajectoryFileNames(std::span<const char* const> stems) {
+  std::vector<std::string> names;
+  for (const TrajectoryFormat& format : kTrajectoryFormats) {
+    for (const char* stem : stems) names.push_back(std::string(stem) + format.extension);
+  }
+  return names;
+}
+
+Status AddTrajectoryFiles(OutputSet* out, std::span<const char* const> stems,
+                          std::span<const std::vector<StampedPose>* const> trajectories) {
+  if (stems.size() != trajectories.size()) {
+    return InternalError(
+        fmt::format("{} trajectory names for {} trajectories", stems.size(), trajectories.size()));
+  }
+  for (const TrajectoryFormat& format : kTrajectoryFormats) {
+    for (size_t k = 0; k < stems.size(); ++k) {
+      GROVE_RETURN_IF_ERROR(
+          out->Add(std::string(stems[k]) + format.extension, format.write(*trajectories[k])));
+    }
+  }
+  return Status::Ok();
+}
+
 nlohmann::json FilterSummaryJson(const FilterSummary& s) {
   const double filter_s = s.filter_s();
   const double particle_steps = static_cast<double>(s.particles) * static_cast<double>(s.steps);

@@ -8,12 +8,10 @@
 #include <numbers>
 #include <string_view>
 
-#include "tools/io/csv_reader.h"
+#include "tools/io/truth_trajectory.h"
 
 namespace grove::tools {
 namespace {
-
-constexpr size_t kMaxLineBytes = size_t{64} << 10;
 
 Status CheckPoints(const std::vector<TimedPoint>& points, std::string_view name) {
   for (size_t i = 0; i < points.size(); ++i) {
@@ -34,57 +32,33 @@ Status CheckPoints(const std::vector<TimedPoint>& points, std::string_view name)
   return Status::Ok();
 }
 
+// The fields of `error`, named as in the struct, into a JSON object of type Json.
+template <typename Json>
+Json ErrorFields(const TrajectoryError& error) {
+  Json json;
+  json["matched"] = error.matched;
+  json["rmse_m"] = error.rmse_m;
+  json["max_m"] = error.max_m;
+  json["aligned_rmse_m"] = error.aligned_rmse_m;
+  json["aligned_max_m"] = error.aligned_max_m;
+  json["rotation_rad"] = error.rotation_rad;
+  json["translation_x_m"] = error.translation_x_m;
+  json["translation_y_m"] = error.translation_y_m;
+  return json;
+}
+
 }  // namespace
 
 StatusOr<std::vector<TimedPoint>> ReadTimedPoints(const std::string& path) {
-  StatusOr<LineReader> opened = LineReader::Open(path, kMaxLineBytes);
-  if (!opened.ok()) return opened.status();
-  LineReader& lines = *opened;
-  std::vector<CsvField> fields;
+  StatusOr<TruthTrajectory> truth = ReadTruthTrajectory(path);
+  if (!truth.ok()) return truth.status();
+  return TimedPointsOf(truth->poses);
+}
+
+std::vector<TimedPoint> TimedPointsOf(const std::vector<StampedPose>& poses) {
   std::vector<TimedPoint> points;
-  std::string_view line;
-  size_t field_count = 0;
-  for (;;) {
-    StatusOr<bool> more = lines.Next(&line);
-    if (!more.ok()) return more.status();
-    if (!*more) break;
-    if (IsSkippedLine(line)) continue;
-    SplitCsvLine(line, &fields);
-    const int64_t number = lines.line_number();
-    if (field_count == 0) {
-      if (fields.size() < 3 || fields[0].text != "t" || fields[1].text != "x" ||
-          fields[2].text != "y") {
-        return LineError(path, number, 1,
-                         fmt::format("unknown header {}: expected one starting with \"t,x,y\"",
-                                     QuotedField(line)));
-      }
-      field_count = fields.size();
-      continue;
-    }
-    if (fields.size() != field_count) {
-      return LineError(
-          path, number, 1,
-          fmt::format("expected {} fields as in the header, found {}", field_count, fields.size()));
-    }
-    TimedPoint p;
-    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, number, fields[0], "t", &p.t_s));
-    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, number, fields[1], "x", &p.x_m));
-    GROVE_RETURN_IF_ERROR(ParseFiniteNumber(path, number, fields[2], "y", &p.y_m));
-    if (!points.empty() && !(p.t_s > points.back().t_s)) {
-      return LineError(
-          path, number, fields[0].column,
-          fmt::format("t = {} is not after the previous time {}: times must be strictly increasing",
-                      p.t_s, points.back().t_s));
-    }
-    points.push_back(p);
-  }
-  if (field_count == 0) {
-    return InvalidArgumentError(
-        fmt::format("{}: empty file: expected a header starting with \"t,x,y\"", path));
-  }
-  if (points.empty()) {
-    return InvalidArgumentError(fmt::format("{}: no points after the header", path));
-  }
+  points.reserve(poses.size());
+  for (const StampedPose& p : poses) points.push_back({p.t_s, p.pose.x_m, p.pose.y_m});
   return points;
 }
 
@@ -171,17 +145,12 @@ StatusOr<TrajectoryError> CompareTrajectories(const std::vector<TimedPoint>& tru
   return error;
 }
 
+nlohmann::json TrajectoryErrorObject(const TrajectoryError& error) {
+  return ErrorFields<nlohmann::json>(error);
+}
+
 std::string TrajectoryErrorJson(const TrajectoryError& error) {
-  nlohmann::ordered_json json;
-  json["matched"] = error.matched;
-  json["rmse_m"] = error.rmse_m;
-  json["max_m"] = error.max_m;
-  json["aligned_rmse_m"] = error.aligned_rmse_m;
-  json["aligned_max_m"] = error.aligned_max_m;
-  json["rotation_rad"] = error.rotation_rad;
-  json["translation_x_m"] = error.translation_x_m;
-  json["translation_y_m"] = error.translation_y_m;
-  return json.dump(2);
+  return ErrorFields<nlohmann::ordered_json>(error).dump(2);
 }
 
 }  // namespace grove::tools

@@ -3,10 +3,12 @@
 #define GROVE_TOOLS_REPORT_TRAJECTORY_METRICS_H_
 
 #include <cstddef>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "grove/status.h"
+#include "grove/types.h"
 
 namespace grove::tools {
 
@@ -16,12 +18,11 @@ struct TimedPoint {
   double y_m = 0;
 };
 
-// Reads a CSV file whose header starts with the fields t,x,y; further columns (such as a heading)
-// are allowed and ignored, but every row must have as many fields as the header. The file syntax
-// and the "FILE:LINE:COLUMN: what" errors are those of step files (tools/io/step_reader.h); times
-// must be strictly increasing and the file must hold at least one point. Lines are limited to
-// 64 KiB.
+// Reads the points of a trajectory file: a CSV file whose header starts with the fields t,x,y
+// or a TUM file, as ReadTruthTrajectory (tools/io/truth_trajectory.h) reads them.
 StatusOr<std::vector<TimedPoint>> ReadTimedPoints(const std::string& path);
+// The positions of `poses`.
+std::vector<TimedPoint> TimedPointsOf(const std::vector<StampedPose>& poses);
 
 struct TrajectoryError {
   size_t matched = 0;  // truth points inside the estimate's time span
@@ -53,7 +54,9 @@ StatusOr<TrajectoryError> CompareTrajectories(const std::vector<TimedPoint>& tru
                                               const std::vector<TimedPoint>& estimate,
                                               std::vector<AlignedPointError>* points = nullptr);
 
-// The fields of `error` as a pretty-printed JSON object, named as in the struct.
+// The fields of `error` as a JSON object, named as in the struct (keys sorted).
+nlohmann::json TrajectoryErrorObject(const TrajectoryError& error);
+// The same, pretty-printed, the keys in the struct's order.
 std::string TrajectoryErrorJson(const TrajectoryError& error);
 
 }  // namespace grove::tools

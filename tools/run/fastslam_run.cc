@@ -22,11 +22,16 @@
 #include "tools/io/id_points.h"
 #include "tools/io/victoria_park.h"
 #include "tools/report/map_render.h"
+#include "tools/report/truth_score.h"
 
 namespace grove::tools {
 namespace {
 
 double Wrap(double a) { return std::remainder(a, 2 * std::numbers::pi); }
+
+// The trajectories a run writes: the weighted mean's (scored against a truth) and the heaviest
+// particle's.
+constexpr const char* kTrajectoryStems[] = {"trajectory", "heaviest_trajectory"};
 
 // A pose file `t,x,y,heading` (trajectory.csv, truth.csv), times non-decreasing; at a repeated
 // time the last row wins (a scan's update follows the prediction to its time).
@@ -229,7 +234,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
       : FacadeRunJob(config, options.run.ranks), options_(options) {}
 
   const FastSlamConfig& config() const { return config_; }
-  std::string BriefReport() const override { return engine_->Summary().BriefReport() + gps_brief_; }
+  std::string Headline() const override { return headline_; }
 
   // Opens the inputs (their errors are input errors) and reads the optional truth. Observations
   // without ids select unknown association (config() says which ran).
@@ -263,7 +268,7 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
       if (events.ok()) CountWorkload(*events);
     }
     if (!options_.truth_path.empty()) {
-      StatusOr<std::map<double, Pose2>> truth = ReadPoses(options_.truth_path);
+      StatusOr<TruthTrajectory> truth = ReadTruthTrajectory(options_.truth_path);
       if (!truth.ok()) return truth.status();
       truth_ = std::move(truth).value();
     }
@@ -303,11 +308,12 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
     return paths;
   }
   std::vector<std::string> OutputNames() const override {
-    std::vector<std::string> names = {"trajectory.csv", "heaviest_trajectory.csv",
-                                      "trajectory.tum", "heaviest_trajectory.tum",
-                                      "landmarks.csv",  "map.png",
-                                      "map.svg"};
+    std::vector<std::string> names = TrajectoryFileNames(kTrajectoryStems);
+    for (const char* name : {"landmarks.csv", "map.png", "map.svg"}) names.push_back(name);
     if (park_ != nullptr) names.push_back("gps_error.csv");
+    if (!options_.truth_path.empty()) {
+      for (const char* name : kTruthScoreFiles) names.push_back(name);
+    }
     return names;
   }
   std::string InputName() const override {
@@ -360,15 +366,13 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
     if (!landmarks.ok()) return landmarks.status();
     const FastSlamSummary engine_summary = engine_->Summary();
     if (out == nullptr) return Status::Ok();  // not rank 0
-    GROVE_RETURN_IF_ERROR(out->Add("trajectory.csv", TrajectoryCsv(mean)));
-    GROVE_RETURN_IF_ERROR(out->Add("heaviest_trajectory.csv", TrajectoryCsv(*heaviest)));
-    GROVE_RETURN_IF_ERROR(out->Add("trajectory.tum", TrajectoryTum(mean)));
-    GROVE_RETURN_IF_ERROR(out->Add("heaviest_trajectory.tum", TrajectoryTum(*heaviest)));
+    const std::vector<StampedPose>* trajectories[] = {&mean, &*heaviest};
+    GROVE_RETURN_IF_ERROR(AddTrajectoryFiles(out, kTrajectoryStems, trajectories));
     GROVE_RETURN_IF_ERROR(out->Add("landmarks.csv", LandmarksCsv(*landmarks)));
     if (StopRequested()) return Status::Ok();
     MapImage image;
     for (const StampedPose& p : *heaviest) image.path.push_back({p.pose.x_m, p.pose.y_m});
-    for (const auto& [t, p] : truth_) image.truth.push_back({p.x_m, p.y_m});
+    for (const StampedPose& p : truth_.poses) image.truth.push_back({p.pose.x_m, p.pose.y_m});
     for (const LandmarkEstimate& l : *landmarks) {
       image.landmarks.push_back({l.x_m, l.y_m, l.sxx, l.sxy, l.syy});
     }
@@ -420,8 +424,8 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
                                                 ? GpsScanErrorsJson(*phd_heaviest)
                                                 : nlohmann::json(phd_heaviest.status().message());
       if (gps_mean.ok() && phd.ok()) {
-        gps_brief_ = fmt::format(
-            "\nAgainst GPS (weighted-mean path): mean error {:.2f} m, RMSE {:.2f} m over {} fixes "
+        headline_ = fmt::format(
+            "Against GPS (weighted-mean path): mean error {:.2f} m, RMSE {:.2f} m over {} fixes "
             "after a rigid alignment; PHD-SLAM's score (fixes within 25 ms of a scan's estimate): "
             "RMSE {:.2f} m over {} of {} scans.",
             gps_mean->mean_m, gps_mean->rmse_m, gps_mean->fixes.size(), phd->rmse_m, phd->pairs,
@@ -431,10 +435,30 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
       (*summary)["inputs"] = {{"controls", options_.controls_path},
                               {"observations", options_.observations_path}};
     }
-    if (!truth_.empty()) {
-      std::map<double, Pose2> estimate;
+    if (!options_.truth_path.empty()) {
+      std::map<double, Pose2> estimate, truth;
       for (const StampedPose& p : mean) estimate[p.t_s] = p.pose;
-      (*summary)["accuracy"] = PoseErrorsJson(ComparePoses(truth_, estimate));
+      for (const StampedPose& p : truth_.poses) truth[p.t_s] = p.pose;
+      nlohmann::json accuracy = PoseErrorsJson(ComparePoses(truth, estimate));
+      // Without a heading in the truth there is none to compare.
+      if (!truth_.has_heading) accuracy["heading_rmse_rad"] = nullptr;
+      const TruthScore score = ScoreAgainstTruth(truth_, mean);
+      GROVE_RETURN_IF_ERROR(AddTruthScoreFiles(
+          out, score,
+          fmt::format("{}, {} particles: weighted-mean path's error against the truth",
+                      FilterTitle(config_.filter), config_.particles)));
+      if (score.error.ok()) {
+        const TrajectoryError& e = *score.error;
+        accuracy["aligned_matched"] = e.matched;
+        accuracy["aligned_position_rmse_m"] = e.aligned_rmse_m;
+        accuracy["aligned_max_position_error_m"] = e.aligned_max_m;
+        accuracy["alignment_rotation_rad"] = e.rotation_rad;
+        accuracy["alignment_translation_m"] = {e.translation_x_m, e.translation_y_m};
+      } else {
+        accuracy["aligned_error"] = score.error.status().message();
+      }
+      (*summary)["accuracy"] = accuracy;
+      headline_ = TruthHeadline(score);
     }
     if (!landmarks_truth_.empty()) {
       (*summary)["landmark_accuracy"] = LandmarkErrorsJson(*landmarks, landmarks_truth_);
@@ -447,11 +471,11 @@ class FastSlamJob final : public FacadeRunJob<FastSlam, FastSlamConfig> {
   std::unique_ptr<FastSlamEventSource> source_;
   std::unique_ptr<VictoriaParkData> park_;
   VictoriaParkEvents* park_events_ = nullptr;  // source_, for Victoria Park
-  std::string gps_brief_;                      // Victoria Park: the GPS scores, for BriefReport()
-  int64_t records_ = 0;                        // input rows
+  std::string headline_;   // the score against the GPS (Victoria Park) or the truth
+  int64_t records_ = 0;    // input rows
   FastSlamWorkload work_;  // counted before the run: controls and scans are the events Read() gives
   FastSlamEvent event_;
-  std::map<double, Pose2> truth_;
+  TruthTrajectory truth_;  // empty without --truth
   std::map<int64_t, IdPoint> landmarks_truth_;
 };
 

@@ -17,7 +17,8 @@ struct FastSlamRunOptions {
   RunOptions run;
   std::string controls_path;
   std::string observations_path;
-  std::string truth_path;            // optional: truth.csv (t,x,y,heading), scored and drawn
+  // optional: the true path (tools/io/truth_trajectory.h: truth.csv or TUM), scored and drawn
+  std::string truth_path;
   std::string landmarks_truth_path;  // optional: landmarks_truth.csv (id,x,y), drawn and scored
   // Victoria Park instead of the CSV files (tools/io/victoria_park.h): its directory, and the
   // records up to until_s only. Adds gps_error.csv and the GPS errors to summary.json.

@@ -12,14 +12,19 @@
 
 #include "grove/collective.h"
 #include "grove/config_json.h"
+#include "tools/io/filter_outputs.h"
 #include "tools/io/footslam_outputs.h"
 #include "tools/io/imu_step_source.h"
 #include "tools/io/output_readers.h"
 #include "tools/io/step_reader.h"
 #include "tools/report/map_render.h"
+#include "tools/report/truth_score.h"
 
 namespace grove::tools {
 namespace {
+
+// The trajectories a run writes; the smoothed path is the one scored against a truth.
+constexpr const char* kTrajectoryStems[] = {"trajectory", "mean_trajectory", "smoothed_trajectory"};
 
 class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
  public:
@@ -45,6 +50,11 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
       if (!prior.ok()) return prior.status();
       prior_ = std::move(prior).value();
     }
+    if (!options_.truth_path.empty()) {
+      StatusOr<TruthTrajectory> truth = ReadTruthTrajectory(options_.truth_path);
+      if (!truth.ok()) return truth.status();
+      truth_ = std::move(truth).value();
+    }
     const int64_t lines = options_.steps_path.empty() ? CountLines(EmbeddedWalkSteps())
                                                       : CountRegularFileLines(options_.steps_path);
     // Lines after the header (comments and blank lines make it an estimate).
@@ -63,6 +73,7 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
     if (!options_.steps_path.empty()) paths.push_back(options_.steps_path);
     if (!options_.imu_path.empty()) paths.push_back(options_.imu_path);
     if (!options_.prior_map_path.empty()) paths.push_back(options_.prior_map_path);
+    if (!options_.truth_path.empty()) paths.push_back(options_.truth_path);
     return paths;
   }
 
@@ -74,22 +85,20 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
     return Status::Ok();
   }
   std::vector<std::string> OutputNames() const override {
-    std::vector<std::string> names = {"map.csv",
-                                      "map_best.csv",
-                                      "trajectory.csv",
-                                      "mean_trajectory.csv",
-                                      "smoothed_trajectory.csv",
-                                      "trajectory.tum",
-                                      "mean_trajectory.tum",
-                                      "smoothed_trajectory.tum",
-                                      "map.png",
-                                      "map.svg"};
+    std::vector<std::string> names = {"map.csv", "map_best.csv"};
+    for (std::string& name : TrajectoryFileNames(kTrajectoryStems)) names.push_back(name);
+    names.push_back("map.png");
+    names.push_back("map.svg");
+    if (!options_.truth_path.empty()) {
+      for (const char* name : kTruthScoreFiles) names.push_back(name);
+    }
     // Storage of diversity: the stored map alone (map.csv and map_best.csv include it).
     if (config_.store_distance_m > 0) names.push_back("stored_map.csv");
     if (imu_) names.push_back("steps.csv");  // the front end's steps
     return names;
   }
   std::string InputName() const override { return steps_name_; }
+  std::string Headline() const override { return headline_; }
   const char* RecordsName() const override { return "steps"; }
   int64_t ExpectedRecords() const override { return records_; }
   int64_t ExpectedSteps() const override { return steps_; }
@@ -141,27 +150,38 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
     if (config_.store_distance_m > 0) {
       GROVE_RETURN_IF_ERROR(out->Add("stored_map.csv", MapCsv(*stored, false)));
     }
-    GROVE_RETURN_IF_ERROR(out->Add("trajectory.csv", TrajectoryCsv(*trajectory)));
-    GROVE_RETURN_IF_ERROR(
-        out->Add("mean_trajectory.csv", TrajectoryCsv(engine_->MeanTrajectory())));
-    GROVE_RETURN_IF_ERROR(out->Add("smoothed_trajectory.csv", TrajectoryCsv(*smoothed)));
-    GROVE_RETURN_IF_ERROR(out->Add("trajectory.tum", TrajectoryTum(*trajectory)));
-    GROVE_RETURN_IF_ERROR(
-        out->Add("mean_trajectory.tum", TrajectoryTum(engine_->MeanTrajectory())));
-    GROVE_RETURN_IF_ERROR(out->Add("smoothed_trajectory.tum", TrajectoryTum(*smoothed)));
+    const std::vector<StampedPose>* trajectories[] = {&*trajectory, &engine_->MeanTrajectory(),
+                                                      &*smoothed};
+    GROVE_RETURN_IF_ERROR(AddTrajectoryFiles(out, kTrajectoryStems, trajectories));
     if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
     // The smoothed path: the best of the three paths on the simulator's walks
     // (engine/footslam/README.md).
     MapImage image = FootSlamImage(
         config_.hex_radius_m, *cumulative, *smoothed, odometry_.points(),
         fmt::format("FootSLAM, {} particles, {} steps: cumulative map, smoothed path, "
-                    "raw odometry",
-                    config_.particles, engine_->steps()));
+                    "raw odometry{}",
+                    config_.particles, engine_->steps(), truth_.poses.empty() ? "" : ", truth"));
     image.path_label = "smoothed path";
+    for (const StampedPose& p : truth_.poses) image.truth.push_back({p.pose.x_m, p.pose.y_m});
+    image.truth_label = "truth";
     GROVE_RETURN_IF_ERROR(AddMapImages(out, image));
     if (StopRequested()) return Status::Ok();  // the loop checkpoints and stops
+    if (!options_.truth_path.empty()) {
+      const TruthScore score = ScoreAgainstTruth(truth_, *smoothed);
+      GROVE_RETURN_IF_ERROR(AddTruthScoreFiles(
+          out, score,
+          fmt::format("FootSLAM, {} particles: smoothed path's error against the truth",
+                      config_.particles)));
+      nlohmann::json accuracy = score.error.ok()
+                                    ? TrajectoryErrorObject(*score.error)
+                                    : nlohmann::json{{"error", score.error.status().message()}};
+      accuracy["estimate"] = "smoothed_trajectory";
+      (*summary)["accuracy"] = accuracy;
+      headline_ = TruthHeadline(score);
+    }
     summary->update(FootSlamSummaryJson(s));
     (*summary)["inputs"] = {{"steps", steps_name_}, {"steps_read", engine_->steps()}};
+    if (!options_.truth_path.empty()) (*summary)["inputs"]["truth"] = options_.truth_path;
     if (imu_) {
       GROVE_RETURN_IF_ERROR(out->Add("steps.csv", FootStepsCsv(imu_steps_)));
       const FootImuSummary f = imu_->Summary();
@@ -238,6 +258,8 @@ class FootSlamJob final : public FacadeRunJob<FootSlam, FootSlamConfig> {
   int64_t records_ = 0;                 // input lines after the header
   int64_t steps_ = 0;                   // the steps Read() returns
   std::vector<HexCounts> prior_;
+  TruthTrajectory truth_;  // empty without --truth
+  std::string headline_;   // the score against the truth
   StepRecord step_;
   OdometryPath odometry_;
 };

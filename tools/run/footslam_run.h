@@ -21,6 +21,9 @@ struct FootSlamRunOptions {
   std::string steps_path;      // empty: the walk bundled in the binary
   double max_step_m = 5.0;     // longer steps in the input are rejected
   std::string prior_map_path;  // a map.csv of an earlier walk (FootSlam::SetPriorMap); empty: none
+  // The true path (tools/io/truth_trajectory.h): the smoothed path is scored against it; empty:
+  // none.
+  std::string truth_path;
   // An IMU recording instead of a step file: its steps come from the foot IMU front end.
   std::string imu_path;
   FootImuConfig imu_config;

@@ -413,6 +413,9 @@ class RunLoop {
     for (const std::string& n : out->names()) names += n + ", ";
     std::fprintf(stderr, "%s\nwrote %s/{%ssummary.json}\n", brief.c_str(), options_.out_dir.c_str(),
                  names.c_str());
+    if (const std::string headline = job_->Headline(); !headline.empty()) {
+      std::fprintf(stderr, "%s\n", headline.c_str());
+    }
     return kExitOk;
   }
 

@@ -116,6 +116,9 @@ class RunJob {
   virtual Status WriteOutputs(OutputSet* out, nlohmann::json* summary) = 0;
   // One paragraph for the terminal after a run.
   virtual std::string BriefReport() const = 0;
+  // The terminal's last line after a run, below the files written: the score against a truth
+  // or a GPS (empty: none). Called after WriteOutputs, on the lead rank only.
+  virtual std::string Headline() const { return {}; }
 };
 
 // The part of a RunJob every model writes alike: its engine made, resumed and checkpointed

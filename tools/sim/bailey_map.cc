@@ -17,21 +17,6 @@ namespace {
 constexpr int32_t kMaxBlockRows = 10'000'000;
 constexpr size_t kMaxLineBytes = 64 * 1024;
 
-bool IsBlank(char c) { return c == ' ' || c == '\t'; }
-
-// Splits at runs of spaces and tabs; fields carry their 1-based byte column.
-void SplitAtBlanks(std::string_view line, std::vector<CsvField>* fields) {
-  fields->clear();
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && IsBlank(line[i])) ++i;
-    if (i == line.size()) break;
-    const size_t start = i;
-    while (i < line.size() && !IsBlank(line[i])) ++i;
-    fields->push_back({line.substr(start, i - start), static_cast<int64_t>(start) + 1});
-  }
-}
-
 bool IsBlockName(std::string_view text) { return text == "lm" || text == "wp"; }
 
 bool LooksLikeNumber(std::string_view text) {
