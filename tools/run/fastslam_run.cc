@@ -163,6 +163,7 @@ nlohmann::json FastSlamSummaryJson(const FastSlamSummary& s) {
         {"dropped", a.dropped},
         {"tagged", a.tagged},
         {"wrong", a.wrong},
+        {"truncated", a.truncated},
         {"error_rate", a.tagged > 0 ? nlohmann::json(static_cast<double>(a.wrong) / a.tagged)
                                     : nlohmann::json(nullptr)}};
   }
