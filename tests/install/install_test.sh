@@ -30,7 +30,7 @@ if grep -rhoE '#include "[^"]+"' "$prefix/include/grove" | grep -v '"grove/'; th
   exit 1
 fi
 
-# C++: find_package(grove 0.2 CONFIG REQUIRED), the shared and the static library.
+# C++: find_package(grove 0.3 CONFIG REQUIRED), the shared and the static library.
 cmake -S "$src/tools/examples/cpp_consumer" -B "$work/cpp" -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_PREFIX_PATH="$prefix" >"$log" 2>&1
 cmake --build "$work/cpp" -- --no-print-directory >"$log" 2>&1

@@ -155,7 +155,7 @@ TEST_F(CliTest, VersionNamesTheBuild) {
   Outcome o = Grove("--version");
   EXPECT_EQ(o.exit_code, 0) << o.err;
   ASSERT_EQ(o.out.rfind("grove ", 0), 0u) << o.out;
-  const std::string version = o.out.substr(6, o.out.find(' ', 6) - 6);  // "0.2.0"
+  const std::string version = o.out.substr(6, o.out.find(' ', 6) - 6);  // "0.3.0"
   EXPECT_EQ(std::count(version.begin(), version.end(), '.'), 2) << o.out;
   EXPECT_NE(o.out.find(" (commit "), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("; SIMD: "), std::string::npos) << o.out;

@@ -96,7 +96,7 @@ typedef enum grove_status {
 /* "ok", "invalid argument", ...; "unknown" for a value outside the enum. Static string. */
 GROVE_EXPORT const char* grove_status_name(grove_status status);
 
-/* One line: "grove 0.2.0 (commit abc1234, GCC 12.2.0, Release; SIMD: ...)". Static string. */
+/* One line: "grove 0.3.0 (commit abc1234, GCC 12.2.0, Release; SIMD: ...)". Static string. */
 GROVE_EXPORT const char* grove_version(void);
 /* The library's version numbers; any pointer may be NULL. */
 GROVE_EXPORT void grove_version_numbers(int* major, int* minor, int* patch);

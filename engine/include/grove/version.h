@@ -9,7 +9,7 @@
 #include "grove/export.h"
 
 #define GROVE_VERSION_MAJOR 0
-#define GROVE_VERSION_MINOR 2
+#define GROVE_VERSION_MINOR 3
 #define GROVE_VERSION_PATCH 0
 
 namespace grove {
@@ -18,7 +18,7 @@ struct VersionInfo {
   int major = GROVE_VERSION_MAJOR;
   int minor = GROVE_VERSION_MINOR;
   int patch = GROVE_VERSION_PATCH;
-  std::string version;   // "0.2.0"
+  std::string version;   // "0.3.0"
   std::string commit;    // the short hash built from, "-dirty" with changes ("unknown" outside git)
   std::string compiler;  // "GCC 12.2.0"
   std::string build_type;    // "Release", "Debug", ...
@@ -28,7 +28,7 @@ struct VersionInfo {
 
 // The library's version (not the header's: a program linked to a newer libgrove sees its own).
 GROVE_EXPORT VersionInfo Version();
-// One line: "grove 0.2.0 (commit abc1234, GCC 12.2.0, Release; SIMD: AVX3 of AVX3 AVX2 ...)".
+// One line: "grove 0.3.0 (commit abc1234, GCC 12.2.0, Release; SIMD: AVX3 of AVX3 AVX2 ...)".
 GROVE_EXPORT std::string VersionString();
 
 }  // namespace grove
