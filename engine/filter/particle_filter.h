@@ -8,8 +8,8 @@
 //   3. resample when ESS / N < threshold (threshold 1 resamples every step): parents are drawn
 //      (systematic by default, in parallel), the model gathers the new generation (O(1) per
 //      particle: maps are shared) and releases the dead one, both in parallel (a
-//      PieceReleasingModel in a filter alone releases it in pieces inside the next step's
-//      parallel loop instead, or whole before complete);
+//      PieceReleasingModel in a filter alone releases it in pieces inside the next parallel
+//      loop instead: the next step's, or complete's for up to 4,096 particles);
 //   4. complete (optional): a model whose weights do not depend on what it draws (FastSLAM
 //      2.0) draws and updates after resampling, in parallel over batches;
 //   5. population (optional): a model that needs the whole population once its particles are
@@ -168,14 +168,25 @@ class ParticleFilter {
       }
     }
     if constexpr (CompletingModel<Model, Input>) {
+      // A generation just resampled is freed before or among the draws that copy the maps. A
+      // large one whole first: freed in pieces among the draws, the dead maps and the new copies
+      // would add up (Victoria Park with 10,000 particles: a fifth more peak memory). A small
+      // one in pieces: whole, up to 1,024 particles are one thread's chunk.
+      auto t_release = Clock::now();
+      const bool in_pieces = release_pending_ && log_w_.size() <= kPiecesAmongDraws;
+      if (!in_pieces) FinishRelease();
       auto t3 = Clock::now();
-      // A generation just resampled is freed whole before the draws copy the maps: freed in
-      // pieces among the draws, the dead and the new copies would add up (Victoria Park with
-      // 10,000 particles: a fifth more peak memory).
-      FinishRelease();
+      times_.release_s += Seconds(t3 - t_release);
       status = ForBatches([&](int slot, size_t begin, size_t end) {
+        if constexpr (PieceReleasingModel<Model>) {
+          if (in_pieces) model_->ReleaseDeadRange(DeadFrom(begin), DeadFrom(end), slot);
+        }
         return model_->Complete(input, step_, begin, end, slot);
       });
+      if constexpr (PieceReleasingModel<Model>) {
+        if (in_pieces) model_->DeadReleased();
+      }
+      release_pending_ = false;
       if constexpr (PopulationModel<Model, Input>) {
         if (status.ok()) status = model_->Population(input, step_, *workers_);
       }
@@ -358,6 +369,9 @@ class ParticleFilter {
     if (k == 0) return 0;
     return k < parents_.size() ? parents_[k] : std::numeric_limits<size_t>::max();
   }
+
+  // Up to this many particles a dead generation is freed in pieces among complete's draws.
+  static constexpr size_t kPiecesAmongDraws = 4096;
 
   // Releases a dead generation the next advance has not (before a step without one).
   void FinishRelease() {
