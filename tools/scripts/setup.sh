@@ -57,6 +57,7 @@ case "$job" in
     ;;
   build) ;;
   package)
+    rm -f "$build_dir"/grove_*.deb  # a package an earlier version left
     cmake --build "$build_dir" --target package -- --no-print-directory >/dev/null
     ls "$build_dir"/grove_*.deb
     ;;
