@@ -163,7 +163,9 @@ const char* BindFastSlam(py::module_& m) {
          py::arg("t"), py::arg("speed"), py::arg("steer"),
          "A control (speed m/s, steering angle rad) from time t on: predicts to t with the "
          "control held so far, then holds this one. InvalidArgumentError (filter unchanged) for "
-         "a non-finite value or a bad time.")
+         "a non-finite value or a bad time. The prediction runs with the next scan or read-out "
+         "(the predictions since the last scan in one pass); an error inside it is raised by "
+         "that scan, or by the next control or scan.")
       .def(
           "scan",
           [](const PyFastSlam& f, double t, const py::object& observations) {
