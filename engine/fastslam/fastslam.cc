@@ -158,8 +158,9 @@ class FastSlam::Impl {
 
   // Runs the deferred predictions (Defer()): every read-out and Scan() first settles. Their
   // error stops the engine; it is returned here and, when a read-out without a status ran
-  // them, by the next Control() or Scan() (SettleQuietly()).
+  // them, by the next call that returns a status (SettleQuietly(), TakeDeferredError()).
   Status Settle() {
+    GROVE_RETURN_IF_ERROR(TakeDeferredError());
     if (pending_.empty()) return Status::Ok();
     return Guarded([&]() -> Status {
       std::vector<PendingStep> run;
@@ -192,7 +193,8 @@ class FastSlam::Impl {
       return s;
     });
   }
-  // Settle() for a read-out that returns no status: its error waits for the next step.
+  // Settle() for a read-out that returns no status: its error waits for the next call that
+  // returns one.
   void SettleQuietly() {
     Status s = Settle();
     if (!s.ok() && deferred_error_.ok()) deferred_error_ = s;
@@ -453,13 +455,15 @@ class FastSlam::Impl {
     return Status::Ok();
   }
 
-  // The driver's CheckNotFailed(), with the error a quiet Settle() kept (once).
+  // The error a quiet Settle() kept, once: the next call that returns a status reports it.
+  Status TakeDeferredError() {
+    Status s = std::move(deferred_error_);
+    deferred_error_ = Status::Ok();
+    return s;
+  }
+  // The driver's CheckNotFailed(), after the error a quiet Settle() kept.
   Status CheckNotFailed(const char* what) {
-    if (!deferred_error_.ok()) {
-      Status s = std::move(deferred_error_);
-      deferred_error_ = Status::Ok();
-      return s;
-    }
+    GROVE_RETURN_IF_ERROR(TakeDeferredError());
     return driver_.CheckNotFailed(what);
   }
 

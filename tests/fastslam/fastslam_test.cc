@@ -350,22 +350,24 @@ TEST_P(ByFilter, ReadingAfterEveryControlGivesTheSameRun) {
 
 // A prediction that fails (here a noisy steering angle outside what the vehicle model can use)
 // is reported by the scan or read-out that ran it, with its step and time; after a read-out
-// without a status, by the next step.
+// without a status, by the next call that returns one (a step or a read-out).
 TEST(FastSlamInput, ADeferredPredictionErrorReachesTheNextCall) {
   FastSlamConfig config = Config(FastSlamFilter::kFastSlam1, 50);
   config.vehicle = FastSlamVehicle::kGuivantNebot;  // its steering must keep tan(G) H / L < 1
   config.sigma_steer_rad = 1.0;
-  for (bool read_out_first : {false, true}) {
+  enum Then { kScan, kReadOutThenControl, kReadOutThenReadOut };
+  for (Then then : {kScan, kReadOutThenControl, kReadOutThenReadOut}) {
     auto slam = FastSlam::Create(config);
     ASSERT_TRUE(slam.ok());
     ASSERT_TRUE((*slam)->Control(0.0, 3.0, 1.2).ok());
     ASSERT_TRUE((*slam)->Control(0.025, 3.0, 1.2).ok());  // deferred: not yet run
     Status s;
-    if (read_out_first) {
-      (void)(*slam)->MeanPose();
-      s = (*slam)->Control(0.05, 3.0, 0.0);
-    } else {
+    if (then == kScan) {
       s = (*slam)->Scan(0.04, {});
+    } else {
+      (void)(*slam)->MeanTrajectory();
+      s = then == kReadOutThenControl ? (*slam)->Control(0.05, 3.0, 0.0)
+                                      : (*slam)->HeaviestTrajectory().status();
     }
     EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition) << s.message();
     EXPECT_NE(s.message().find("step 1 (t = 0.025 s): particle "), std::string::npos)

@@ -70,6 +70,24 @@ class CliInputRulesTest : public CliTest {
   std::vector<std::string> controls_, observations_;
 };
 
+// A FastSLAM control's prediction waits for the next scan or read-out. Here no scan follows the
+// controls, so their predictions run when the outputs read the engine: a failure there (FastSLAM
+// 1.0's noisy steering beyond what the vehicle model can use) fails the run, which writes
+// nothing, as it did when every control predicted at once.
+TEST_F(CliTest, PredictionsThatFailAfterTheLastScanFailTheRun) {
+  const std::string c = Write("c.csv", "t,v,steer\n0,3,1.2\n0.025,3,1.2\n0.05,3,1.2\n");
+  const std::string o = Write("o.csv", "t,range,bearing,id\n");
+  const fs::path out = dir_ / "out";
+  Outcome r = Grove(
+      "fastslam run --no-progress --filter fastslam1 --particles 50 --vehicle guivant_nebot "
+      "--sigma-steer-rad 1.0 --controls " +
+      c + " --observations " + o + " --out " + out.string());
+  EXPECT_EQ(r.exit_code, 4) << r.err;
+  EXPECT_NE(r.err.find("step 1 (t = 0.025 s): particle "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("steering angle is outside"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 // A huge finite range made a landmark of infinite covariance: the run went on and failed later
 // at a valid line (or after the whole run, naming no line). It is refused at its own field.
 TEST_F(CliInputRulesTest, AHugeRangeIsRefusedAtItsField) {

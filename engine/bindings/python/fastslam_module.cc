@@ -165,7 +165,7 @@ const char* BindFastSlam(py::module_& m) {
          "control held so far, then holds this one. InvalidArgumentError (filter unchanged) for "
          "a non-finite value or a bad time. The prediction runs with the next scan or read-out "
          "(the predictions since the last scan in one pass); an error inside it is raised by "
-         "that scan, or by the next control or scan.")
+         "that scan or read-out, or by the next call that can raise.")
       .def(
           "scan",
           [](const PyFastSlam& f, double t, const py::object& observations) {

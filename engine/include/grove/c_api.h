@@ -446,8 +446,8 @@ GROVE_EXPORT const char* grove_fastslam_last_error(const grove_fastslam* slam);
  * GROVE_INVALID_ARGUMENT, engine unchanged, for a value outside grove/input_rules.h's bounds
  * or a time not after the previous control's or before the last scan's. The prediction runs
  * with the next scan or read-out, all the controls' predictions since the last scan in one
- * pass (grove/fastslam.h, FastSlam::Control()): an error inside it is returned there, or by the
- * next control or scan after a read-out that returns no status. */
+ * pass (grove/fastslam.h, FastSlam::Control()): an error inside it is returned there, or after
+ * a read-out that returns no status by the next call that returns one. */
 GROVE_EXPORT grove_status grove_fastslam_control(grove_fastslam* slam, double t_s, double speed_mps,
                                                  double steer_rad);
 /* A scan at t_s: predicts to t_s with the held control, then updates with the n observations

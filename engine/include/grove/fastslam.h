@@ -314,8 +314,9 @@ class GROVE_EXPORT FastSlam {
   // the last scan's. The prediction itself runs with the next Scan() or read-out (see Time
   // above): an error inside it (a particle's pose not finite, its noisy steering outside what
   // the vehicle model can use) stops the engine and is returned, with the step and time it
-  // happened at, by that Scan() or read-out, or by the next Control() or Scan() when the
-  // read-out returns no status. Every later step returns FailedPrecondition.
+  // happened at, by that Scan() or read-out, or, when the read-out returns no status (MeanPose(),
+  // MeanTrajectory(), Summary(), ...), by the next call that returns one. Every later step
+  // returns FailedPrecondition.
   Status Control(double t_s, double speed_mps, double steer_rad);
 
   // A scan at t_s (at or after the last time): predicts to t_s with the held control, then
