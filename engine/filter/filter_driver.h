@@ -95,13 +95,18 @@ class FilterDriver {
 
   // Predict(times[j], inputs[j]) for each j in turn, with the same state, times, mean poses and
   // errors, in one pass over the particles (ParticleFilter::PredictRun): what a facade uses for
-  // the predictions between two weighting steps. The particles' poses after each input are
-  // kept for the mean poses, in runs of at most kRunSampleBytes. InvalidArgument, nothing
-  // changed, for a bad time (as Predict()). Across ranks, input by input.
+  // the predictions between two weighting steps. With more than one thread the particles' poses
+  // after each input are kept for the mean poses, in runs of at most kRunSampleBytes; where a
+  // run would hold one input (about 260,000 particles), and across ranks, input by input.
+  // InvalidArgument, nothing changed, for a bad time (as Predict()).
   template <typename Input>
   Status PredictRun(std::span<const double> times, std::span<const Input> inputs) {
     GROVE_DCHECK(times.size() == inputs.size());
-    if (filter_.options().collective != nullptr || inputs.size() == 1) {
+    const size_t n = model_->size();
+    const size_t per_run = workers_->num_threads() == 1
+                               ? inputs.size()
+                               : std::max<size_t>(1, kRunSampleBytes / (sizeof(PoseSample) * n));
+    if (filter_.options().collective != nullptr || inputs.size() == 1 || per_run == 1) {
       for (size_t j = 0; j < inputs.size(); ++j) {
         GROVE_RETURN_IF_ERROR(Predict(times[j], inputs[j]));
       }
@@ -112,8 +117,6 @@ class FilterDriver {
                                       steps() + 1 + static_cast<int64_t>(j)));
     }
     GROVE_RETURN_IF_ERROR(CheckNotFailed("cannot be stepped again"));
-    const size_t n = model_->size();
-    const size_t per_run = std::max<size_t>(1, kRunSampleBytes / (sizeof(PoseSample) * n));
     return Guarded([&]() -> Status {
       for (size_t first = 0; first < inputs.size(); first += per_run) {
         const size_t count = std::min(per_run, inputs.size() - first);
@@ -271,7 +274,7 @@ class FilterDriver {
   struct PoseSample {
     double x, y, c, s;
   };
-  static constexpr size_t kRunSampleBytes = size_t{32} << 20;
+  static constexpr size_t kRunSampleBytes = size_t{8} << 20;
 
   // InvalidArgument unless step `step`'s time t_s is finite and in order after `previous`.
   Status CheckTime(double t_s, double previous, int64_t step) const {
