@@ -30,6 +30,8 @@ namespace {
 // FastSLAM's checkpoints. The body layout's version is bumped whenever it changes.
 // Version 3: the seed's filters (their configuration fields, evolution counts).
 // Version 4: the rank and rank count of the share it holds.
+// Version 5: the association counts' truncated joint-compatibility searches; no segment flag
+// (the step records say where a path segment starts).
 constexpr CheckpointFormat kFastSlamCheckpoint = {"grove fastslam", "FastSLAM", 5};
 
 // The landmark trees' degree, 2^kLog2Degree (engine/fastslam/README.md, "FastSLAM 1.0 and 2.0:
@@ -101,7 +103,10 @@ class FastSlam::Impl {
         return InvalidArgumentError(
             fmt::format("control at t = {} is before the last scan at t = {}", t_s, LastTime()));
       }
-      GROVE_RETURN_IF_ERROR(Guarded([&] { return Defer(t_s, kControlPredict); }));
+      GROVE_RETURN_IF_ERROR(driver_.Guarded([&] {
+        Defer(t_s, kControlPredict);
+        return Status::Ok();
+      }));
     }
     held_ = {v, g};
     last_control_s_ = t_s;
@@ -136,8 +141,8 @@ class FastSlam::Impl {
       if (!s.ok()) return Status(s.code(), fmt::format("scan at t = {}: {}", t_s, s.message()));
     }
     GROVE_RETURN_IF_ERROR(CheckNotFailed("cannot take another scan"));
-    return Guarded([&]() -> Status {
-      if (t_s > LastTime()) GROVE_RETURN_IF_ERROR(Defer(t_s, kScanPredict));
+    return driver_.Guarded([&]() -> Status {
+      if (t_s > LastTime()) Defer(t_s, kScanPredict);
       GROVE_RETURN_IF_ERROR(Settle());
       StepRecord record;
       record.kind = kScanUpdate;
@@ -148,7 +153,6 @@ class FastSlam::Impl {
         log_.pop_back();
         return s;
       }
-      model_.set_segment_start(true);
       reported_.push_back(driver_.mean_trajectory().back());
       ++scans_;
       observations_ += static_cast<int64_t>(z.size());
@@ -162,14 +166,14 @@ class FastSlam::Impl {
   Status Settle() {
     GROVE_RETURN_IF_ERROR(TakeDeferredError());
     if (pending_.empty()) return Status::Ok();
-    return Guarded([&]() -> Status {
+    return driver_.Guarded([&]() -> Status {
       std::vector<PendingStep> run;
       run.swap(pending_);
       std::vector<double> times(run.size());
       std::vector<PredictStep> steps(run.size());
       for (size_t j = 0; j < run.size(); ++j) {
         times[j] = run[j].t_s;
-        steps[j] = {run[j].record.control, j == 0 && model_.segment_start()};
+        steps[j] = {run[j].record.control, j == 0 && SegmentStarts()};
       }
       const size_t logged = log_.size();
       const int64_t before = driver_.steps();
@@ -183,7 +187,6 @@ class FastSlam::Impl {
       const size_t done =
           s.ok() ? run.size() : static_cast<size_t>(std::max<int64_t>(0, added - 1));
       log_.resize(logged + done);
-      if (done > 0) model_.set_segment_start(false);
       const std::vector<StampedPose>& mean = driver_.mean_trajectory();
       for (size_t j = 0; j < done; ++j) {
         if (run[j].record.kind == kControlPredict) {
@@ -446,14 +449,17 @@ class FastSlam::Impl {
 
   // A prediction with the held control from the last time to t_s, deferred to the next Settle():
   // the predictions between two scans then run in one pass over the particles.
-  Status Defer(double t_s, StepKind kind) {
+  void Defer(double t_s, StepKind kind) {
     PendingStep p;
     p.t_s = t_s;
     p.record.control = ControlStep{held_.v_mps, held_.steer_rad, t_s - LastTime()};
     p.record.kind = kind;
     pending_.push_back(p);
-    return Status::Ok();
   }
+
+  // Whether the next filter step's prediction starts a path segment: at the start and after a
+  // scan's update.
+  bool SegmentStarts() const { return log_.empty() || log_.back().kind == kScanUpdate; }
 
   // The error a quiet Settle() kept, once: the next call that returns a status reports it.
   Status TakeDeferredError() {
@@ -465,11 +471,6 @@ class FastSlam::Impl {
   Status CheckNotFailed(const char* what) {
     GROVE_RETURN_IF_ERROR(TakeDeferredError());
     return driver_.CheckNotFailed(what);
-  }
-
-  template <typename F>
-  Status Guarded(F&& f) {
-    return driver_.Guarded(std::forward<F>(f));
   }
 
   FastSlamConfig config_;

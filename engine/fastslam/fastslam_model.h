@@ -117,11 +117,6 @@ class FastSlamModel {
   const AssociationCounts& counts(size_t i) const { return association_.counts(i); }
   const EvolutionCounts& evolution_counts() const { return evolution_.counts(); }
 
-  // Whether the next prediction is the first of a path segment (after the start or a scan): the
-  // facade marks that PredictStep (PredictStep::starts_segment); kept here for checkpoints.
-  bool segment_start() const { return segment_start_; }
-  void set_segment_start(bool v) { segment_start_ = v; }
-
   // The prediction of particles [begin, end) over control c (FilterSteps::PredictPose() redoes
   // one of them).
   Status Predict(const PredictStep& prediction, uint64_t step, size_t begin, size_t end, int slot) {
@@ -334,11 +329,10 @@ class FastSlamModel {
     return m;
   }
 
-  // The particles' state after a step: poses, covariances, the segment flag, maps and paths.
+  // The particles' state after a step: poses, covariances, maps and paths.
   void Save(ByteWriter* w) const {
     w->Put<uint64_t>(n_);
     poses_.Save(w);
-    w->Put<uint8_t>(segment_start_ ? 1 : 0);
     association_.Save(w);
     evolution_.Save(w);
     trie_.Save(maps_.roots(), w);
@@ -350,9 +344,6 @@ class FastSlamModel {
     GROVE_RETURN_IF_ERROR(ReadParticleCount(r, n_));
     ParticlePoses::Saved poses;
     GROVE_RETURN_IF_ERROR(ParticlePoses::Read(r, n_, &poses));
-    uint8_t segment = 0;
-    GROVE_RETURN_IF_ERROR(r->Get("segment flag", &segment));
-    if (segment > 1) return r->Error("segment flag", "not 0 or 1");
     typename UnknownAssociation<Trie>::Saved association;
     GROVE_RETURN_IF_ERROR(association_.Read(r, &association));
     EvolutionCounts evolution;
@@ -376,7 +367,6 @@ class FastSlamModel {
       return s;
     }
     poses_.Restore(&poses);
-    segment_start_ = segment == 1;
     association_.Restore(&association);
     evolution_.Restore(evolution);
     maps_.Replace(std::move(roots));
@@ -631,7 +621,6 @@ class FastSlamModel {
   VersionSet<Trie> maps_;
   VersionSet<SegmentHistory> paths_;
   ParticlePoses poses_;
-  bool segment_start_ = true;
   UnknownAssociation<Trie> association_;
   LandmarkUpdates<Trie> updates_;
   DifferentialEvolution evolution_;
