@@ -125,50 +125,28 @@ class FastSlamModel {
     if (traits().pose == FilterTraits::Pose::kSampledMotion) {
       return PredictSampled(c, step, prediction.starts_segment, begin, end);
     }
-    const bool ekf = traits().pose == FilterTraits::Pose::kEkf;
-    const bool sigma_points = traits().draws_every_scan();
     const VehicleGeometry& geometry = steps_.geometry();
-    if ((ekf || sigma_points) && !SteeringUsable(geometry, c.steer_rad)) {
-      return BadSteering(begin);
-    }
-    // FastSLAM 2.0 moves every particle with the same control: its terms once per batch.
-    ControlTerms shared;
-    HeadingUnit turn{1, 0};
-    if (ekf) {
-      shared = ControlTermsOf(geometry, c.v_mps, c.steer_rad, c.dt_s);
-      turn = HeadingUnit{std::cos(shared.turn_rad), std::sin(shared.turn_rad)};
+    if (!SteeringUsable(geometry, c.steer_rad)) return BadSteering(begin);
+    if (traits().pose == FilterTraits::Pose::kEkf) {
+      const MotionResult r =
+          steps_.PredictLinearized(c, prediction.starts_segment, &poses_.pose(begin),
+                                   &poses_.unit(begin), &poses_.cov(begin), end - begin);
+      if (r.first_failed == end - begin) return Status::Ok();
+      return PoseNotFinite(begin + r.first_failed, poses_.pose(begin + r.first_failed));
     }
     for (size_t i = begin; i < end; ++i) {
-      const VehiclePose p = poses_.pose(i);
-      VehiclePose next;
-      if (sigma_points) {
-        Eigen::Vector3d mean = ToVector(p);
-        Eigen::Matrix3d m = steps_.Stored(poses_.cov(i));
-        Status s = steps_.SigmaPointPredict(c, &mean, &m);
-        if (!s.ok()) return ParticleStatus(first_ + i, s);
-        next = ToPose(mean);
-        poses_.cov(i) = steps_.Store(m);
-      } else {
-        StepTrig trig;
-        next = MoveVehicle(geometry, shared, p, &trig);
-        Eigen::Matrix3d gv;
-        Eigen::Matrix<double, 3, 2> gu;
-        VehicleJacobians(geometry, shared, trig, &gv, &gu);
-        steps_.PropagateCovariance(gv, gu, &poses_.cov(i));
-      }
+      Eigen::Vector3d mean = ToVector(poses_.pose(i));
+      Eigen::Matrix3d m = steps_.Stored(poses_.cov(i));
+      Status s = steps_.SigmaPointPredict(c, &mean, &m);
+      if (!s.ok()) return ParticleStatus(first_ + i, s);
+      const VehiclePose next = ToPose(mean);
       if (!std::isfinite(next.x_m) || !std::isfinite(next.y_m) ||
           !std::isfinite(next.heading_rad)) {
         return PoseNotFinite(i, next);
       }
+      poses_.cov(i) = steps_.Store(m);
       poses_.pose(i) = next;
-      if (ekf) {
-        // The heading turns by the same angle for every particle: rotate its unit vector (only
-        // the mean pose reads it) instead of a sine and cosine per particle.
-        const HeadingUnit& h = poses_.unit(i);
-        poses_.unit(i) = HeadingUnit{h.c * turn.c - h.s * turn.s, h.s * turn.c + h.c * turn.s};
-      } else {
-        poses_.unit(i) = HeadingUnit{std::cos(next.heading_rad), std::sin(next.heading_rad)};
-      }
+      poses_.unit(i) = HeadingUnit{std::cos(next.heading_rad), std::sin(next.heading_rad)};
     }
     return Status::Ok();
   }

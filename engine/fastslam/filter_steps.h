@@ -64,12 +64,6 @@ struct ScanStep {
   std::span<const LandmarkObservation> observations;
 };
 
-// A particle's pose covariance, its upper triangle, or for the central-difference filters the
-// lower Cholesky factor [xx 0 0; xy yy 0; xh yh hh].
-struct PoseCovariance {
-  double xx = 0, xy = 0, xh = 0, yy = 0, yh = 0, hh = 0;
-};
-
 class FilterSteps {
  public:
   // REQUIRES: config.Validate() is ok.
@@ -128,10 +122,14 @@ class FilterSteps {
         *usable = PredictSampled(c, step, index, true, &q, &unit, 1).first_failed == 1;
         return *usable ? q : p;
       }
-      case FilterTraits::Pose::kEkf:
-        *usable = SteeringUsable(geometry_, c.steer_rad);
-        if (!*usable) return p;
-        return MoveVehicle(geometry_, ControlTermsOf(geometry_, c.v_mps, c.steer_rad, c.dt_s), p);
+      case FilterTraits::Pose::kEkf: {
+        // As kSampledMotion: the unit vector is recomputed; the covariance is not needed.
+        VehiclePose q = p;
+        HeadingUnit unit;
+        *usable = SteeringUsable(geometry_, c.steer_rad) &&
+                  PredictLinearized(c, true, &q, &unit, nullptr, 1).first_failed == 1;
+        return *usable ? q : p;
+      }
       case FilterTraits::Pose::kUnscented:
       case FilterTraits::Pose::kCentralDifference: {
         Eigen::Vector3d mean = ToVector(p);
@@ -144,27 +142,6 @@ class FilterSteps {
     }
     *usable = false;
     return p;
-  }
-
-  // Sigma <- Gv Sigma Gv^T + Gu Q Gu^T on the upper triangle, for the Jacobians' shape: Gv is
-  // the identity but for its heading column (gv(0,2), gv(1,2)) and Q is diagonal. Writing
-  // Gv = I + a e_h^T with a = (gv(0,2), gv(1,2), 0) and c = Sigma e_h, the first term is
-  // Sigma + a c^T + c a^T + Sigma_hh a a^T; the second is q_v g_v g_v^T + q_g g_g g_g^T.
-  void PropagateCovariance(const Eigen::Matrix3d& gv, const Eigen::Matrix<double, 3, 2>& gu,
-                           PoseCovariance* p) const {
-    const double ax = gv(0, 2), ay = gv(1, 2);
-    const double cx = p->xh, cy = p->yh, ch = p->hh;
-    const double qv = q_(0, 0), qg = q_(1, 1);
-    const double v0 = gu(0, 0), v1 = gu(1, 0), v2 = gu(2, 0);
-    const double g0 = gu(0, 1), g1 = gu(1, 1), g2 = gu(2, 1);
-    PoseCovariance out;
-    out.xx = p->xx + 2 * ax * cx + ch * ax * ax + qv * v0 * v0 + qg * g0 * g0;
-    out.xy = p->xy + ax * cy + cx * ay + ch * ax * ay + qv * v0 * v1 + qg * g0 * g1;
-    out.xh = p->xh + ax * ch + qv * v0 * v2 + qg * g0 * g2;
-    out.yy = p->yy + 2 * ay * cy + ch * ay * ay + qv * v1 * v1 + qg * g1 * g1;
-    out.yh = p->yh + ay * ch + qv * v1 * v2 + qg * g1 * g2;
-    out.hh = p->hh + qv * v2 * v2 + qg * g2 * g2;
-    *p = out;
   }
 
   // The unscented or central-difference prediction of (mean, m) over the control.
@@ -204,6 +181,14 @@ class FilterSteps {
       if (r.first_failed < m) return {b + r.first_failed, r.why};
     }
     return {n, MotionFailure::kNone};
+  }
+
+  // The EKF pose steps' prediction of particles [0, n) over control c (MoveLinearized(); covs
+  // nullptr: the poses only). REQUIRES: SteeringUsable() of c's steering.
+  MotionResult PredictLinearized(const ControlStep& c, bool units_from_headings, VehiclePose* poses,
+                                 HeadingUnit* units, PoseCovariance* covs, size_t n) const {
+    const SampledControl u{geometry_, c.v_mps, c.steer_rad, c.dt_s, 0, 0};
+    return MoveLinearized(u, q_(0, 0), q_(1, 1), units_from_headings, poses, units, covs, n);
   }
 
   // The covariance reading of a leaf.

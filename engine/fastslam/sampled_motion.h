@@ -1,6 +1,7 @@
 // MoveSampled: FastSLAM 1.0's prediction of many particles at once, each with its own noisy
 // control, with particles in SIMD lanes (Google Highway, dispatched at run time like
-// DrawNormals).
+// DrawNormals). MoveLinearized: FastSLAM 2.0's, the same step with the control itself and each
+// particle's pose covariance carried through it.
 //
 // Per particle, from its pose (x, y, phi), its heading's unit vector (cos phi, sin phi) and its
 // standard normals n: V = v + sigma_v n, G = g + sigma_g n (each term drawn only when its sigma
@@ -17,6 +18,11 @@
 // batch, on any Highway target (every operation rounds: the source is compiled with
 // -ffp-contract=off), and for one particle replayed alone (FilterSteps::PredictPose()).
 //
+// MoveLinearized adds Sigma <- Gv Sigma Gv^T + Gu Q Gu^T with Q = diag(q_speed, q_steer) and
+// the Jacobians of the step with respect to the pose (Gv: the identity but for its heading
+// column) and the control (Gu), as VehicleJacobians() gives them, from the same sines and
+// cosines as the step; the covariance's upper triangle in six terms, lane by lane.
+//
 // Thread safety: a pure function of its arguments on the particles it is given.
 #ifndef GROVE_ENGINE_FASTSLAM_SAMPLED_MOTION_H_
 #define GROVE_ENGINE_FASTSLAM_SAMPLED_MOTION_H_
@@ -32,6 +38,12 @@ namespace grove::fastslam {
 // The heading's unit vector (cos, sin).
 struct HeadingUnit {
   double c, s;
+};
+
+// A particle's pose covariance, its upper triangle, or for the central-difference filters the
+// lower Cholesky factor [xx 0 0; xy yy 0; xh yh hh].
+struct PoseCovariance {
+  double xx = 0, xy = 0, xh = 0, yy = 0, yh = 0, hh = 0;
 };
 
 // A control step as MoveSampled moves particles with it.
@@ -62,6 +74,13 @@ struct MotionResult {
 MotionResult MoveSampled(const SampledControl& u, const double* const* noise,
                          bool units_from_headings, VehiclePose* poses, HeadingUnit* units,
                          size_t n);
+
+// Moves particles [0, n) with the control (v_mps, steer_rad; u's sigmas are not used) as
+// MoveSampled() does and, when covs is not nullptr, propagates covs[i] (covariances, not
+// factors) through the step with Q = diag(q_speed, q_steer).
+MotionResult MoveLinearized(const SampledControl& u, double q_speed, double q_steer,
+                            bool units_from_headings, VehiclePose* poses, HeadingUnit* units,
+                            PoseCovariance* covs, size_t n);
 
 }  // namespace grove::fastslam
 

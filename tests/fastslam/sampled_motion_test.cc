@@ -1,12 +1,14 @@
-// MoveSampled (FastSLAM 1.0's particle steps in SIMD lanes): the same bits on every Highway
-// target and in any grouping of the particles, the vehicle model's step to round-off, the
-// wrap of the heading, and the first unusable particle reported.
+// MoveSampled and MoveLinearized (FastSLAM 1.0's and 2.0's particle steps in SIMD lanes): the
+// same bits on every Highway target and in any grouping of the particles, the vehicle model's
+// step and covariance propagation to round-off, the wrap of the heading, and the first unusable
+// particle reported.
 #include "engine/fastslam/sampled_motion.h"
 
 #include <gtest/gtest.h>
 #include <hwy/highway.h>
 #include <hwy/targets.h>
 
+#include <Eigen/Core>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -26,6 +28,7 @@ struct Particles {
   std::vector<VehiclePose> poses;
   std::vector<HeadingUnit> units;
   std::vector<double> nv, ng;
+  std::vector<PoseCovariance> covs;
 };
 
 // n particles anywhere, headings across (-pi, pi] (units SinCos of them) and standard normals.
@@ -42,6 +45,11 @@ Particles RandomParticles(size_t n, uint64_t seed) {
     p.units.push_back(u);
     p.nv.push_back(normal(rng));
     p.ng.push_back(normal(rng));
+    // A covariance: A A^T of a random A.
+    Eigen::Matrix3d a;
+    for (int k = 0; k < 9; ++k) a(k / 3, k % 3) = normal(rng);
+    const Eigen::Matrix3d c = a * a.transpose();
+    p.covs.push_back({c(0, 0), c(0, 1), c(0, 2), c(1, 1), c(1, 2), c(2, 2)});
   }
   return p;
 }
@@ -68,11 +76,20 @@ MotionResult Move(const SampledControl& u, Particles* p, bool from_headings, siz
                      end - begin);
 }
 
+constexpr double kQSpeed = 0.09, kQSteer = 0.0027;
+
+MotionResult MoveEkf(const SampledControl& u, Particles* p, bool from_headings, size_t begin,
+                     size_t end) {
+  return MoveLinearized(u, kQSpeed, kQSteer, from_headings, p->poses.data() + begin,
+                        p->units.data() + begin, p->covs.data() + begin, end - begin);
+}
+
 std::vector<uint64_t> Bits(const Particles& p) {
   std::vector<uint64_t> bits;
   for (size_t i = 0; i < p.poses.size(); ++i) {
-    for (double v :
-         {p.poses[i].x_m, p.poses[i].y_m, p.poses[i].heading_rad, p.units[i].c, p.units[i].s}) {
+    const PoseCovariance& c = p.covs[i];
+    for (double v : {p.poses[i].x_m, p.poses[i].y_m, p.poses[i].heading_rad, p.units[i].c,
+                     p.units[i].s, c.xx, c.xy, c.xh, c.yy, c.yh, c.hh}) {
       bits.push_back(std::bit_cast<uint64_t>(v));
     }
   }
@@ -196,6 +213,88 @@ TEST(SampledMotionTest, ReportsTheFirstUnusableParticle) {
   const MotionResult s = Move(fast, &q, false, 0, 3);
   EXPECT_EQ(s.first_failed, 0u);
   EXPECT_EQ(s.why, MotionFailure::kNotFinite);
+}
+
+TEST(LinearizedMotionTest, SameBitsOnEveryTargetAndInAnyGrouping) {
+  for (FastSlamVehicle vehicle : {FastSlamVehicle::kBailey, FastSlamVehicle::kGuivantNebot}) {
+    for (bool from_headings : {false, true}) {
+      SCOPED_TRACE(testing::Message() << "vehicle " << static_cast<int>(vehicle)
+                                      << " units from headings " << from_headings);
+      const SampledControl u = Control(vehicle);
+      const Particles start = RandomParticles(37, 76);
+      std::vector<uint64_t> first;
+      for (int64_t target : hwy::SupportedAndGeneratedTargets()) {
+        hwy::SetSupportedTargetsForTest(target);
+        SCOPED_TRACE(hwy::TargetName(target));
+        Particles all = start;
+        ASSERT_EQ(MoveEkf(u, &all, from_headings, 0, 37).first_failed, 37u);
+        Particles one = start;
+        for (size_t i = 0; i < 37; ++i) MoveEkf(u, &one, from_headings, i, i + 1);
+        Particles groups = start;
+        for (size_t b = 0; b < 37; b += 5)
+          MoveEkf(u, &groups, from_headings, b, std::min<size_t>(b + 5, 37));
+        // Without covariances (a replay): the same poses and units.
+        Particles poses_only = start;
+        ASSERT_EQ(MoveLinearized(u, kQSpeed, kQSteer, from_headings, poses_only.poses.data(),
+                                 poses_only.units.data(), nullptr, 37)
+                      .first_failed,
+                  37u);
+        poses_only.covs = all.covs;
+        if (first.empty()) first = Bits(all);
+        EXPECT_EQ(Bits(all), first);
+        EXPECT_EQ(Bits(one), first);
+        EXPECT_EQ(Bits(groups), first);
+        EXPECT_EQ(Bits(poses_only), first);
+      }
+      hwy::SetSupportedTargetsForTest(0);
+    }
+  }
+}
+
+// The step with the control itself, and Gv Sigma Gv^T + Gu Q Gu^T with VehicleJacobians()'s
+// Jacobians, in Eigen.
+TEST(LinearizedMotionTest, AgreesWithTheVehicleModelAndItsJacobians) {
+  for (FastSlamVehicle vehicle : {FastSlamVehicle::kBailey, FastSlamVehicle::kGuivantNebot}) {
+    SCOPED_TRACE(testing::Message() << "vehicle " << static_cast<int>(vehicle));
+    const SampledControl u = Control(vehicle);  // its sigmas are not used
+    Particles p = RandomParticles(50, 77);
+    const Particles before = p;
+    ASSERT_EQ(MoveEkf(u, &p, false, 0, 50).first_failed, 50u);
+    const Eigen::Matrix2d q = Eigen::Vector2d(kQSpeed, kQSteer).asDiagonal();
+    for (size_t i = 0; i < 50; ++i) {
+      const VehiclePose want =
+          MoveVehicle(u.geometry, before.poses[i], u.v_mps, u.steer_rad, u.dt_s);
+      EXPECT_NEAR(p.poses[i].x_m, want.x_m, 1e-12) << i;
+      EXPECT_NEAR(p.poses[i].y_m, want.y_m, 1e-12) << i;
+      EXPECT_NEAR(WrapAngle(p.poses[i].heading_rad - want.heading_rad), 0, 1e-14) << i;
+      EXPECT_NEAR(p.units[i].c, std::cos(want.heading_rad), 1e-15) << i;
+      Eigen::Matrix3d gv;
+      Eigen::Matrix<double, 3, 2> gu;
+      VehicleJacobians(u.geometry, before.poses[i], u.v_mps, u.steer_rad, u.dt_s, &gv, &gu);
+      const PoseCovariance& b = before.covs[i];
+      Eigen::Matrix3d sigma;
+      sigma << b.xx, b.xy, b.xh, b.xy, b.yy, b.yh, b.xh, b.yh, b.hh;
+      const Eigen::Matrix3d w = gv * sigma * gv.transpose() + gu * q * gu.transpose();
+      const PoseCovariance& c = p.covs[i];
+      const double tol = 1e-12 * (1 + w.cwiseAbs().maxCoeff());
+      EXPECT_NEAR(c.xx, w(0, 0), tol) << i;
+      EXPECT_NEAR(c.xy, w(0, 1), tol) << i;
+      EXPECT_NEAR(c.xh, w(0, 2), tol) << i;
+      EXPECT_NEAR(c.yy, w(1, 1), tol) << i;
+      EXPECT_NEAR(c.yh, w(1, 2), tol) << i;
+      EXPECT_NEAR(c.hh, w(2, 2), tol) << i;
+    }
+  }
+}
+
+TEST(LinearizedMotionTest, ReportsAPoseThatIsNotFinite) {
+  SampledControl u = Control(FastSlamVehicle::kBailey);
+  u.v_mps = 1e308;
+  u.dt_s = 10;
+  Particles p = RandomParticles(3, 78);
+  const MotionResult r = MoveEkf(u, &p, false, 0, 3);
+  EXPECT_EQ(r.first_failed, 0u);
+  EXPECT_EQ(r.why, MotionFailure::kNotFinite);
 }
 
 }  // namespace
