@@ -194,12 +194,24 @@ class FastSlamModel {
   Status Complete(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot) {
     if (!traits().draws_after_resampling) return Status::Ok();
     if (scan.observations.empty() && !traits().draws_every_scan()) return Status::Ok();
+    // The EKF map under known association: every pose drawn, then the landmark updates of the
+    // particles drawn, observation by observation across them (LandmarkUpdates), reporting the
+    // lowest failing particle's error as the loop below does.
+    if (traits().map == FilterTraits::Map::kEkf && !traits().evolution && !association_.active()) {
+      Status drawn;
+      size_t i = begin;
+      for (; i < end; ++i) {
+        drawn = Draw(step, i);
+        if (!drawn.ok()) break;
+      }
+      if (!scan.observations.empty() && i > begin) {
+        GROVE_RETURN_IF_ERROR(updates_.Apply(steps_, &trie_, &maps_[begin], &poses_.pose(begin),
+                                             first_ + begin, scan, i - begin, slot, nullptr));
+      }
+      return drawn;
+    }
     for (size_t i = begin; i < end; ++i) {
-      VehiclePose& pose = poses_.pose(i);
-      GROVE_RETURN_IF_ERROR(steps_.Draw(step, first_ + i, poses_.proposal_mu(i),
-                                        steps_.Stored(poses_.proposal_sigma(i)), &pose));
-      poses_.unit(i) = HeadingUnit{std::cos(pose.heading_rad), std::sin(pose.heading_rad)};
-      poses_.cov(i) = steps_.restart_covariance();
+      GROVE_RETURN_IF_ERROR(Draw(step, i));
       if (traits().evolution || scan.observations.empty()) continue;
       GROVE_RETURN_IF_ERROR(UpdateMap(scan, i, slot));
     }
@@ -558,6 +570,16 @@ class FastSlamModel {
   }
 
   // The landmark updates of particle i's scan from its pose now.
+  // Particle i's pose drawn from its proposal at `step`; its covariance restarts.
+  Status Draw(uint64_t step, size_t i) {
+    VehiclePose& pose = poses_.pose(i);
+    GROVE_RETURN_IF_ERROR(steps_.Draw(step, first_ + i, poses_.proposal_mu(i),
+                                      steps_.Stored(poses_.proposal_sigma(i)), &pose));
+    poses_.unit(i) = HeadingUnit{std::cos(pose.heading_rad), std::sin(pose.heading_rad)};
+    poses_.cov(i) = steps_.restart_covariance();
+    return Status::Ok();
+  }
+
   Status UpdateMap(const ScanStep& scan, size_t i, int slot) {
     if (association_.active()) {
       return association_.ApplyPending(steps_, &trie_, &maps_[i], scan, i, poses_.pose(i), slot);
