@@ -39,6 +39,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
+#include <cmath>
 #include <cstdint>
 #include <numbers>
 #include <type_traits>
@@ -78,6 +79,24 @@ inline constexpr double kPsdTolerance = 1e-10;
 // A 3x3 covariance counts as symmetric when |A(i,j) - A(j,i)| <= kSymmetryTolerance * max |A(k,k)|.
 inline constexpr double kSymmetryTolerance = 1e-9;
 
+// The lower Cholesky factor of a 3x3 `a` from its lower triangle, in the operations and order
+// of Eigen's unblocked LLT (so the same bits, without its loops and its norm for rcond()); false
+// where Eigen's LLT fails (a pivot at or below 0; NaN passes, as there).
+inline bool Cholesky3(const Eigen::Matrix3d& a, Eigen::Matrix3d* l) {
+  const double d0 = a(0, 0);
+  if (d0 <= 0) return false;
+  const double l00 = std::sqrt(d0);
+  const double l10 = a(1, 0) / l00, l20 = a(2, 0) / l00;
+  const double d1 = a(1, 1) - l10 * l10;
+  if (d1 <= 0) return false;
+  const double l11 = std::sqrt(d1);
+  const double l21 = (a(2, 1) - l20 * l10) / l11;
+  const double d2 = a(2, 2) - (l20 * l20 + l21 * l21);
+  if (d2 <= 0) return false;
+  if (l != nullptr) *l << l00, 0, 0, l10, l11, 0, l20, l21, std::sqrt(d2);
+  return true;
+}
+
 // A with A A^T = a when `a` is positive semi-definite in the sense of kPsdTolerance: the Cholesky
 // factor when LLT succeeds (positive definite, the usual case), else V diag(lambda)^1/2 from the
 // symmetric eigendecomposition with round-off eigenvalues clamped to 0 (a pivoted LDLT can stop
@@ -87,10 +106,15 @@ inline constexpr double kSymmetryTolerance = 1e-9;
 template <int N>
 bool PsdSquareRoot(const Eigen::Matrix<double, N, N>& a, Eigen::Matrix<double, N, N>* root) {
   using Matrix = Eigen::Matrix<double, N, N>;
-  const Eigen::LLT<Matrix> llt(a);
-  if (llt.info() == Eigen::Success) [[likely]] {
-    if (root != nullptr) *root = llt.matrixL();
-    return true;
+  if constexpr (N == 3) {
+    if (Cholesky3(a, root)) [[likely]]
+      return true;
+  } else {
+    const Eigen::LLT<Matrix> llt(a);
+    if (llt.info() == Eigen::Success) [[likely]] {
+      if (root != nullptr) *root = llt.matrixL();
+      return true;
+    }
   }
   const Eigen::SelfAdjointEigenSolver<Matrix> eigen(a);
   if (eigen.info() != Eigen::Success) return false;

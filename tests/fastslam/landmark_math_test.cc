@@ -998,5 +998,31 @@ TEST(LogGaussianDensityTest, MatchesTheClosedFormAndRejectsBadCovariance) {
   EXPECT_EQ(untouched, 3);
 }
 
+// Cholesky3 is Eigen's LLT bit for bit on positive definite matrices (near-singular ones too)
+// and fails where it fails.
+TEST(Cholesky3Test, MatchesEigensLltBitForBit) {
+  std::mt19937_64 rng(91);
+  std::normal_distribution<double> normal(0, 1);
+  int failures = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    Eigen::Matrix3d a;
+    for (int k = 0; k < 9; ++k) a(k / 3, k % 3) = normal(rng);
+    Eigen::Matrix3d m = a * a.transpose();
+    if (trial % 4 == 1) m(2, 2) -= 1.5 * std::fabs(normal(rng));  // often indefinite
+    if (trial % 4 == 2) m = a.col(0) * a.col(0).transpose() + 1e-13 * Eigen::Matrix3d::Identity();
+    const Eigen::LLT<Eigen::Matrix3d> llt(m);
+    Eigen::Matrix3d l;
+    const bool ok = Cholesky3(m, &l);
+    ASSERT_EQ(ok, llt.info() == Eigen::Success) << m;
+    if (!ok) {
+      ++failures;
+      continue;
+    }
+    const Eigen::Matrix3d want = llt.matrixL();
+    EXPECT_EQ(std::memcmp(l.data(), want.data(), sizeof(double) * 9), 0) << m;
+  }
+  EXPECT_GT(failures, 0);  // both outcomes were exercised
+}
+
 }  // namespace
 }  // namespace grove::fastslam
