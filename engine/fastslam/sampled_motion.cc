@@ -1,6 +1,6 @@
 // MoveSampled and MoveLinearized (sampled_motion.h): FastSLAM's particle steps in Highway
 // vectors, one particle per 64-bit lane, poses and unit vectors loaded from their arrays of
-// structures, covariances gathered from theirs. Compiled with
+// structures, covariances through a buffer from theirs. Compiled with
 // -ffp-contract=off (engine/CMakeLists.txt): no multiply and add are fused, so every target and
 // the scalar fix-ups round alike. foreach_target.h compiles the HWY_NAMESPACE part once per
 // target; HWY_DYNAMIC_DISPATCH picks one at run time.
@@ -172,36 +172,48 @@ HWY_INLINE bool MoveVector(D d, const SampledControl& u, const double* nv, const
 
 // The covariances of one vector of particles at covs (an array of PoseCovariance) carried
 // through the step: Gv = I + a e_h^T with a = (ax, ay, 0) and c = Sigma e_h make Gv Sigma Gv^T
-// = Sigma + a c^T + c a^T + Sigma_hh a a^T; Gu Q Gu^T = q_v g_v g_v^T + q_g g_g g_g^T.
+// = Sigma + a c^T + c a^T + Sigma_hh a a^T; Gu Q Gu^T = q_v g_v g_v^T + q_g g_g g_g^T. The six
+// terms are moved between the structures and the lanes through a buffer (cheaper than gathers
+// and scatters).
 HWY_INLINE void PropagateVector(D d, const StepJacobian& j, double q_speed, double q_steer,
-                                double* covs) {
-  const hn::RebindToSigned<D> di;
-  const auto at = hn::Mul(hn::Iota(di, 0), hn::Set(di, 6));
-  auto load = [&](int k) { return hn::GatherIndex(d, covs + k, at); };
-  const VD xx = load(0), xy = load(1), xh = load(2), yy = load(3), yh = load(4), hh = load(5);
+                                PoseCovariance* covs) {
+  constexpr size_t kMax = hn::MaxLanes(D());
+  HWY_ALIGN double t[6][kMax];
+  const size_t lanes = hn::Lanes(d);
+  for (size_t k = 0; k < lanes; ++k) {
+    const PoseCovariance& c = covs[k];
+    t[0][k] = c.xx;
+    t[1][k] = c.xy;
+    t[2][k] = c.xh;
+    t[3][k] = c.yy;
+    t[4][k] = c.yh;
+    t[5][k] = c.hh;
+  }
+  const VD xx = hn::Load(d, t[0]), xy = hn::Load(d, t[1]), xh = hn::Load(d, t[2]);
+  const VD yy = hn::Load(d, t[3]), yh = hn::Load(d, t[4]), hh = hn::Load(d, t[5]);
   const VD qv = hn::Set(d, q_speed), qg = hn::Set(d, q_steer), two = hn::Set(d, 2.0);
   // q_v a_r a_c + q_g b_r b_c for the control's two columns.
   auto control = [&](VD vr, VD vc, VD gr, VD gc) {
     return hn::Add(hn::Mul(hn::Mul(qv, vr), vc), hn::Mul(hn::Mul(qg, gr), gc));
   };
-  const VD out_xx = hn::Add(
-      hn::Add(hn::Add(xx, hn::Mul(hn::Mul(two, j.ax), xh)), hn::Mul(hn::Mul(hh, j.ax), j.ax)),
-      control(j.v0, j.v0, j.g0, j.g0));
-  const VD out_xy = hn::Add(hn::Add(hn::Add(hn::Add(xy, hn::Mul(j.ax, yh)), hn::Mul(xh, j.ay)),
-                                    hn::Mul(hn::Mul(hh, j.ax), j.ay)),
-                            control(j.v0, j.v1, j.g0, j.g1));
-  const VD out_xh = hn::Add(hn::Add(xh, hn::Mul(j.ax, hh)), control(j.v0, j.v2, j.g0, j.g2));
-  const VD out_yy = hn::Add(
-      hn::Add(hn::Add(yy, hn::Mul(hn::Mul(two, j.ay), yh)), hn::Mul(hn::Mul(hh, j.ay), j.ay)),
-      control(j.v1, j.v1, j.g1, j.g1));
-  const VD out_yh = hn::Add(hn::Add(yh, hn::Mul(j.ay, hh)), control(j.v1, j.v2, j.g1, j.g2));
-  const VD out_hh = hn::Add(hh, control(j.v2, j.v2, j.g2, j.g2));
-  hn::ScatterIndex(out_xx, d, covs + 0, at);
-  hn::ScatterIndex(out_xy, d, covs + 1, at);
-  hn::ScatterIndex(out_xh, d, covs + 2, at);
-  hn::ScatterIndex(out_yy, d, covs + 3, at);
-  hn::ScatterIndex(out_yh, d, covs + 4, at);
-  hn::ScatterIndex(out_hh, d, covs + 5, at);
+  hn::Store(hn::Add(hn::Add(hn::Add(xx, hn::Mul(hn::Mul(two, j.ax), xh)),
+                            hn::Mul(hn::Mul(hh, j.ax), j.ax)),
+                    control(j.v0, j.v0, j.g0, j.g0)),
+            d, t[0]);
+  hn::Store(hn::Add(hn::Add(hn::Add(hn::Add(xy, hn::Mul(j.ax, yh)), hn::Mul(xh, j.ay)),
+                            hn::Mul(hn::Mul(hh, j.ax), j.ay)),
+                    control(j.v0, j.v1, j.g0, j.g1)),
+            d, t[1]);
+  hn::Store(hn::Add(hn::Add(xh, hn::Mul(j.ax, hh)), control(j.v0, j.v2, j.g0, j.g2)), d, t[2]);
+  hn::Store(hn::Add(hn::Add(hn::Add(yy, hn::Mul(hn::Mul(two, j.ay), yh)),
+                            hn::Mul(hn::Mul(hh, j.ay), j.ay)),
+                    control(j.v1, j.v1, j.g1, j.g1)),
+            d, t[3]);
+  hn::Store(hn::Add(hn::Add(yh, hn::Mul(j.ay, hh)), control(j.v1, j.v2, j.g1, j.g2)), d, t[4]);
+  hn::Store(hn::Add(hh, control(j.v2, j.v2, j.g2, j.g2)), d, t[5]);
+  for (size_t k = 0; k < lanes; ++k) {
+    covs[k] = PoseCovariance{t[0][k], t[1][k], t[2][k], t[3][k], t[4][k], t[5][k]};
+  }
 }
 
 // MoveSampled(), or with kLinearized MoveLinearized() (noise is then nullptr; covs may be).
@@ -222,7 +234,7 @@ MotionResult MoveAll(const SampledControl& u, const double* const* noise, bool u
         d, u, v, g, units_from_headings, reinterpret_cast<double*>(p), reinterpret_cast<double*>(q),
         raw, failed, steering, &jac);
     if (kLinearized && r != nullptr) {
-      PropagateVector(d, jac, q_speed, q_steer, reinterpret_cast<double*>(r));
+      PropagateVector(d, jac, q_speed, q_steer, r);
     }
     return wrap;
   };
