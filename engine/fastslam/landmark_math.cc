@@ -23,8 +23,6 @@ constexpr double kPi = std::numbers::pi;
 constexpr double kTwoPi = 2 * std::numbers::pi;  // exactly twice kPi
 const double kLogTwoPi = std::log(kTwoPi);
 
-using Llt2 = Eigen::LLT<Eigen::Matrix2d>;
-
 // Messages (error path only).
 
 template <typename Derived>
@@ -73,20 +71,6 @@ template <typename Derived>
 typename Derived::PlainObject Symmetric(const Eigen::MatrixBase<Derived>& expression) {
   const typename Derived::PlainObject a = expression;
   return 0.5 * (a + a.transpose());
-}
-
-// C^-1 B from the LLT of C, one column at a time: Eigen sends a matrix right-hand side through its
-// blocked, packing triangular solver, several times the cost of the vector path at these sizes.
-template <int N, int M>
-Eigen::Matrix<double, N, M> SolveColumns(const Eigen::LLT<Eigen::Matrix<double, N, N>>& llt,
-                                         const Eigen::Matrix<double, N, M>& b) {
-  Eigen::Matrix<double, N, M> x;
-  for (int j = 0; j < M; ++j) {
-    Eigen::Matrix<double, N, 1> column = b.col(j);
-    llt.solveInPlace(column);
-    x.col(j) = column;
-  }
-  return x;
 }
 
 // log N(v; 0, C) from C = L L^T: -|L^-1 v|^2 / 2 - (N/2) log 2pi - log prod L_ii. (The product
@@ -280,44 +264,98 @@ Status KalmanCore(const Eigen::Vector2d& v, const Eigen::Matrix2d& h, const Eige
   return Status::Ok();
 }
 
-// Q = Hv sigma Hv^T + S: the innovation covariance with the pose uncertain.
-Eigen::Matrix2d PoseInnovationCovariance(const Matrix23d& h_pose, const Eigen::Matrix3d& sigma,
-                                         const Eigen::Matrix2d& s) {
-  return Symmetric(h_pose * sigma * h_pose.transpose() + s);
-}
+// The innovation Q = Hv sigma Hv^T + S of the proposal, in closed form: the products Hv sigma
+// the gain reuses, Q's symmetric entries and its determinant.
+struct PoseInnovation {
+  double hp[2][3];       // Hv sigma
+  double q00, q01, q11;  // Q
+  double det;            // det Q
+};
 
-// Q and its LLT, or why not.
-Status PoseInnovationFactor(const Matrix23d& h_pose, const Eigen::Matrix3d& sigma,
-                            const Eigen::Matrix2d& s, Eigen::Matrix2d* q, Llt2* llt) {
-  *q = PoseInnovationCovariance(h_pose, sigma, s);
-  if (!q->allFinite()) [[unlikely]] {
-    return FailedPreconditionError(fmt::format(
-        "innovation covariance Hv sigma Hv^T + S = {} is not finite", FormatMatrix(*q)));
+// Q and its determinant, or why Q is unusable (not finite, not positive definite). REQUIRES:
+// finite inputs, sigma and s symmetric.
+Status PoseInnovationOf(const Matrix23d& h_pose, const Eigen::Matrix3d& sigma,
+                        const Eigen::Matrix2d& s, PoseInnovation* out) {
+  PoseInnovation& n = *out;
+  for (int i = 0; i < 2; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      n.hp[i][j] =
+          h_pose(i, 0) * sigma(0, j) + h_pose(i, 1) * sigma(1, j) + h_pose(i, 2) * sigma(2, j);
+    }
   }
-  llt->compute(*q);
-  if (llt->info() != Eigen::Success) [[unlikely]] {
-    return NotPositiveDefinite("innovation covariance Hv sigma Hv^T + S", *q);
+  auto times_h = [&](int i, int k) {
+    return n.hp[i][0] * h_pose(k, 0) + n.hp[i][1] * h_pose(k, 1) + n.hp[i][2] * h_pose(k, 2);
+  };
+  n.q00 = times_h(0, 0) + s(0, 0);
+  n.q01 = 0.5 * (times_h(0, 1) + times_h(1, 0)) + s(0, 1);
+  n.q11 = times_h(1, 1) + s(1, 1);
+  n.det = n.q00 * n.q11 - n.q01 * n.q01;
+  if (!std::isfinite(n.q00) || !std::isfinite(n.q01) || !std::isfinite(n.q11)) [[unlikely]] {
+    return FailedPreconditionError(
+        fmt::format("innovation covariance Hv sigma Hv^T + S = {} is not finite",
+                    FormatMatrix(Matrix2Of(n.q00, n.q01, n.q11))));
+  }
+  if (!(n.q00 > 0 && n.det > 0) || !std::isfinite(n.det)) [[unlikely]] {
+    return NotPositiveDefinite("innovation covariance Hv sigma Hv^T + S",
+                               Matrix2Of(n.q00, n.q01, n.q11));
   }
   return Status::Ok();
 }
 
-// The FastSLAM 2.0 proposal update (covariance form, Joseph); writes nothing on error.
-// REQUIRES: finite inputs, sigma and s symmetric.
+// log N(v; 0, Q): v^T Q^-1 v through Q = L D L^T (never negative), and Q's determinant.
+double PoseLogDensity(const PoseInnovation& n, const Eigen::Vector2d& v) {
+  const double t = v(1) - (n.q01 / n.q00) * v(0);
+  const double m2 = v(0) * v(0) / n.q00 + t * t * (n.q00 / n.det);
+  return -0.5 * m2 - kLogTwoPi - 0.5 * std::log(n.det);
+}
+
+// The FastSLAM 2.0 proposal update (covariance form, Joseph), in closed form; writes nothing on
+// error. REQUIRES: finite inputs, sigma and s symmetric.
 Status ProposalCore(const Eigen::Vector2d& v, const Matrix23d& h_pose, const Eigen::Matrix2d& s,
                     Eigen::Vector3d* mu, Eigen::Matrix3d* sigma, double* log_weight) {
   const Eigen::Matrix3d& p = *sigma;
-  Eigen::Matrix2d q;
-  Llt2 llt;
-  GROVE_RETURN_IF_ERROR(PoseInnovationFactor(h_pose, p, s, &q, &llt));
-  // K = sigma Hv^T Q^-1, from K^T = Q^-1 Hv sigma; equal to sigma' Hv^T S^-1 (Woodbury).
-  const Eigen::Matrix<double, 3, 2> k = SolveColumns<2, 3>(llt, h_pose * p).transpose();
+  PoseInnovation n;
+  GROVE_RETURN_IF_ERROR(PoseInnovationOf(h_pose, p, s, &n));
+  // K = sigma Hv^T Q^-1 = (Hv sigma)^T Q^-1 (equal to sigma' Hv^T S^-1: Woodbury).
+  const double inv = 1 / n.det;
+  Eigen::Matrix<double, 3, 2> k;
+  for (int j = 0; j < 3; ++j) {
+    k(j, 0) = (n.hp[0][j] * n.q11 - n.hp[1][j] * n.q01) * inv;
+    k(j, 1) = (n.hp[1][j] * n.q00 - n.hp[0][j] * n.q01) * inv;
+  }
   const Eigen::Vector3d new_mu = *mu + k * v;
-  const Eigen::Matrix3d a = Eigen::Matrix3d::Identity() - k * h_pose;
-  const Eigen::Matrix3d new_sigma = Symmetric(a * p * a.transpose() + k * s * k.transpose());
-  const double lw = LogDensity<2>(llt, v);
+  // A sigma A^T + K S K^T with A = I - K Hv.
+  Eigen::Matrix3d a;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      a(i, j) = (i == j ? 1.0 : 0.0) - (k(i, 0) * h_pose(0, j) + k(i, 1) * h_pose(1, j));
+    }
+  }
+  Eigen::Matrix3d ap;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j)
+      ap(i, j) = a(i, 0) * p(0, j) + a(i, 1) * p(1, j) + a(i, 2) * p(2, j);
+  }
+  Eigen::Matrix<double, 3, 2> ks;
+  for (int i = 0; i < 3; ++i) {
+    ks(i, 0) = k(i, 0) * s(0, 0) + k(i, 1) * s(1, 0);
+    ks(i, 1) = k(i, 0) * s(0, 1) + k(i, 1) * s(1, 1);
+  }
+  auto entry = [&](int i, int j) {
+    return (ap(i, 0) * a(j, 0) + ap(i, 1) * a(j, 1) + ap(i, 2) * a(j, 2)) +
+           (ks(i, 0) * k(j, 0) + ks(i, 1) * k(j, 1));
+  };
+  Eigen::Matrix3d new_sigma;
+  for (int i = 0; i < 3; ++i) {
+    new_sigma(i, i) = entry(i, i);
+    for (int j = i + 1; j < 3; ++j)
+      new_sigma(i, j) = new_sigma(j, i) = 0.5 * (entry(i, j) + entry(j, i));
+  }
+  const double lw = PoseLogDensity(n, v);
   if (!new_mu.allFinite() || !new_sigma.allFinite() || !std::isfinite(lw)) [[unlikely]] {
     return FailedPreconditionError(
-        fmt::format("proposal update is not finite (Hv sigma Hv^T + S = {})", FormatMatrix(q)));
+        fmt::format("proposal update is not finite (Hv sigma Hv^T + S = {})",
+                    FormatMatrix(Matrix2Of(n.q00, n.q01, n.q11))));
   }
   *mu = new_mu;
   *sigma = new_sigma;
@@ -539,14 +577,13 @@ Status ProposalLogWeight(const Eigen::Vector3d& mu, const Eigen::Matrix3d& sigma
   Eigen::Matrix3d sigma_sym;
   GROVE_RETURN_IF_ERROR(
       PrepareProposal(mu, sigma, landmark, z, noise, &v, &h_pose, &s, &sigma_sym));
-  // The Q and factorisation ProposalCore forms, so the value equals ProposalStep's.
-  Eigen::Matrix2d q;
-  Llt2 llt;
-  GROVE_RETURN_IF_ERROR(PoseInnovationFactor(h_pose, sigma_sym, s, &q, &llt));
-  const double lw = LogDensity<2>(llt, v);
+  // The Q ProposalCore forms, so the value equals ProposalStep's.
+  PoseInnovation n;
+  GROVE_RETURN_IF_ERROR(PoseInnovationOf(h_pose, sigma_sym, s, &n));
+  const double lw = PoseLogDensity(n, v);
   if (!std::isfinite(lw)) [[unlikely]] {
-    return FailedPreconditionError(
-        fmt::format("log weight is not finite (Hv sigma Hv^T + S = {})", FormatMatrix(q)));
+    return FailedPreconditionError(fmt::format("log weight is not finite (Hv sigma Hv^T + S = {})",
+                                               FormatMatrix(Matrix2Of(n.q00, n.q01, n.q11))));
   }
   *log_weight = lw;
   return Status::Ok();

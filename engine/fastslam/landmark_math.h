@@ -103,11 +103,23 @@ inline bool Cholesky3(const Eigen::Matrix3d& a, Eigen::Matrix3d* l) {
 // at a zero pivot followed by round-off; the eigenvalues decide semi-definiteness robustly).
 // False when `a` is not positive semi-definite. `root` may be null (a check only).
 // REQUIRES: a finite and symmetric.
+// Whether a 3x3 `a` is positive definite by the pivots of its L D L^T (from its lower triangle),
+// without square roots: the quick test of PsdSquareRoot() when no root is wanted.
+inline bool PositivePivots3(const Eigen::Matrix3d& a) {
+  const double d0 = a(0, 0);
+  if (!(d0 > 0)) return false;
+  const double l10 = a(1, 0) / d0, l20 = a(2, 0) / d0;
+  const double d1 = a(1, 1) - l10 * a(1, 0);
+  if (!(d1 > 0)) return false;
+  const double e21 = a(2, 1) - l20 * a(1, 0);
+  return a(2, 2) - l20 * a(2, 0) - e21 * e21 / d1 > 0;
+}
+
 template <int N>
 bool PsdSquareRoot(const Eigen::Matrix<double, N, N>& a, Eigen::Matrix<double, N, N>* root) {
   using Matrix = Eigen::Matrix<double, N, N>;
   if constexpr (N == 3) {
-    if (Cholesky3(a, root)) [[likely]]
+    if (root == nullptr ? PositivePivots3(a) : Cholesky3(a, root)) [[likely]]
       return true;
   } else {
     const Eigen::LLT<Matrix> llt(a);
