@@ -113,29 +113,44 @@ struct SensorView {  // FastSlamConfig's sensor_range_m and sensor_fov_rad
   double fov_rad;
 };
 
-// A detection's point in the plane and its squared candidate radius (FindMatches' scratch).
+// A detection's point in the plane and its squared candidate radius.
 struct DetectionProbe {
   double x, y, radius2;
+};
+
+// FindMatches' buffers, kept by the caller (per worker) between calls: the probes and the
+// (detection, landmark) pairs whose likelihoods are computed together.
+struct MatchScratch {
+  std::vector<DetectionProbe> probes;
+  std::vector<uint32_t> detection;
+  std::vector<uint64_t> key;
+  std::vector<Landmark> leaf;
+  std::vector<const Landmark*> leaf_ptr;
+  std::vector<RangeBearing> z;
+  std::vector<double> log_likelihood, d2;
 };
 
 // Appends the matches of every detection of `scan` against the map `root` of `trie` (keyed by
 // SpatialKey) seen from `pose`; with `view`, also the keys of the landmarks in view, in
 // increasing order, to *in_view (the same range query). use_index: candidates from the spatial
 // range query; false: from every landmark of the map, unfiltered (the reference the index and the
-// radius are tested against). *probes is scratch, kept by the caller (per worker) between calls.
-// Errors: those of ObservationLogLikelihood, naming the detection.
+// radius are tested against). Errors: those of ObservationLogLikelihood for the first pair of
+// the query that fails, naming the detection and the landmark.
 template <typename Trie>
 Status FindMatches(const Trie& trie, const typename Trie::Node* root, const VehiclePose& pose,
                    std::span<const LandmarkObservation> scan, const AssociationParams& params,
                    double max_range_m, bool use_index, std::vector<Match>* out,
-                   std::vector<DetectionProbe>* probe_scratch, const SensorView* view = nullptr,
+                   MatchScratch* scratch, const SensorView* view = nullptr,
                    std::vector<uint64_t>* in_view = nullptr) {
   const Eigen::Matrix2d r = SensorCovariance(params.noise);
   const double sr2 = r(0, 0), sb2 = r(1, 1);
   // Each detection's point and candidate radius, and the box around all of them (and the
   // view): one range query per scan, each landmark in it tested against every detection.
-  std::vector<DetectionProbe>& probes = *probe_scratch;
+  std::vector<DetectionProbe>& probes = scratch->probes;
   probes.clear();
+  scratch->detection.clear();
+  scratch->key.clear();
+  scratch->leaf.clear();
   double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
   bool bounded = true;
   for (const LandmarkObservation& z : scan) {
@@ -162,9 +177,8 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
     y0 = std::min(y0, pose.y_m - view->range_m);
     y1 = std::max(y1, pose.y_m + view->range_m);
   }
-  Status status;
+  // The range query notes the pairs to test; their likelihoods follow in SIMD lanes.
   auto consider = [&](uint64_t key, const Landmark& leaf) {
-    if (!status.ok()) return;
     const Landmark l = params.square_root_leaves ? WithCovariance(leaf) : leaf;
     const double lx = l.x_m - pose.x_m, ly = l.y_m - pose.y_m;
     if (view != nullptr) {
@@ -192,19 +206,12 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
         }
         if (d2 > reach2) continue;
       }
-      const LandmarkObservation& z = scan[j];
-      double ll = 0, m2 = 0;
-      Status s = ObservationLogLikelihood(pose, RangeBearing{z.range_m, z.bearing_rad},
-                                          params.noise, l, &ll, &m2);
-      if (!s.ok()) {
-        status =
-            Status(s.code(), fmt::format("detection {}, landmark {}: {}", j, key, s.message()));
-        return;
-      }
-      if (m2 <= params.augment_gate) out->push_back(Match{static_cast<uint32_t>(j), key, ll, m2});
+      scratch->detection.push_back(static_cast<uint32_t>(j));
+      scratch->key.push_back(key);
+      scratch->leaf.push_back(l);
     }
   };
-  if (scan.empty() && view == nullptr) return status;
+  if (scan.empty() && view == nullptr) return Status::Ok();
   if (use_index && bounded) {
     // One rectangle around them all: testing each node against every detection's rectangle
     // costs more than the landmarks it would skip (measured on Victoria Park: 8 % more
@@ -215,7 +222,32 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
   } else {
     trie.ForEach(root, consider);
   }
-  return status;
+  // The pairs' likelihoods (ObservationLogLikelihoods()), the matches in the order noted.
+  const size_t n = scratch->key.size();
+  scratch->leaf_ptr.resize(n);
+  scratch->z.resize(n);
+  scratch->log_likelihood.resize(n);
+  scratch->d2.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    const LandmarkObservation& z = scan[scratch->detection[k]];
+    scratch->leaf_ptr[k] = &scratch->leaf[k];
+    scratch->z[k] = RangeBearing{z.range_m, z.bearing_rad};
+  }
+  size_t failed = n;
+  Status s =
+      ObservationLogLikelihoods(pose, scratch->z.data(), scratch->leaf_ptr.data(), params.noise,
+                                scratch->log_likelihood.data(), scratch->d2.data(), n, &failed);
+  if (!s.ok()) {
+    return Status(s.code(), fmt::format("detection {}, landmark {}: {}", scratch->detection[failed],
+                                        scratch->key[failed], s.message()));
+  }
+  for (size_t k = 0; k < n; ++k) {
+    if (scratch->d2[k] <= params.augment_gate) {
+      out->push_back(Match{scratch->detection[k], scratch->key[k], scratch->log_likelihood[k],
+                           scratch->d2[k]});
+    }
+  }
+  return Status::Ok();
 }
 
 }  // namespace grove::fastslam

@@ -18,6 +18,17 @@ const double kLogTwoPi = std::log(kTwoPi);
 // WrapAngle()'s reach for one add of 2 pi (landmark_math.h).
 constexpr double kOneTurn = 9.0;
 
+// A batch's inputs: lane i's pose is poses[i * pose_step] and its observation zs[i * z_step]
+// (a step of 0: one for every lane).
+template <typename Leaf>
+struct Batch {
+  const VehiclePose* poses;
+  size_t pose_step;
+  const RangeBearing* zs;
+  size_t z_step;
+  Leaf* const* leaves;
+};
+
 }  // namespace grove::fastslam::landmark_batch_internal
 
 #endif  // GROVE_ENGINE_FASTSLAM_LANDMARK_BATCH_CC_
@@ -37,6 +48,7 @@ namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 using grove::HWY_NAMESPACE::Atan2Vector;
 using grove::HWY_NAMESPACE::LogVector;
+using landmark_batch_internal::Batch;
 
 using D = hn::ScalableTag<double>;
 using VD = hn::Vec<D>;
@@ -48,6 +60,7 @@ constexpr size_t kMaxLanes = hn::MaxLanes(D());
 struct Gathered {
   HWY_ALIGN double px[kMaxLanes], py[kMaxLanes], ph[kMaxLanes];
   HWY_ALIGN double lx[kMaxLanes], ly[kMaxLanes], a[kMaxLanes], b[kMaxLanes], c[kMaxLanes];
+  HWY_ALIGN double range[kMaxLanes], bearing[kMaxLanes];
   size_t count;  // lanes with a landmark, the first `count`
 };
 
@@ -74,16 +87,15 @@ struct Innovation {
   MD ok;  // the landmark is off the sensor and S is positive definite
 };
 
-HWY_INLINE Innovation Innovate(D d, const Gathered& g, const RangeBearing& z, double r0,
-                               double r1) {
+HWY_INLINE Innovation Innovate(D d, const Gathered& g, double r0, double r1) {
   Innovation n;
   const VD dx = hn::Sub(hn::Load(d, g.lx), hn::Load(d, g.px));
   const VD dy = hn::Sub(hn::Load(d, g.ly), hn::Load(d, g.py));
   const VD q = hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy));
   const VD r = hn::Sqrt(q);
-  n.v0 = hn::Sub(hn::Set(d, z.range_m), r);
+  n.v0 = hn::Sub(hn::Load(d, g.range), r);
   const VD predicted = Wrap(d, hn::Sub(Atan2Vector(d, dy, dx), hn::Load(d, g.ph)));
-  n.v1 = Wrap(d, hn::Sub(hn::Set(d, z.bearing_rad), predicted));
+  n.v1 = Wrap(d, hn::Sub(hn::Load(d, g.bearing), predicted));
   n.h00 = hn::Div(dx, r);
   n.h01 = hn::Div(dy, r);
   n.h10 = hn::Div(hn::Neg(dy), q);
@@ -114,12 +126,15 @@ HWY_INLINE VD LogLikelihood(D d, const Innovation& n, VD* m2) {
 // Gathers lanes [at, at + count) of the batch (count <= Lanes); a lane without a landmark, or
 // past count, takes a stand-in 1 m ahead of its pose (or of lane `at`'s).
 template <typename Leaf>
-HWY_INLINE void Gather(D d, const VehiclePose* poses, Leaf* const* leaves, size_t at, size_t count,
-                       Gathered* g) {
+HWY_INLINE void Gather(D d, const Batch<Leaf>& in, size_t at, size_t count, Gathered* g) {
   g->count = count;
   for (size_t j = 0; j < hn::Lanes(d); ++j) {
-    const VehiclePose& p = poses[at + (j < count ? j : 0)];
-    const Landmark* l = j < count ? leaves[at + j] : nullptr;
+    const size_t k = at + (j < count ? j : 0);
+    const VehiclePose& p = in.poses[k * in.pose_step];
+    const RangeBearing& z = in.zs[k * in.z_step];
+    g->range[j] = z.range_m;
+    g->bearing[j] = z.bearing_rad;
+    const Landmark* l = j < count ? in.leaves[at + j] : nullptr;
     g->px[j] = p.x_m;
     g->py[j] = p.y_m;
     g->ph[j] = p.heading_rad;
@@ -138,8 +153,7 @@ HWY_INLINE void Gather(D d, const VehiclePose* poses, Leaf* const* leaves, size_
   }
 }
 
-size_t UpdateImpl(const VehiclePose* poses, Landmark* const* leaves, const RangeBearing& z,
-                  double r0, double r1, double* sums, size_t n) {
+size_t UpdateImpl(const Batch<Landmark>& in, double r0, double r1, double* sums, size_t n) {
   const D d;
   const size_t lanes = hn::Lanes(d);
   size_t first_failed = n;
@@ -148,8 +162,8 @@ size_t UpdateImpl(const VehiclePose* poses, Landmark* const* leaves, const Range
   HWY_ALIGN uint8_t ok_bits[8];
   for (size_t at = 0; at < n; at += lanes) {
     const size_t count = n - at < lanes ? n - at : lanes;
-    Gather(d, poses, leaves, at, count, &g);
-    const Innovation v = Innovate(d, g, z, r0, r1);
+    Gather(d, in, at, count, &g);
+    const Innovation v = Innovate(d, g, r0, r1);
     const VD inv = hn::Div(hn::Set(d, 1.0), v.det);
     const VD k00 = hn::Mul(hn::Sub(hn::Mul(v.hp00, v.s11), hn::Mul(v.hp10, v.s01)), inv);
     const VD k01 = hn::Mul(hn::Sub(hn::Mul(v.hp10, v.s00), hn::Mul(v.hp00, v.s01)), inv);
@@ -193,7 +207,7 @@ size_t UpdateImpl(const VehiclePose* poses, Landmark* const* leaves, const Range
     hn::Store(p11, d, out[4]);
     hn::Store(ll, d, out[5]);
     for (size_t j = 0; j < count; ++j) {
-      Landmark* l = leaves[at + j];
+      Landmark* l = in.leaves[at + j];
       if (l == nullptr) continue;
       if (!((ok_bits[j / 8] >> (j % 8)) & 1)) {
         if (first_failed == n) first_failed = at + j;
@@ -210,9 +224,8 @@ size_t UpdateImpl(const VehiclePose* poses, Landmark* const* leaves, const Range
   return first_failed;
 }
 
-size_t LikelihoodImpl(const VehiclePose* poses, const Landmark* const* leaves,
-                      const RangeBearing& z, double r0, double r1, double* log_likelihoods,
-                      double* mahalanobis_sq, size_t n) {
+size_t LikelihoodImpl(const Batch<const Landmark>& in, double r0, double r1,
+                      double* log_likelihoods, double* mahalanobis_sq, size_t n) {
   const D d;
   const size_t lanes = hn::Lanes(d);
   size_t first_failed = n;
@@ -221,8 +234,8 @@ size_t LikelihoodImpl(const VehiclePose* poses, const Landmark* const* leaves,
   HWY_ALIGN uint8_t ok_bits[8];
   for (size_t at = 0; at < n; at += lanes) {
     const size_t count = n - at < lanes ? n - at : lanes;
-    Gather(d, poses, leaves, at, count, &g);
-    const Innovation v = Innovate(d, g, z, r0, r1);
+    Gather(d, in, at, count, &g);
+    const Innovation v = Innovate(d, g, r0, r1);
     VD m2;
     const VD ll = LogLikelihood(d, v, &m2);
     hn::StoreMaskBits(d, hn::And(v.ok, hn::IsFinite(ll)), ok_bits);
@@ -252,14 +265,22 @@ HWY_EXPORT(LikelihoodImpl);
 
 size_t UpdateLandmarkBatch(const VehiclePose* poses, Landmark* const* leaves, const RangeBearing& z,
                            double r0, double r1, double* sums, size_t n) {
-  return HWY_DYNAMIC_DISPATCH(UpdateImpl)(poses, leaves, z, r0, r1, sums, n);
+  const landmark_batch_internal::Batch<Landmark> in{poses, 1, &z, 0, leaves};
+  return HWY_DYNAMIC_DISPATCH(UpdateImpl)(in, r0, r1, sums, n);
 }
 
 size_t LandmarkLikelihoodBatch(const VehiclePose* poses, const Landmark* const* leaves,
                                const RangeBearing& z, double r0, double r1, double* log_likelihoods,
                                double* mahalanobis_sq, size_t n) {
-  return HWY_DYNAMIC_DISPATCH(LikelihoodImpl)(poses, leaves, z, r0, r1, log_likelihoods,
-                                              mahalanobis_sq, n);
+  const landmark_batch_internal::Batch<const Landmark> in{poses, 1, &z, 0, leaves};
+  return HWY_DYNAMIC_DISPATCH(LikelihoodImpl)(in, r0, r1, log_likelihoods, mahalanobis_sq, n);
+}
+
+size_t LandmarkLikelihoodPairs(const VehiclePose& pose, const Landmark* const* leaves,
+                               const RangeBearing* zs, double r0, double r1,
+                               double* log_likelihoods, double* mahalanobis_sq, size_t n) {
+  const landmark_batch_internal::Batch<const Landmark> in{&pose, 0, zs, 1, leaves};
+  return HWY_DYNAMIC_DISPATCH(LikelihoodImpl)(in, r0, r1, log_likelihoods, mahalanobis_sq, n);
 }
 
 }  // namespace grove::fastslam

@@ -40,6 +40,11 @@ size_t LandmarkLikelihoodBatch(const VehiclePose* poses, const Landmark* const* 
                                const RangeBearing& z, double r0, double r1, double* log_likelihoods,
                                double* mahalanobis_sq, size_t n);
 
+// As LandmarkLikelihoodBatch() for n pairs seen from one pose: zs[i] against *leaves[i].
+size_t LandmarkLikelihoodPairs(const VehiclePose& pose, const Landmark* const* leaves,
+                               const RangeBearing* zs, double r0, double r1,
+                               double* log_likelihoods, double* mahalanobis_sq, size_t n);
+
 }  // namespace grove::fastslam
 
 #endif  // GROVE_ENGINE_FASTSLAM_LANDMARK_BATCH_H_

@@ -539,6 +539,32 @@ Status ObservationLogLikelihood(const VehiclePose& pose, const RangeBearing& z,
   return WhyUpdateFailed(pose, z, noise, landmark);
 }
 
+Status ObservationLogLikelihoods(const VehiclePose& pose, const RangeBearing* zs,
+                                 const Landmark* const* leaves, const SensorNoise& noise,
+                                 double* log_likelihoods, double* mahalanobis_sq, size_t n,
+                                 size_t* failed) {
+  bool usable = true;
+  for (size_t k = 0; k < n && usable; ++k) usable = InputsUsable(pose, zs[k], noise, *leaves[k]);
+  if (usable) [[likely]] {
+    const double sr = std::max(noise.sigma_range_m, kMinSigma);
+    const double sb = std::max(noise.sigma_bearing_rad, kMinSigma);
+    if (LandmarkLikelihoodPairs(pose, leaves, zs, sr * sr, sb * sb, log_likelihoods, mahalanobis_sq,
+                                n) == n) [[likely]] {
+      return Status::Ok();
+    }
+  }
+  // A pair fails: one at a time, for the first failure's status.
+  for (size_t k = 0; k < n; ++k) {
+    Status s = ObservationLogLikelihood(pose, zs[k], noise, *leaves[k], &log_likelihoods[k],
+                                        &mahalanobis_sq[k]);
+    if (!s.ok()) {
+      *failed = k;
+      return s;
+    }
+  }
+  return Status::Ok();
+}
+
 Status ProposalUpdate(const Eigen::Vector2d& innovation, const Matrix23d& h_pose,
                       const Eigen::Matrix2d& s, Eigen::Vector3d* mu, Eigen::Matrix3d* sigma,
                       double* log_weight) {

@@ -267,6 +267,14 @@ Status ObservationLogLikelihood(const VehiclePose& pose, const RangeBearing& z,
                                 const SensorNoise& noise, const Landmark& landmark,
                                 double* log_likelihood, double* mahalanobis_sq = nullptr);
 
+// ObservationLogLikelihood() of n pairs seen from one pose, zs[k] against *leaves[k], into
+// log_likelihoods[k] and mahalanobis_sq[k], for k < n, in SIMD lanes (the same values). On an
+// error, the first failing pair's: its index in *failed and ObservationLogLikelihood()'s status.
+Status ObservationLogLikelihoods(const VehiclePose& pose, const RangeBearing* zs,
+                                 const Landmark* const* leaves, const SensorNoise& noise,
+                                 double* log_likelihoods, double* mahalanobis_sq, size_t n,
+                                 size_t* failed);
+
 // FastSLAM 2.0 proposal step for one observation (Montemerlo et al. 2003; applied observation by
 // observation as Bailey's sample_proposal, relinearising at the current mean): with Hv, Hl and
 // z_pred at (mu, landmark), v = Innovation(z, z_pred), S = Hl P Hl^T + R,

@@ -63,7 +63,7 @@ class UnknownAssociation {
     ScanQuery query;
     std::vector<Decision> decisions;
     std::vector<uint64_t> keys;
-    std::vector<DetectionProbe> probes;
+    MatchScratch matches;
     // Sampled association: the scan's log T - log L_drawn summed over detections
     // (association_sampling.h), to add to the particle's log-weight.
     double log_correction = 0;
@@ -121,7 +121,7 @@ class UnknownAssociation {
     sc->query.matches.clear();
     sc->query.in_view.clear();
     Status s = FindMatches(trie, root, pose, scan.observations, params_, max_range_,
-                           /*use_index=*/true, &sc->query.matches, &sc->probes,
+                           /*use_index=*/true, &sc->query.matches, &sc->matches,
                            evidence_ ? &view_ : nullptr, &sc->query.in_view);
     if (!s.ok()) return Status(s.code(), fmt::format("particle {}, {}", first_ + i, s.message()));
     if (sampled_) {

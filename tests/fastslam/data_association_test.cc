@@ -241,9 +241,9 @@ TEST(FindMatches, IndexGivesTheSameMatchesAsTheWholeMap) {
       scan.push_back({max_range * unit(rng), WrapAngle((2 * unit(rng) - 1) * kPi), -1});
     }
     std::vector<Match> indexed, all;
-    std::vector<DetectionProbe> probes;
-    ASSERT_TRUE(FindMatches(trie, root, pose, scan, p, max_range, true, &indexed, &probes).ok());
-    ASSERT_TRUE(FindMatches(trie, root, pose, scan, p, max_range, false, &all, &probes).ok());
+    MatchScratch scratch;
+    ASSERT_TRUE(FindMatches(trie, root, pose, scan, p, max_range, true, &indexed, &scratch).ok());
+    ASSERT_TRUE(FindMatches(trie, root, pose, scan, p, max_range, false, &all, &scratch).ok());
     auto order = [](const Match& a, const Match& b) {
       return a.detection != b.detection ? a.detection < b.detection : a.key < b.key;
     };

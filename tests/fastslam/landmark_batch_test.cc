@@ -141,6 +141,55 @@ TEST(LandmarkBatchTest, LikelihoodIsTheUpdatesLogLikelihood) {
   }
 }
 
+// Pairs seen from one pose, each with its own observation: ObservationLogLikelihood()'s values
+// bit for bit on every target, and on an error the first failing pair with its status.
+TEST(LandmarkBatchTest, PairsFromOnePoseAreObservationLogLikelihoods) {
+  const Batch b = RandomBatch(13, 84);
+  const VehiclePose pose = b.poses[0];
+  std::mt19937_64 rng(85);
+  std::uniform_real_distribution<double> range(1, 40), angle(-kPi, kPi);
+  std::vector<RangeBearing> zs;
+  std::vector<const Landmark*> pointers;
+  for (const Landmark& l : b.leaves) {
+    zs.push_back({range(rng), angle(rng)});
+    pointers.push_back(&l);
+  }
+  const SensorNoise noise{0.1, 0.02};
+  for (int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    hwy::SetSupportedTargetsForTest(target);
+    SCOPED_TRACE(hwy::TargetName(target));
+    std::vector<double> ll(13), m2(13);
+    size_t failed = 99;
+    ASSERT_TRUE(ObservationLogLikelihoods(pose, zs.data(), pointers.data(), noise, ll.data(),
+                                          m2.data(), 13, &failed)
+                    .ok());
+    for (size_t k = 0; k < 13; ++k) {
+      double want = 0, want_m2 = 0;
+      ASSERT_TRUE(ObservationLogLikelihood(pose, zs[k], noise, b.leaves[k], &want, &want_m2).ok());
+      EXPECT_EQ(std::bit_cast<uint64_t>(ll[k]), std::bit_cast<uint64_t>(want)) << k;
+      EXPECT_EQ(std::bit_cast<uint64_t>(m2[k]), std::bit_cast<uint64_t>(want_m2)) << k;
+    }
+  }
+  hwy::SetSupportedTargetsForTest(0);
+  // Pair 5's landmark at the sensor and pair 9's covariance not finite: pair 5's error.
+  std::vector<Landmark> bad = b.leaves;
+  bad[5].x_m = pose.x_m;
+  bad[5].y_m = pose.y_m;
+  bad[9].xx = NAN;
+  std::vector<const Landmark*> bad_pointers;
+  for (const Landmark& l : bad) bad_pointers.push_back(&l);
+  std::vector<double> ll(13), m2(13);
+  size_t failed = 99;
+  const Status s = ObservationLogLikelihoods(pose, zs.data(), bad_pointers.data(), noise, ll.data(),
+                                             m2.data(), 13, &failed);
+  double unused = 0;
+  const Status want = ObservationLogLikelihood(pose, zs[5], noise, bad[5], &unused, &unused);
+  ASSERT_FALSE(want.ok());
+  EXPECT_EQ(failed, 5u);
+  EXPECT_EQ(s.code(), want.code());
+  EXPECT_EQ(s.message(), want.message());
+}
+
 // A bearing many turns off is the same observation: the update agrees to round-off.
 TEST(LandmarkBatchTest, BearingsManyTurnsOffAreWrapped) {
   const Batch b = RandomBatch(9, 84);
