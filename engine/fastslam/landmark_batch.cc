@@ -276,6 +276,12 @@ size_t LandmarkLikelihoodBatch(const VehiclePose* poses, const Landmark* const* 
   return HWY_DYNAMIC_DISPATCH(LikelihoodImpl)(in, r0, r1, log_likelihoods, mahalanobis_sq, n);
 }
 
+size_t UpdateLandmarkPairs(const VehiclePose& pose, Landmark* const* leaves, const RangeBearing* zs,
+                           double r0, double r1, double* sums, size_t n) {
+  const landmark_batch_internal::Batch<Landmark> in{&pose, 0, zs, 1, leaves};
+  return HWY_DYNAMIC_DISPATCH(UpdateImpl)(in, r0, r1, sums, n);
+}
+
 size_t LandmarkLikelihoodPairs(const VehiclePose& pose, const Landmark* const* leaves,
                                const RangeBearing* zs, double r0, double r1,
                                double* log_likelihoods, double* mahalanobis_sq, size_t n) {

@@ -40,6 +40,10 @@ size_t LandmarkLikelihoodBatch(const VehiclePose* poses, const Landmark* const* 
                                const RangeBearing& z, double r0, double r1, double* log_likelihoods,
                                double* mahalanobis_sq, size_t n);
 
+// As UpdateLandmarkBatch() for n landmarks seen from one pose: *leaves[i] by zs[i].
+size_t UpdateLandmarkPairs(const VehiclePose& pose, Landmark* const* leaves, const RangeBearing* zs,
+                           double r0, double r1, double* sums, size_t n);
+
 // As LandmarkLikelihoodBatch() for n pairs seen from one pose: zs[i] against *leaves[i].
 size_t LandmarkLikelihoodPairs(const VehiclePose& pose, const Landmark* const* leaves,
                                const RangeBearing* zs, double r0, double r1,

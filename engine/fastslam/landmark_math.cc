@@ -4,6 +4,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -537,6 +538,40 @@ Status ObservationLogLikelihood(const VehiclePose& pose, const RangeBearing& z,
     return Status::Ok();
   }
   return WhyUpdateFailed(pose, z, noise, landmark);
+}
+
+Status UpdateLandmarks(const VehiclePose& pose, const RangeBearing* zs, Landmark* const* leaves,
+                       const SensorNoise& noise, size_t n, size_t* failed) {
+  bool usable = true;
+  for (size_t k = 0; k < n && usable; ++k) usable = InputsUsable(pose, zs[k], noise, *leaves[k]);
+  if (!usable) [[unlikely]] {
+    // One at a time, nothing updated yet: the first failure's status.
+    for (size_t k = 0; k < n; ++k) {
+      Status s = UpdateLandmark(pose, zs[k], noise, leaves[k], nullptr);
+      if (!s.ok()) {
+        *failed = k;
+        return s;
+      }
+    }
+    return Status::Ok();
+  }
+  const double sr = std::max(noise.sigma_range_m, kMinSigma);
+  const double sb = std::max(noise.sigma_bearing_rad, kMinSigma);
+  constexpr size_t kChunk = 64;
+  double sums[kChunk];
+  for (size_t first = 0; first < n; first += kChunk) {
+    const size_t m = std::min(kChunk, n - first);
+    std::fill(sums, sums + m, 0.0);
+    const size_t f =
+        UpdateLandmarkPairs(pose, leaves + first, zs + first, sr * sr, sb * sb, sums, m);
+    if (f < m) [[unlikely]] {
+      // Landmark first + f is unchanged: UpdateLandmark() runs the same lane on it, and says why.
+      *failed = first + f;
+      Status s = UpdateLandmark(pose, zs[first + f], noise, leaves[first + f], nullptr);
+      return s.ok() ? InternalError("a landmark update failed in a batch and not alone") : s;
+    }
+  }
+  return Status::Ok();
 }
 
 Status ObservationLogLikelihoods(const VehiclePose& pose, const RangeBearing* zs,

@@ -259,6 +259,13 @@ Landmark InitLandmark(const VehiclePose& pose, const RangeBearing& z, const Sens
 Status UpdateLandmark(const VehiclePose& pose, const RangeBearing& z, const SensorNoise& noise,
                       Landmark* landmark, double* log_likelihood);
 
+// UpdateLandmark() of n distinct landmarks seen from one pose, *leaves[k] by zs[k] for k < n,
+// in SIMD lanes (the same values; the log-likelihoods are not kept). On an error, the first
+// failing landmark's: its index in *failed and UpdateLandmark()'s status (that landmark is
+// unchanged; the others may be updated).
+Status UpdateLandmarks(const VehiclePose& pose, const RangeBearing* zs, Landmark* const* leaves,
+                       const SensorNoise& noise, size_t n, size_t* failed);
+
 // log N(v; 0, S) for z at `pose` without updating the landmark (Bailey's likelihood_given_xv; the
 // FastSLAM 1.0 weight factor), and optionally the squared Mahalanobis distance v^T S^-1 v (for
 // gating and nearest-neighbour association). Same errors as UpdateLandmark; equals the

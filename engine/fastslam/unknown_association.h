@@ -64,6 +64,10 @@ class UnknownAssociation {
     std::vector<Decision> decisions;
     std::vector<uint64_t> keys;
     MatchScratch matches;
+    // UpdateAssociatedTogether(): the leaves to update, their observations and detections.
+    std::vector<Landmark*> update_leaves;
+    std::vector<RangeBearing> update_zs;
+    std::vector<uint32_t> update_detections;
     // Sampled association: the scan's log T - log L_drawn summed over detections
     // (association_sampling.h), to add to the particle's log-weight.
     double log_correction = 0;
@@ -383,6 +387,9 @@ class UnknownAssociation {
   // sc->keys.
   Status UpdateAssociated(const FilterSteps& steps, Trie* trie, Node** root, const ScanStep& scan,
                           size_t i, int slot, const VehiclePose& pose, Scratch* sc) {
+    if (steps.traits().map == FilterTraits::Map::kEkf) {
+      return UpdateAssociatedTogether(steps, trie, root, scan, i, slot, pose, sc);
+    }
     AssociationCounts& counts = counts_[i];
     for (size_t j = 0; j < sc->decisions.size(); ++j) {
       const Decision& d = sc->decisions[j];
@@ -406,6 +413,60 @@ class UnknownAssociation {
       sc->keys.push_back(d.key);
     }
     return Status::Ok();
+  }
+
+  // UpdateAssociated() for the EKF map: the paths to the associated landmarks copied first (a
+  // path copied once is the particle's own, so the leaves noted stay where they are; the
+  // evidence and the counts as the loop does), then their updates together (UpdateLandmarks()).
+  // Two detections associated with one landmark update it in turn, as the loop does.
+  Status UpdateAssociatedTogether(const FilterSteps& steps, Trie* trie, Node** root,
+                                  const ScanStep& scan, size_t i, int slot, const VehiclePose& pose,
+                                  Scratch* sc) {
+    AssociationCounts& counts = counts_[i];
+    sc->update_leaves.clear();
+    sc->update_zs.clear();
+    sc->update_detections.clear();
+    size_t start = 0;  // the first noted update not yet applied
+    auto apply = [&]() -> Status {
+      const size_t n = sc->update_leaves.size() - start;
+      size_t failed = 0;
+      Status s = UpdateLandmarks(pose, sc->update_zs.data() + start,
+                                 sc->update_leaves.data() + start, steps.noise(), n, &failed);
+      if (!s.ok()) {
+        return ParticleError(first_ + i, scan.observations[sc->update_detections[start + failed]],
+                             s);
+      }
+      start = sc->update_leaves.size();
+      return Status::Ok();
+    };
+    for (size_t j = 0; j < sc->decisions.size(); ++j) {
+      const Decision& d = sc->decisions[j];
+      const LandmarkObservation& z = scan.observations[j];
+      if (d.kind == Decision::kIgnored) ++counts.ignored;
+      if (d.kind != Decision::kAssociated) continue;
+      if (std::find(sc->keys.begin() + static_cast<std::ptrdiff_t>(start), sc->keys.end(), d.key) !=
+          sc->keys.end()) {
+        GROVE_RETURN_IF_ERROR(apply());  // this landmark's earlier update first
+      }
+      Landmark* leaf = nullptr;
+      int32_t tag = -1;
+      const bool ok = trie->Update(root, d.key, slot, [&](Landmark& l, bool) {
+        if (l.evidence < (1 << 30)) ++l.evidence;
+        tag = l.tag;
+        leaf = &l;
+      });
+      if (!ok) return NoMemoryError(first_ + i, "map");
+      sc->update_leaves.push_back(leaf);
+      sc->update_zs.push_back(RangeBearing{z.range_m, z.bearing_rad});
+      sc->update_detections.push_back(static_cast<uint32_t>(j));
+      ++counts.associated;
+      if (z.id >= 0 && tag >= 0) {
+        ++counts.tagged;
+        counts.wrong += tag != z.id;
+      }
+      sc->keys.push_back(d.key);
+    }
+    return apply();
   }
 
   // ApplyScan's second stage: the evidence of the landmarks in view and not seen (near no

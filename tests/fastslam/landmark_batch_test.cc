@@ -190,6 +190,44 @@ TEST(LandmarkBatchTest, PairsFromOnePoseAreObservationLogLikelihoods) {
   EXPECT_EQ(s.message(), want.message());
 }
 
+// Landmarks updated from one pose, each by its own observation: UpdateLandmark()'s results bit
+// for bit (more than one chunk of the batch), and on an error the first failing landmark's.
+TEST(LandmarkBatchTest, UpdatesFromOnePoseAreUpdateLandmarks) {
+  const Batch b = RandomBatch(70, 86);
+  const VehiclePose pose = b.poses[0];
+  std::mt19937_64 rng(87);
+  std::uniform_real_distribution<double> range(1, 40), angle(-kPi, kPi);
+  std::vector<RangeBearing> zs;
+  for (size_t k = 0; k < 70; ++k) zs.push_back({range(rng), angle(rng)});
+  const SensorNoise noise{0.1, 0.02};
+  std::vector<Landmark> together = b.leaves, alone = b.leaves;
+  size_t failed = 99;
+  ASSERT_TRUE(
+      UpdateLandmarks(pose, zs.data(), Pointers(&together).data(), noise, 70, &failed).ok());
+  for (size_t k = 0; k < 70; ++k) {
+    ASSERT_TRUE(UpdateLandmark(pose, zs[k], noise, &alone[k], nullptr).ok());
+  }
+  const std::vector<double> zeros(70, 0.0);
+  EXPECT_EQ(Bits(together, zeros), Bits(alone, zeros));
+  // Landmark 66 (in the second chunk) at the sensor, landmark 68 not finite: 66's error.
+  std::vector<Landmark> bad = b.leaves;
+  bad[66].x_m = pose.x_m;
+  bad[66].y_m = pose.y_m;
+  Landmark want_leaf = bad[66];
+  const Status want = UpdateLandmark(pose, zs[66], noise, &want_leaf, nullptr);
+  ASSERT_FALSE(want.ok());
+  bad[68].xx = NAN;
+  const Status s = UpdateLandmarks(pose, zs.data(), Pointers(&bad).data(), noise, 70, &failed);
+  EXPECT_EQ(failed, 66u);
+  EXPECT_EQ(s.code(), want.code());
+  EXPECT_EQ(s.message(), want.message());
+  // Without the unusable one (checked before any update): the first failing pair alike.
+  bad[68] = b.leaves[68];
+  const Status t = UpdateLandmarks(pose, zs.data(), Pointers(&bad).data(), noise, 70, &failed);
+  EXPECT_EQ(failed, 66u);
+  EXPECT_EQ(t.message(), want.message());
+}
+
 // A bearing many turns off is the same observation: the update agrees to round-off.
 TEST(LandmarkBatchTest, BearingsManyTurnsOffAreWrapped) {
   const Batch b = RandomBatch(9, 84);
