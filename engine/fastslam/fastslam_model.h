@@ -569,7 +569,6 @@ class FastSlamModel {
     return association_.ApplyScan(steps_, &trie_, &maps_[i], scan, i, poses_.pose(i), slot, sc);
   }
 
-  // The landmark updates of particle i's scan from its pose now.
   // Particle i's pose drawn from its proposal at `step`; its covariance restarts.
   Status Draw(uint64_t step, size_t i) {
     VehiclePose& pose = poses_.pose(i);
@@ -580,6 +579,7 @@ class FastSlamModel {
     return Status::Ok();
   }
 
+  // The landmark updates of particle i's scan from its pose now.
   Status UpdateMap(const ScanStep& scan, size_t i, int slot) {
     if (association_.active()) {
       return association_.ApplyPending(steps_, &trie_, &maps_[i], scan, i, poses_.pose(i), slot);
