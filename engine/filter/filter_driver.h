@@ -95,9 +95,9 @@ class FilterDriver {
 
   // Predict(times[j], inputs[j]) for each j in turn, with the same state, times, mean poses and
   // errors, in one pass over the particles (ParticleFilter::PredictRun): what a facade uses for
-  // the predictions between two weighting steps. With more than one thread the particles' poses
-  // after each input are kept for the mean poses, in runs of at most kRunSampleBytes; where a
-  // run would hold one input (about 260,000 particles), and across ranks, input by input.
+  // the predictions between two weighting steps. Each batch keeps the sums of its sub-blocks of
+  // the mean pose after each input, in runs of at most kRunSumBytes of them; where a run would
+  // hold one input (beyond about 3 million particles), and across ranks, input by input.
   // InvalidArgument, nothing changed, for a bad time (as Predict()).
   template <typename Input>
   Status PredictRun(std::span<const double> times, std::span<const Input> inputs) {
@@ -105,7 +105,7 @@ class FilterDriver {
     const size_t n = model_->size();
     const size_t per_run = workers_->num_threads() == 1
                                ? inputs.size()
-                               : std::max<size_t>(1, kRunSampleBytes / (sizeof(PoseSample) * n));
+                               : std::max<size_t>(1, kRunSumBytes / (sizeof(Sum) * SubBlocks(n)));
     if (filter_.options().collective != nullptr || inputs.size() == 1 || per_run == 1) {
       for (size_t j = 0; j < inputs.size(); ++j) {
         GROVE_RETURN_IF_ERROR(Predict(times[j], inputs[j]));
@@ -270,11 +270,13 @@ class FilterDriver {
   }
 
  private:
-  // A particle's pose after one input of a run, for the mean pose.
+  // A particle's pose, for the mean pose.
   struct PoseSample {
     double x, y, c, s;
   };
-  static constexpr size_t kRunSampleBytes = size_t{8} << 20;
+  // PredictRun(): the most bytes of sub-block sums a run keeps.
+  static constexpr size_t kRunSumBytes = size_t{8} << 20;
+  static size_t SubBlocks(size_t n) { return (n + kMeanSubBlock - 1) / kMeanSubBlock; }
 
   // InvalidArgument unless step `step`'s time t_s is finite and in order after `previous`.
   Status CheckTime(double t_s, double previous, int64_t step) const {
@@ -308,22 +310,19 @@ class FilterDriver {
   }
 
   // One part of PredictRun(): the filter's run, then the times and mean poses of the inputs it
-  // completed (and the time of a failed one, as Step()). With one thread the batches run in
-  // particle order, so each input's block sums are added up as the run goes, in the order
-  // SumOf() adds them; with more, the poses after each input are kept (samples_) and summed
-  // over (input, block) in parallel afterwards.
+  // completed (and the time of a failed one, as Step()). Each batch (whole sub-blocks of the
+  // mean: BatchSize()) sums its own sub-blocks after each input, on its thread; the blocks'
+  // sums add them in order, as SumOf() does: as the run goes with one thread (the batches run
+  // in particle order), afterwards with more.
   template <typename Input>
   Status RunPart(std::span<const double> times, std::span<const Input> inputs) {
     StartStepping(times.front(), times.size());
     const size_t n = model_->size();
     const size_t blocks = (n + kSumBlock - 1) / kSumBlock;
+    const size_t subs = SubBlocks(n);
     const bool in_order = workers_->num_threads() == 1;
-    std::vector<Sum> sums;
-    if (in_order) {
-      sums.assign(inputs.size() * blocks, Sum{});
-    } else {
-      samples_.resize(inputs.size() * n);
-    }
+    std::vector<Sum> sums(inputs.size() * blocks);
+    if (!in_order) sub_sums_.resize(inputs.size() * subs);
     const bool current = weights_current_ && weights_.size() == n;
     std::span<const double> lw = filter_.log_weights();
     weights_.resize(n);
@@ -332,31 +331,34 @@ class FilterDriver {
         inputs,
         [&](size_t j, size_t begin, size_t end) {
           if (j == 0 && !current) FillWeights(lw, begin, end);
-          if (in_order) {
-            // In a local per block: the compiler keeps the chain of adds in registers.
-            for (size_t b = begin; b < end;) {
-              const size_t e = std::min(end, (b / kSumBlock + 1) * kSumBlock);
-              Sum& total = sums[j * blocks + b / kSumBlock];
-              Sum local = total;
-              for (size_t i = b; i < e; ++i) Add(&local, weights_[i], SampleOf(i));
-              total = local;
-              b = e;
+          auto sub = [&](size_t b) {
+            return SubBlockSum(b, std::min(end, b + kMeanSubBlock),
+                               [&](size_t i) { return SampleOf(i); });
+          };
+          if (!in_order) {
+            for (size_t b = begin; b < end; b += kMeanSubBlock) {
+              sub_sums_[j * subs + b / kMeanSubBlock] = sub(b);
             }
             return;
           }
-          PoseSample* out = &samples_[j * n];
-          for (size_t i = begin; i < end; ++i) out[i] = SampleOf(i);
+          // In a local per block: the compiler keeps the chain of adds in registers.
+          for (size_t b = begin; b < end;) {
+            const size_t e = std::min(end, (b / kSumBlock + 1) * kSumBlock);
+            Sum& total = sums[j * blocks + b / kSumBlock];
+            Sum local = total;
+            for (; b < e; b += kMeanSubBlock) AddSum(&local, sub(b));
+            total = local;
+          }
         },
         &done);
+    sums.resize(done * blocks);
     // A failed first input leaves batches without weights.
     weights_current_ = current || done > 0;
     auto t0 = std::chrono::steady_clock::now();
-    if (!in_order) {
-      sums = workers_->template MapBlocks<Sum>(done * blocks, 1, [&](size_t k, size_t, size_t) {
-        const size_t j = k / blocks, b = (k % blocks) * kSumBlock;
-        const PoseSample* in = &samples_[j * n];
-        return SumOf(b, std::min(n, b + kSumBlock), [&](size_t i) { return in[i]; });
-      });
+    for (size_t j = 0; !in_order && j < done; ++j) {
+      for (size_t k = 0; k < subs; ++k) {
+        AddSum(&sums[j * blocks + k * kMeanSubBlock / kSumBlock], sub_sums_[j * subs + k]);
+      }
     }
     for (size_t j = 0; j < done; ++j) {
       times_.push_back(times[j]);
@@ -451,24 +453,36 @@ class FilterDriver {
     s->c += w * p.c;
     s->s += w * p.s;
   }
-  // The weighted sums of particles [b, e), added in index order; pose(i) gives a PoseSample.
+  static void AddSum(Sum* total, const Sum& s) {
+    total->w += s.w;
+    total->x += s.x;
+    total->y += s.y;
+    total->c += s.c;
+    total->s += s.s;
+  }
+  // The weighted sums of the particles of one sub-block [b, e), added in index order; pose(i)
+  // gives a PoseSample. In a local: the compiler keeps the chain of adds in registers.
+  template <typename PoseOfParticle>
+  Sum SubBlockSum(size_t b, size_t e, PoseOfParticle&& pose) const {
+    Sum s;
+    for (size_t i = b; i < e; ++i) Add(&s, weights_[i], pose(i));
+    return s;
+  }
+  // The weighted sums of block [b, e) (b a multiple of kMeanSubBlock): its sub-blocks' sums,
+  // added in order.
   template <typename PoseOfParticle>
   Sum SumOf(size_t b, size_t e, PoseOfParticle&& pose) const {
     Sum s;
-    for (size_t i = b; i < e; ++i) Add(&s, weights_[i], pose(i));
+    for (size_t k = b; k < e; k += kMeanSubBlock) {
+      AddSum(&s, SubBlockSum(k, std::min(e, k + kMeanSubBlock), pose));
+    }
     return s;
   }
 
   // The mean pose of the blocks' sums, added in block order.
   static Pose2 PoseOf(std::span<const Sum> sums) {
     Sum total;
-    for (const Sum& s : sums) {
-      total.w += s.w;
-      total.x += s.x;
-      total.y += s.y;
-      total.c += s.c;
-      total.s += s.s;
-    }
+    for (const Sum& s : sums) AddSum(&total, s);
     return Pose2{total.x / total.w, total.y / total.w, std::atan2(total.s, total.c)};
   }
 
@@ -480,9 +494,9 @@ class FilterDriver {
   std::vector<double> times_;  // times_[k]: time of the state after step k (k = 0: the start)
   std::vector<StampedPose> mean_;
   double bookkeeping_s_ = 0;
-  std::vector<double> weights_;      // exp of the log weights, for the mean pose
-  std::vector<PoseSample> samples_;  // PredictRun(): the poses after each input of a part
-  bool weights_current_ = false;     // weights_ holds the filter's weights now
+  std::vector<double> weights_;   // exp of the log weights, for the mean pose
+  std::vector<Sum> sub_sums_;     // PredictRun(): each input's sub-block sums in a part
+  bool weights_current_ = false;  // weights_ holds the filter's weights now
   bool start_time_unset_ = true;
   bool failed_ = false;
 };

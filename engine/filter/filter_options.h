@@ -18,8 +18,8 @@ struct FilterOptions {
   ResamplingScheme resampling = ResamplingScheme::kSystematic;
   // Resample when ESS / N falls below this, in (0, 1]; 1 resamples every step. Default: 0.5.
   double resample_threshold = 0.5;
-  // Particles per parallel batch, at most: fewer when that leaves a thread under 4 batches
-  // (affects speed only). Default: 512.
+  // Particles per parallel batch, at most: fewer when that leaves a thread under 4 batches,
+  // rounded up to a multiple of 16 (BatchSize(); affects speed only). Default: 512.
   size_t batch = 512;
   // Seed of every random stream. Default: 1.
   uint64_t seed = 1;

@@ -60,12 +60,13 @@ struct PhaseTimes {
   double release_s = 0;    // freeing the dead generation (in advance_s when freed in pieces)
 };
 
-// RunInBatches' batch size: batch b is particles [b * size, (b + 1) * size).
+// RunInBatches' batch size: batch b is particles [b * size, (b + 1) * size). A whole number of
+// kMeanSubBlock particles (max_batch rounded up), so a batch holds whole sub-blocks of the mean.
 inline size_t BatchSize(const WorkerPool& workers, size_t n, size_t max_batch) {
   const size_t threads = static_cast<size_t>(workers.num_threads());
   size_t batch = std::max<size_t>(max_batch, 1);
   if (threads > 1) batch = std::clamp<size_t>((n + 4 * threads - 1) / (4 * threads), 1, batch);
-  return batch;
+  return (batch + kMeanSubBlock - 1) / kMeanSubBlock * kMeanSubBlock;
 }
 
 // Runs body(slot, begin, end) -> Status over [0, n) in batches of at most max_batch particles,

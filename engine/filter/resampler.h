@@ -29,6 +29,10 @@ void Resample(ResamplingScheme scheme, std::span<const double> weights, uint64_t
 
 // Fixed block size for sums over particles: results are independent of the thread count.
 inline constexpr size_t kSumBlock = 4096;
+// The mean pose's sub-blocks: a block's pose sums are the sums of its runs of kMeanSubBlock
+// particles, added in order, so a batch of whole sub-blocks sums its own (FilterDriver).
+inline constexpr size_t kMeanSubBlock = 16;
+static_assert(kSumBlock % kMeanSubBlock == 0);
 
 // The sums of weights over the fixed blocks of kSumBlock, in block order.
 std::vector<double> BlockSums(std::span<const double> weights, WorkerPool& workers);

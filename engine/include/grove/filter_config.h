@@ -48,8 +48,8 @@ struct FilterConfig {
   // Worker threads. 0 means one per hardware thread. Range: 0..256 (more threads than cores
   // only add overhead; oneTBB runs at most as many as the process may use). Default: 0.
   int threads = 0;
-  // Particles per parallel batch, at most (batches shrink to leave each thread at least 4).
-  // Range: >= 1. Default: 512.
+  // Particles per parallel batch, at most (batches shrink to leave each thread at least 4),
+  // rounded up to a multiple of 16. Range: >= 1. Default: 512.
   int64_t batch = 512;
 };
 
@@ -116,7 +116,8 @@ FilterFieldRows<Config> FilterFields(const char* threshold_help) {
       IntegerField<C>("threads", static_cast<int C::*>(&F::threads), 0, 256, kChangesSpeedOnly,
                       "Worker threads; 0: one per hardware thread"),
       IntegerField<C>("batch", static_cast<int64_t C::*>(&F::batch), 1, int64_t{1} << 31,
-                      kChangesSpeedOnly, "Particles per parallel batch"),
+                      kChangesSpeedOnly,
+                      "Particles per parallel batch, rounded up to a multiple of 16"),
   };
   return rows;
 }
