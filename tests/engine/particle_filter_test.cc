@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "concurrency/random_stream.h"
+#include "engine/filter/filter_driver.h"
 #include "engine/filter/generation.h"
 #include "engine/io/checkpoint_io.h"
 #include "engine/persistent/persistent_trie.h"
@@ -656,6 +657,94 @@ TEST(ParticleFilterTest, IslandsNeedWholeBlocksAndSystematicResampling) {
   Status s = filter.Update(0.0);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(s.message().find("systematically"), std::string::npos) << s.message();
+}
+
+// A posed model for FilterDriver: particle i at (i, step)-dependent poses, weighted unevenly.
+class PosedToy {
+ public:
+  explicit PosedToy(size_t n) : x_(n), y_(n), h_(n) {
+    for (size_t i = 0; i < n; ++i) Move(i, 0);
+  }
+  size_t size() const { return x_.size(); }
+  Status Advance(const double&, uint64_t, size_t begin, size_t end, int, double* log_w) {
+    for (size_t i = begin; i < end; ++i) log_w[i] += -0.001 * static_cast<double>(i % 97);
+    return Status::Ok();
+  }
+  Status Predict(const Shift& shift, uint64_t step, size_t begin, size_t end, int) {
+    for (size_t i = begin; i < end; ++i) Move(i, step + 1, shift.dx);
+    return Status::Ok();
+  }
+  void Gather(std::span<const uint32_t>, WorkerPool&) {}
+  void ReleaseDead(WorkerPool&) {}
+  double x(size_t i) const { return x_[i]; }
+  double y(size_t i) const { return y_[i]; }
+  double cos_heading(size_t i) const { return std::cos(h_[i]); }
+  double sin_heading(size_t i) const { return std::sin(h_[i]); }
+
+ private:
+  void Move(size_t i, uint64_t step, double dx = 0) {
+    RandomStream rs(9, step, static_cast<uint32_t>(i));
+    x_[i] += dx + rs.NextNormal();
+    y_[i] = 1000 * rs.NextNormal();
+    h_[i] = rs.NextNormal();
+  }
+  std::vector<double> x_, y_, h_;
+};
+
+// The documented mean pose: per block of kSumBlock particles, the sums of its sub-blocks of
+// kMeanSubBlock (each added in index order) added in order; the blocks added in order.
+Pose2 ReferenceMean(const PosedToy& m, std::span<const double> lw) {
+  double w = 0, x = 0, y = 0, c = 0, s = 0;
+  for (size_t b = 0; b < m.size(); b += kSumBlock) {
+    double bw = 0, bx = 0, by = 0, bc = 0, bs = 0;
+    for (size_t k = b; k < std::min(m.size(), b + kSumBlock); k += kMeanSubBlock) {
+      double sw = 0, sx = 0, sy = 0, sc = 0, ss = 0;
+      for (size_t i = k; i < std::min(m.size(), k + kMeanSubBlock); ++i) {
+        const double wi = std::exp(lw[i]);
+        sw += wi;
+        sx += wi * m.x(i);
+        sy += wi * m.y(i);
+        sc += wi * m.cos_heading(i);
+        ss += wi * m.sin_heading(i);
+      }
+      bw += sw, bx += sx, by += sy, bc += sc, bs += ss;
+    }
+    w += bw, x += bx, y += by, c += bc, s += bs;
+  }
+  return Pose2{x / w, y / w, std::atan2(s, c)};
+}
+
+// Mean poses after an update and over a run of predictions: the documented sums, bit for bit,
+// at any thread count and batch size (5,000 particles: two blocks, a partial sub-block).
+TEST(FilterDriverTest, MeanPoseIsTheSumOfFixedSubBlocksAtAnyThreadCount) {
+  constexpr size_t kN = 5000;
+  for (int threads : {1, 2, 3}) {
+    for (size_t batch : {1, 50, 512}) {
+      SCOPED_TRACE(testing::Message() << threads << " threads, batch " << batch);
+      WorkerPool workers(threads);
+      PosedToy model(kN);
+      FilterOptions options;
+      options.batch = batch;
+      options.resample_threshold = 1e-9;  // keep the uneven weights
+      FilterDriver<PosedToy> driver(&model, &workers, options, threads, Pose2{},
+                                    TimeOrder::kNonDecreasing);
+      ASSERT_TRUE(driver.Update(1.0, 0.0).ok());
+      const std::vector<double> times = {2.0, 3.0, 4.0};
+      const std::vector<Shift> shifts = {{0.5}, {-0.25}, {1.0}};
+      const Pose2 after_update = ReferenceMean(model, driver.filter().log_weights());
+      ASSERT_TRUE(
+          driver.PredictRun(std::span<const double>(times), std::span<const Shift>(shifts)).ok());
+      const Pose2 after_run = ReferenceMean(model, driver.filter().log_weights());
+      const std::vector<StampedPose>& mean = driver.mean_trajectory();
+      ASSERT_EQ(mean.size(), 5u);
+      EXPECT_EQ(mean[1].pose.x_m, after_update.x_m);
+      EXPECT_EQ(mean[1].pose.y_m, after_update.y_m);
+      EXPECT_EQ(mean[1].pose.heading_rad, after_update.heading_rad);
+      EXPECT_EQ(mean[4].pose.x_m, after_run.x_m);
+      EXPECT_EQ(mean[4].pose.y_m, after_run.y_m);
+      EXPECT_EQ(mean[4].pose.heading_rad, after_run.heading_rad);
+    }
+  }
 }
 
 }  // namespace
