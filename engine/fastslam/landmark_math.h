@@ -97,12 +97,6 @@ inline bool Cholesky3(const Eigen::Matrix3d& a, Eigen::Matrix3d* l) {
   return true;
 }
 
-// A with A A^T = a when `a` is positive semi-definite in the sense of kPsdTolerance: the Cholesky
-// factor when LLT succeeds (positive definite, the usual case), else V diag(lambda)^1/2 from the
-// symmetric eigendecomposition with round-off eigenvalues clamped to 0 (a pivoted LDLT can stop
-// at a zero pivot followed by round-off; the eigenvalues decide semi-definiteness robustly).
-// False when `a` is not positive semi-definite. `root` may be null (a check only).
-// REQUIRES: a finite and symmetric.
 // Whether a 3x3 `a` is positive definite by the pivots of its L D L^T (from its lower triangle),
 // without square roots: the quick test of PsdSquareRoot() when no root is wanted.
 inline bool PositivePivots3(const Eigen::Matrix3d& a) {
@@ -115,6 +109,12 @@ inline bool PositivePivots3(const Eigen::Matrix3d& a) {
   return a(2, 2) - l20 * a(2, 0) - e21 * e21 / d1 > 0;
 }
 
+// A with A A^T = a when `a` is positive semi-definite in the sense of kPsdTolerance: the Cholesky
+// factor when LLT succeeds (positive definite, the usual case), else V diag(lambda)^1/2 from the
+// symmetric eigendecomposition with round-off eigenvalues clamped to 0 (a pivoted LDLT can stop
+// at a zero pivot followed by round-off; the eigenvalues decide semi-definiteness robustly).
+// False when `a` is not positive semi-definite. `root` may be null (a check only).
+// REQUIRES: a finite and symmetric.
 template <int N>
 bool PsdSquareRoot(const Eigen::Matrix<double, N, N>& a, Eigen::Matrix<double, N, N>* root) {
   using Matrix = Eigen::Matrix<double, N, N>;
@@ -287,11 +287,11 @@ Status ObservationLogLikelihoods(const VehiclePose& pose, const RangeBearing* zs
 // z_pred at (mu, landmark), v = Innovation(z, z_pred), S = Hl P Hl^T + R,
 //   sigma' = (Hv^T S^-1 Hv + sigma^-1)^-1,   mu' = mu + sigma' Hv^T S^-1 v.
 // Computed in the equal covariance form, which needs no inverse of sigma (so sigma may be
-// singular, e.g. zero motion noise) and factorises only the 2x2 Q = Hv sigma Hv^T + S (LLT):
+// singular, e.g. zero motion noise) and inverts only the 2x2 Q = Hv sigma Hv^T + S (closed form):
 //   K = sigma Hv^T Q^-1,   mu' = mu + K v,   sigma' = (I - K Hv) sigma (I - K Hv)^T + K S K^T
 // (Woodbury; Joseph form). mu'(2), the heading, is wrapped to (-pi, pi].
-// `log_weight` (may be null) gets ProposalLogWeight() at the mu and sigma given, which the same
-// factorisation yields. Errors as UpdateLandmark, and InvalidArgument when sigma is not symmetric,
+// `log_weight` (may be null) gets ProposalLogWeight() at the mu and sigma given, from the same
+// Q. Errors as UpdateLandmark, and InvalidArgument when sigma is not symmetric,
 // FailedPrecondition when it is not positive semi-definite. On error nothing is written.
 // REQUIRES: mu, sigma != nullptr.
 Status ProposalStep(Eigen::Vector3d* mu, Eigen::Matrix3d* sigma, const Landmark& landmark,

@@ -64,7 +64,7 @@ class UnknownAssociation {
     std::vector<Decision> decisions;
     std::vector<uint64_t> keys;
     MatchScratch matches;
-    // UpdateAssociatedTogether(): the leaves to update, their observations and detections.
+    // UpdateAssociated(): the leaves to update, their observations and detections.
     std::vector<Landmark*> update_leaves;
     std::vector<RangeBearing> update_zs;
     std::vector<uint32_t> update_detections;
@@ -384,44 +384,12 @@ class UnknownAssociation {
   }
 
   // ApplyScan's first stage: the updates of the associated landmarks, their keys appended to
-  // sc->keys.
+  // sc->keys. The paths to them are copied first, with the evidence and the counts (a path copied
+  // once is the particle's own, so the leaves noted stay where they are), then the updates run
+  // together: the EKF map's in SIMD lanes (UpdateLandmarks()), the others' leaf by leaf. Two
+  // detections associated with one landmark update it in turn.
   Status UpdateAssociated(const FilterSteps& steps, Trie* trie, Node** root, const ScanStep& scan,
                           size_t i, int slot, const VehiclePose& pose, Scratch* sc) {
-    if (steps.traits().map == FilterTraits::Map::kEkf) {
-      return UpdateAssociatedTogether(steps, trie, root, scan, i, slot, pose, sc);
-    }
-    AssociationCounts& counts = counts_[i];
-    for (size_t j = 0; j < sc->decisions.size(); ++j) {
-      const Decision& d = sc->decisions[j];
-      const LandmarkObservation& z = scan.observations[j];
-      if (d.kind == Decision::kIgnored) ++counts.ignored;
-      if (d.kind != Decision::kAssociated) continue;
-      Status s;
-      int32_t tag = -1;
-      const bool ok = trie->Update(root, d.key, slot, [&](Landmark& l, bool) {
-        s = steps.UpdateLeaf(pose, RangeBearing{z.range_m, z.bearing_rad}, &l, nullptr);
-        if (l.evidence < (1 << 30)) ++l.evidence;
-        tag = l.tag;
-      });
-      if (!ok) return NoMemoryError(first_ + i, "map");
-      if (!s.ok()) return ParticleError(first_ + i, z, s);
-      ++counts.associated;
-      if (z.id >= 0 && tag >= 0) {
-        ++counts.tagged;
-        counts.wrong += tag != z.id;
-      }
-      sc->keys.push_back(d.key);
-    }
-    return Status::Ok();
-  }
-
-  // UpdateAssociated() for the EKF map: the paths to the associated landmarks copied first (a
-  // path copied once is the particle's own, so the leaves noted stay where they are; the
-  // evidence and the counts as the loop does), then their updates together (UpdateLandmarks()).
-  // Two detections associated with one landmark update it in turn, as the loop does.
-  Status UpdateAssociatedTogether(const FilterSteps& steps, Trie* trie, Node** root,
-                                  const ScanStep& scan, size_t i, int slot, const VehiclePose& pose,
-                                  Scratch* sc) {
     AssociationCounts& counts = counts_[i];
     sc->update_leaves.clear();
     sc->update_zs.clear();
@@ -429,9 +397,18 @@ class UnknownAssociation {
     size_t start = 0;  // the first noted update not yet applied
     auto apply = [&]() -> Status {
       const size_t n = sc->update_leaves.size() - start;
+      Landmark* const* leaves = sc->update_leaves.data() + start;
+      const RangeBearing* zs = sc->update_zs.data() + start;
       size_t failed = 0;
-      Status s = UpdateLandmarks(pose, sc->update_zs.data() + start,
-                                 sc->update_leaves.data() + start, steps.noise(), n, &failed);
+      Status s;
+      if (steps.traits().map == FilterTraits::Map::kEkf) {
+        s = UpdateLandmarks(pose, zs, leaves, steps.noise(), n, &failed);
+      } else {
+        for (; failed < n; ++failed) {
+          s = steps.UpdateLeaf(pose, zs[failed], leaves[failed], nullptr);
+          if (!s.ok()) break;
+        }
+      }
       if (!s.ok()) {
         return ParticleError(first_ + i, scan.observations[sc->update_detections[start + failed]],
                              s);

@@ -69,11 +69,12 @@ inline size_t BatchSize(const WorkerPool& workers, size_t n, size_t max_batch) {
   return (batch + kMeanSubBlock - 1) / kMeanSubBlock * kMeanSubBlock;
 }
 
-// Runs body(slot, begin, end) -> Status over [0, n) in batches of at most max_batch particles,
-// fewer when that leaves a thread under 4 batches (100 particles in batches of 64 would keep two
-// threads at 64 and 36); returns the error of the lowest failing batch, which is the error of the
-// lowest failing particle whatever the batches when a batch stops at its first. `status` is
-// scratch space (one entry per batch), kept by the caller to avoid an allocation per loop.
+// Runs body(slot, begin, end) -> Status over [0, n) in batches of BatchSize(): max_batch
+// particles, fewer when that leaves a thread under 4 batches (100 particles in batches of 64
+// would keep two threads at 64 and 36), rounded up to whole sub-blocks; returns the error of the
+// lowest failing batch, which is the error of the lowest failing particle whatever the batches when
+// a batch stops at its first. `status` is scratch space (one entry per batch), kept by the caller
+// to avoid an allocation per loop.
 template <typename F>
 Status RunInBatches(WorkerPool& workers, size_t n, size_t max_batch, std::vector<Status>* status,
                     F&& body) {
@@ -354,7 +355,7 @@ class ParticleFilter {
     return std::chrono::duration<double>(d).count();
   }
 
-  // Runs body(slot, begin, end) -> Status over batches of at most options_.batch particles
+  // Runs body(slot, begin, end) -> Status over batches of about options_.batch particles
   // (RunInBatches).
   template <typename F>
   Status ForBatches(F&& body) {

@@ -52,6 +52,15 @@ Batch RandomBatch(size_t n, uint64_t seed) {
   return b;
 }
 
+// n observations anywhere within 1..40 m and any bearing (each against its own landmark).
+std::vector<RangeBearing> RandomObservations(size_t n, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> range(1, 40), angle(-kPi, kPi);
+  std::vector<RangeBearing> zs;
+  for (size_t k = 0; k < n; ++k) zs.push_back({range(rng), angle(rng)});
+  return zs;
+}
+
 std::vector<uint64_t> Bits(const std::vector<Landmark>& leaves, const std::vector<double>& sums) {
   std::vector<uint64_t> bits;
   for (size_t i = 0; i < leaves.size(); ++i) {
@@ -146,14 +155,9 @@ TEST(LandmarkBatchTest, LikelihoodIsTheUpdatesLogLikelihood) {
 TEST(LandmarkBatchTest, PairsFromOnePoseAreObservationLogLikelihoods) {
   const Batch b = RandomBatch(13, 84);
   const VehiclePose pose = b.poses[0];
-  std::mt19937_64 rng(85);
-  std::uniform_real_distribution<double> range(1, 40), angle(-kPi, kPi);
-  std::vector<RangeBearing> zs;
+  const std::vector<RangeBearing> zs = RandomObservations(13, 85);
   std::vector<const Landmark*> pointers;
-  for (const Landmark& l : b.leaves) {
-    zs.push_back({range(rng), angle(rng)});
-    pointers.push_back(&l);
-  }
+  for (const Landmark& l : b.leaves) pointers.push_back(&l);
   const SensorNoise noise{0.1, 0.02};
   for (int64_t target : hwy::SupportedAndGeneratedTargets()) {
     hwy::SetSupportedTargetsForTest(target);
@@ -195,10 +199,7 @@ TEST(LandmarkBatchTest, PairsFromOnePoseAreObservationLogLikelihoods) {
 TEST(LandmarkBatchTest, UpdatesFromOnePoseAreUpdateLandmarks) {
   const Batch b = RandomBatch(70, 86);
   const VehiclePose pose = b.poses[0];
-  std::mt19937_64 rng(87);
-  std::uniform_real_distribution<double> range(1, 40), angle(-kPi, kPi);
-  std::vector<RangeBearing> zs;
-  for (size_t k = 0; k < 70; ++k) zs.push_back({range(rng), angle(rng)});
+  const std::vector<RangeBearing> zs = RandomObservations(70, 87);
   const SensorNoise noise{0.1, 0.02};
   std::vector<Landmark> together = b.leaves, alone = b.leaves;
   size_t failed = 99;

@@ -12,6 +12,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -96,8 +97,18 @@ std::vector<uint64_t> Bits(const Particles& p) {
   return bits;
 }
 
-TEST(SampledMotionTest, SameBitsOnEveryTargetAndInAnyGrouping) {
-  const uint64_t seed = 71;
+// Moves particles [begin, end) of *p with control u (MoveSampled or MoveLinearized).
+using Mover = std::function<MotionResult(const SampledControl& u, Particles* p, bool from_headings,
+                                         size_t begin, size_t end)>;
+// Moves a copy of the start another way, given the particles `all` moved at once.
+using Variant = std::function<void(const SampledControl& u, bool from_headings,
+                                   const Particles& all, Particles* p)>;
+
+// The particles' bits after `move` are the same on every Highway target and in any grouping
+// (all 37 at once, one at a time, in groups of 5: every particle in a partial vector), for both
+// vehicles, with the unit vectors loaded or recomputed; and after `variant`, if given.
+void ExpectSameBitsOnEveryTargetAndInAnyGrouping(const Mover& move, uint64_t seed,
+                                                 const Variant& variant = nullptr) {
   SCOPED_TRACE(testing::Message() << "seed " << seed);
   for (FastSlamVehicle vehicle : {FastSlamVehicle::kBailey, FastSlamVehicle::kGuivantNebot}) {
     for (bool from_headings : {false, true}) {
@@ -110,21 +121,29 @@ TEST(SampledMotionTest, SameBitsOnEveryTargetAndInAnyGrouping) {
         hwy::SetSupportedTargetsForTest(target);
         SCOPED_TRACE(hwy::TargetName(target));
         Particles all = start;
-        ASSERT_EQ(Move(u, &all, from_headings, 0, 37).first_failed, 37u);
-        // One at a time, and in uneven groups: every particle in a partial vector.
+        ASSERT_EQ(move(u, &all, from_headings, 0, 37).first_failed, 37u);
         Particles one = start;
-        for (size_t i = 0; i < 37; ++i) Move(u, &one, from_headings, i, i + 1);
+        for (size_t i = 0; i < 37; ++i) move(u, &one, from_headings, i, i + 1);
         Particles groups = start;
         for (size_t b = 0; b < 37; b += 5)
-          Move(u, &groups, from_headings, b, std::min<size_t>(b + 5, 37));
+          move(u, &groups, from_headings, b, std::min<size_t>(b + 5, 37));
         if (first.empty()) first = Bits(all);
         EXPECT_EQ(Bits(all), first);
         EXPECT_EQ(Bits(one), first);
         EXPECT_EQ(Bits(groups), first);
+        if (variant) {
+          Particles other = start;
+          variant(u, from_headings, all, &other);
+          EXPECT_EQ(Bits(other), first);
+        }
       }
       hwy::SetSupportedTargetsForTest(0);
     }
   }
+}
+
+TEST(SampledMotionTest, SameBitsOnEveryTargetAndInAnyGrouping) {
+  ExpectSameBitsOnEveryTargetAndInAnyGrouping(Move, 71);
 }
 
 TEST(SampledMotionTest, AgreesWithTheVehicleModel) {
@@ -205,50 +224,32 @@ TEST(SampledMotionTest, ReportsTheFirstUnusableParticle) {
   const MotionResult r = Move(u, &p, false, 0, 40);
   EXPECT_EQ(r.first_failed, want);
   EXPECT_EQ(r.why, MotionFailure::kSteering);
-  // A pose that overflows is not finite.
+}
+
+// A pose that overflows is not finite, in either step.
+TEST(SampledMotionTest, APoseThatOverflowsIsNotFiniteInEitherStep) {
   SampledControl fast = Control(FastSlamVehicle::kBailey);
   fast.v_mps = 1e308;
   fast.dt_s = 10;
-  Particles q = RandomParticles(3, 75);
-  const MotionResult s = Move(fast, &q, false, 0, 3);
-  EXPECT_EQ(s.first_failed, 0u);
-  EXPECT_EQ(s.why, MotionFailure::kNotFinite);
+  for (const Mover& move : {Mover(Move), Mover(MoveEkf)}) {
+    Particles p = RandomParticles(3, 75);
+    const MotionResult r = move(fast, &p, false, 0, 3);
+    EXPECT_EQ(r.first_failed, 0u);
+    EXPECT_EQ(r.why, MotionFailure::kNotFinite);
+  }
 }
 
 TEST(LinearizedMotionTest, SameBitsOnEveryTargetAndInAnyGrouping) {
-  for (FastSlamVehicle vehicle : {FastSlamVehicle::kBailey, FastSlamVehicle::kGuivantNebot}) {
-    for (bool from_headings : {false, true}) {
-      SCOPED_TRACE(testing::Message() << "vehicle " << static_cast<int>(vehicle)
-                                      << " units from headings " << from_headings);
-      const SampledControl u = Control(vehicle);
-      const Particles start = RandomParticles(37, 76);
-      std::vector<uint64_t> first;
-      for (int64_t target : hwy::SupportedAndGeneratedTargets()) {
-        hwy::SetSupportedTargetsForTest(target);
-        SCOPED_TRACE(hwy::TargetName(target));
-        Particles all = start;
-        ASSERT_EQ(MoveEkf(u, &all, from_headings, 0, 37).first_failed, 37u);
-        Particles one = start;
-        for (size_t i = 0; i < 37; ++i) MoveEkf(u, &one, from_headings, i, i + 1);
-        Particles groups = start;
-        for (size_t b = 0; b < 37; b += 5)
-          MoveEkf(u, &groups, from_headings, b, std::min<size_t>(b + 5, 37));
-        // Without covariances (a replay): the same poses and units.
-        Particles poses_only = start;
-        ASSERT_EQ(MoveLinearized(u, kQSpeed, kQSteer, from_headings, poses_only.poses.data(),
-                                 poses_only.units.data(), nullptr, 37)
-                      .first_failed,
-                  37u);
-        poses_only.covs = all.covs;
-        if (first.empty()) first = Bits(all);
-        EXPECT_EQ(Bits(all), first);
-        EXPECT_EQ(Bits(one), first);
-        EXPECT_EQ(Bits(groups), first);
-        EXPECT_EQ(Bits(poses_only), first);
-      }
-      hwy::SetSupportedTargetsForTest(0);
-    }
-  }
+  // Without covariances (a replay): the same poses and units.
+  auto poses_only = [](const SampledControl& u, bool from_headings, const Particles& all,
+                       Particles* p) {
+    ASSERT_EQ(MoveLinearized(u, kQSpeed, kQSteer, from_headings, p->poses.data(), p->units.data(),
+                             nullptr, p->poses.size())
+                  .first_failed,
+              p->poses.size());
+    p->covs = all.covs;
+  };
+  ExpectSameBitsOnEveryTargetAndInAnyGrouping(MoveEkf, 76, poses_only);
 }
 
 // The step with the control itself, and Gv Sigma Gv^T + Gu Q Gu^T with VehicleJacobians()'s
@@ -285,16 +286,6 @@ TEST(LinearizedMotionTest, AgreesWithTheVehicleModelAndItsJacobians) {
       EXPECT_NEAR(c.hh, w(2, 2), tol) << i;
     }
   }
-}
-
-TEST(LinearizedMotionTest, ReportsAPoseThatIsNotFinite) {
-  SampledControl u = Control(FastSlamVehicle::kBailey);
-  u.v_mps = 1e308;
-  u.dt_s = 10;
-  Particles p = RandomParticles(3, 78);
-  const MotionResult r = MoveEkf(u, &p, false, 0, 3);
-  EXPECT_EQ(r.first_failed, 0u);
-  EXPECT_EQ(r.why, MotionFailure::kNotFinite);
 }
 
 }  // namespace
