@@ -109,9 +109,51 @@ inline void DetectionPoint(const VehiclePose& pose, const LandmarkObservation& z
 // The sensor's view for the existence evidence: range <= sqrt(range2) and |bearing| <= fov / 2,
 // tested as: the component along the heading is at least |d| cos(fov / 2) (no angle computed).
 struct SensorView {  // FastSlamConfig's sensor_range_m and sensor_fov_rad
+  SensorView(double range_m, double fov_rad)
+      : range_m(range_m),
+        fov_rad(fov_rad),
+        cos_half(std::cos(0.5 * fov_rad)),
+        sin_half(std::sin(0.5 * fov_rad)) {}
   double range_m;
   double fov_rad;
+  double cos_half, sin_half;  // of fov / 2
 };
+
+// Whether the point (lx, ly) relative to a sensor facing (hc, hs) (a unit vector) is in its view:
+// lx^2 + ly^2 <= range2 and the angle to the heading at most the half view whose cosine is
+// cos_half.
+inline bool InView(double lx, double ly, double hc, double hs, double range2, double cos_half) {
+  const double d2 = lx * lx + ly * ly;
+  const double along = lx * hc + ly * hs;
+  return d2 <= range2 && (cos_half >= 0 ? along >= 0 && along * along >= d2 * cos_half * cos_half
+                                        : along >= 0 || along * along <= d2 * cos_half * cos_half);
+}
+
+// A box [x0, x1] x [y0, y1] holding the view of a sensor at (x, y) facing (hc, hs) (a unit
+// vector), cos_half and sin_half those of fov / 2: the apex, the arc's ends and the arc's points
+// furthest along each axis that lie in the view, widened by a millionth of the range so that
+// rounding never leaves out a point InView() admits.
+struct ViewBox {
+  double x0, x1, y0, y1;
+};
+inline ViewBox ViewBoxOf(double x, double y, double hc, double hs, double range_m, double cos_half,
+                         double sin_half) {
+  ViewBox b{x, x, y, y};
+  auto add = [&](double ux, double uy) {
+    b.x0 = std::min(b.x0, x + range_m * ux);
+    b.x1 = std::max(b.x1, x + range_m * ux);
+    b.y0 = std::min(b.y0, y + range_m * uy);
+    b.y1 = std::max(b.y1, y + range_m * uy);
+  };
+  add(hc * cos_half + hs * sin_half, hs * cos_half - hc * sin_half);
+  add(hc * cos_half - hs * sin_half, hs * cos_half + hc * sin_half);
+  if (hc >= cos_half) add(1, 0);
+  if (-hc >= cos_half) add(-1, 0);
+  if (hs >= cos_half) add(0, 1);
+  if (-hs >= cos_half) add(0, -1);
+  const double pad = 1e-6 * range_m;
+  return ViewBox{b.x0 - pad, b.x1 + pad, b.y0 - pad, b.y1 + pad};
+}
 
 // A detection's point in the plane and its squared candidate radius.
 struct DetectionProbe {
@@ -169,26 +211,21 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
   double view_range2 = 0, cos_half = 0, hc = 0, hs = 0;
   if (view != nullptr) {
     view_range2 = view->range_m * view->range_m;
-    cos_half = std::cos(0.5 * view->fov_rad);
+    cos_half = view->cos_half;
     hc = std::cos(pose.heading_rad);
     hs = std::sin(pose.heading_rad);
-    x0 = std::min(x0, pose.x_m - view->range_m);
-    x1 = std::max(x1, pose.x_m + view->range_m);
-    y0 = std::min(y0, pose.y_m - view->range_m);
-    y1 = std::max(y1, pose.y_m + view->range_m);
+    const ViewBox box =
+        ViewBoxOf(pose.x_m, pose.y_m, hc, hs, view->range_m, cos_half, view->sin_half);
+    x0 = std::min(x0, box.x0);
+    x1 = std::max(x1, box.x1);
+    y0 = std::min(y0, box.y0);
+    y1 = std::max(y1, box.y1);
   }
   // The range query notes the pairs to test; their likelihoods follow in SIMD lanes.
   auto consider = [&](uint64_t key, const Landmark& leaf) {
     const Landmark l = params.square_root_leaves ? WithCovariance(leaf) : leaf;
     const double lx = l.x_m - pose.x_m, ly = l.y_m - pose.y_m;
-    if (view != nullptr) {
-      const double d2 = lx * lx + ly * ly;
-      const double along = lx * hc + ly * hs;
-      const bool within = d2 <= view_range2 &&
-                          (cos_half >= 0 ? along >= 0 && along * along >= d2 * cos_half * cos_half
-                                         : along >= 0 || along * along <= d2 * cos_half * cos_half);
-      if (within) in_view->push_back(key);
-    }
+    if (view != nullptr && InView(lx, ly, hc, hs, view_range2, cos_half)) in_view->push_back(key);
     // The bound of the file comment with this landmark's own range and largest eigenvalue:
     // d2 >= D^2 / (2 (lP + sr^2 + r_l^2 sb^2)); beyond the augment gate it rules the pair out
     // without the likelihood. Computed for the first detection within the radius.

@@ -60,6 +60,62 @@ TEST(SpatialKey, BlockTestIsExact) {
   EXPECT_TRUE(KeyRangeMayHit(0, ~uint64_t{0}, CellRect{-3, -3, 5, 5}));
 }
 
+// ViewBoxOf holds every point InView() admits, and no more than the view needs: a half view
+// facing +x is a box R deep and 2R wide, a quarter view facing the diagonal an R square.
+TEST(ViewBox, HoldsTheViewAndNoMore) {
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> unit(0, 1);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const double x = 200 * unit(rng) - 100, y = 200 * unit(rng) - 100;
+    const double heading = 2 * M_PI * unit(rng) - M_PI, fov = 2 * M_PI * (0.01 + 0.99 * unit(rng));
+    const double range = 1 + 50 * unit(rng);
+    const double hc = std::cos(heading), hs = std::sin(heading), ch = std::cos(0.5 * fov);
+    const ViewBox b = ViewBoxOf(x, y, hc, hs, range, ch, std::sin(0.5 * fov));
+    for (int k = 0; k < 200; ++k) {
+      // Points on the view's edges and inside it.
+      const double a = heading + (unit(rng) - 0.5) * fov * (k % 4 == 0 ? 1 : 1 + 1e-9);
+      const double r = range * (k % 3 == 0 ? 1 : unit(rng));
+      const double lx = r * std::cos(a), ly = r * std::sin(a);
+      if (!InView(lx, ly, hc, hs, range * range, ch)) continue;
+      ASSERT_GE(x + lx, b.x0) << trial;
+      ASSERT_LE(x + lx, b.x1) << trial;
+      ASSERT_GE(y + ly, b.y0) << trial;
+      ASSERT_LE(y + ly, b.y1) << trial;
+    }
+    // Every edge of the box is reached by an admitted point of the arc or the apex.
+    double lo_x = x, hi_x = x, lo_y = y, hi_y = y;
+    for (int j = 0; j <= 1000; ++j) {
+      const double a = heading + fov * (j / 1000.0 - 0.5), r = range * (1 - 1e-9);
+      const double lx = r * std::cos(a), ly = r * std::sin(a);
+      if (!InView(lx, ly, hc, hs, range * range, ch)) continue;
+      lo_x = std::min(lo_x, x + lx);
+      hi_x = std::max(hi_x, x + lx);
+      lo_y = std::min(lo_y, y + ly);
+      hi_y = std::max(hi_y, y + ly);
+    }
+    ASSERT_LT(lo_x - b.x0, 0.01 * range) << trial;
+    ASSERT_LT(b.x1 - hi_x, 0.01 * range) << trial;
+    ASSERT_LT(lo_y - b.y0, 0.01 * range) << trial;
+    ASSERT_LT(b.y1 - hi_y, 0.01 * range) << trial;
+  }
+  const ViewBox half = ViewBoxOf(0, 0, 1, 0, 10, std::cos(M_PI / 2), std::sin(M_PI / 2));
+  EXPECT_NEAR(half.x0, 0, 1e-4);
+  EXPECT_NEAR(half.x1, 10, 1e-4);
+  EXPECT_NEAR(half.y0, -10, 1e-4);
+  EXPECT_NEAR(half.y1, 10, 1e-4);
+  const double d = std::sqrt(0.5);
+  const ViewBox quarter = ViewBoxOf(0, 0, d, d, 10, std::cos(M_PI / 4), std::sin(M_PI / 4));
+  EXPECT_NEAR(quarter.x0, 0, 1e-4);
+  EXPECT_NEAR(quarter.x1, 10, 1e-4);
+  EXPECT_NEAR(quarter.y0, 0, 1e-4);
+  EXPECT_NEAR(quarter.y1, 10, 1e-4);
+  const ViewBox full = ViewBoxOf(1, 2, 0, 1, 10, std::cos(M_PI), std::sin(M_PI));
+  EXPECT_NEAR(full.x0, -9, 1e-4);
+  EXPECT_NEAR(full.x1, 11, 1e-4);
+  EXPECT_NEAR(full.y0, -8, 1e-4);
+  EXPECT_NEAR(full.y1, 12, 1e-4);
+}
+
 Landmark At(double x, double y) {
   Landmark l;
   l.x_m = x;
