@@ -4,7 +4,8 @@
 // memory. Each thread has a set of the same size whatever the thread count, in huge pages as the
 // node pools' slabs are, so two threads differ from one only by what the cores share (the L3, the
 // memory controller, the host). One more case shares on purpose: locked increments on one set
-// that every thread uses, the price of a line that moves between the cores. No engine code runs
+// that every thread uses, the price of a line that moves between the cores, and the round trip of
+// one line between two threads, the latency of such a move. No engine code runs
 // here: the figures say what the machine gives a second thread, the ceiling for the engine's own
 // 2-thread scaling.
 //
@@ -161,6 +162,36 @@ void BM_MachineSharedAtomicIncrement(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * kAccessesPerIteration);
   if (state.thread_index() == 0) shared_set.reset();
 }
+
+// One line handed back and forth between two threads: each iteration is a round trip (the
+// `round_trip` counter, in seconds; the time columns count both threads' iterations), the
+// latency of a line the other core changed last (what every shared reference-count update can
+// wait for). On a virtual machine it depends on where the host placed the two virtual CPUs.
+alignas(64) std::atomic<uint64_t> baton{0};
+
+void BM_MachineLineRoundTrip(benchmark::State& state) {
+  const bool first = state.thread_index() == 0;
+  // Thread 0 resets the baton before the loop; the threads meet at the loop's start.
+  if (first) baton.store(0, std::memory_order_relaxed);
+  uint64_t turn = 0;
+  for (auto _ : state) {
+    if (first) {
+      baton.store(turn + 1, std::memory_order_release);
+      while (baton.load(std::memory_order_acquire) != turn + 2) {
+      }
+    } else {
+      while (baton.load(std::memory_order_acquire) != turn + 1) {
+      }
+      baton.store(turn + 2, std::memory_order_release);
+    }
+    turn += 2;
+  }
+  // Seconds per round trip (thread 1 adds nothing to the threads' sum).
+  state.counters["round_trip"] =
+      benchmark::Counter(first ? static_cast<double>(state.iterations()) : 0,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_MachineLineRoundTrip)->Threads(2)->UseRealTime();
 
 // Working set per thread in KiB (for the shared set, its whole size): within one core's L2 (2 MiB
 // on the development machines), within the shared L3 (32 MiB) with another thread's, and far
