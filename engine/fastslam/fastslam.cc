@@ -32,11 +32,17 @@ namespace {
 // Version 4: the rank and rank count of the share it holds.
 // Version 5: the association counts' truncated joint-compatibility searches; no segment flag
 // (the step records say where a path segment starts).
-constexpr CheckpointFormat kFastSlamCheckpoint = {"grove fastslam", "FastSLAM", 5};
+// Version 6: under unknown association, bottom nodes of 2^kLog2CellsPerBottom cells.
+constexpr CheckpointFormat kFastSlamCheckpoint = {"grove fastslam", "FastSLAM", 6};
 
 // The landmark trees' degree, 2^kLog2Degree (engine/fastslam/README.md, "FastSLAM 1.0 and 2.0:
 // accuracy and speed", has the measurement).
 constexpr int kLog2Degree = 3;
+// Under unknown association a bottom node holds the landmarks of 2^kLog2CellsPerBottom cells of
+// the spatial index, packed: most cells hold one landmark or none, so a query visits fewer, fuller
+// nodes (engine/fastslam/README.md, "Unknown data association"). Landmark ids are dense keys: a
+// bottom node holds the leaves of 2^kLog2Degree ids, unpacked.
+constexpr int kLog2CellsPerBottom = 3;
 
 // What each filter step was: the replay of paths and the reported trajectory need it.
 enum StepKind : uint8_t {
@@ -62,11 +68,35 @@ Status CheckObservation(size_t k, const LandmarkObservation& z, bool known) {
 
 }  // namespace
 
+// A run behind the facade, whatever its model's map layout (ImplOf).
 class FastSlam::Impl {
  public:
-  using Model = FastSlamModel<kLog2Degree>;
+  virtual ~Impl() = default;
+  virtual Status Control(double t_s, double v, double g) = 0;
+  virtual Status Scan(double t_s, std::span<const LandmarkObservation> z) = 0;
+  // Runs the deferred predictions; an error stops the engine (ImplOf::Settle()).
+  virtual Status Settle() = 0;
+  virtual void SettleQuietly() = 0;
+  virtual const FastSlamConfig& config() const = 0;
+  virtual int64_t steps() const = 0;
+  virtual Pose2 MeanPose() const = 0;
+  virtual Pose2 HeaviestPose() const = 0;
+  virtual const std::vector<StampedPose>& MeanTrajectory() const = 0;
+  virtual Pose2Covariance PoseCovariance() const = 0;
+  virtual StatusOr<std::vector<StampedPose>> HeaviestTrajectory() const = 0;
+  virtual StatusOr<std::vector<LandmarkEstimate>> HeaviestLandmarks() const = 0;
+  virtual FastSlamSummary Summary() const = 0;
+  virtual Status CheckInvariants() const = 0;
+  virtual StatusOr<std::string> Checkpoint(std::string_view user_data) const = 0;
+  virtual Status Load(ByteReader* r) = 0;
+};
 
-  Impl(const FastSlamConfig& config, int threads, Collective* ranks)
+namespace {
+
+template <typename Model>
+class ImplOf final : public FastSlam::Impl {
+ public:
+  ImplOf(const FastSlamConfig& config, int threads, Collective* ranks)
       : config_(config),
         ranks_(ranks),
         share_(ShareOf(static_cast<uint64_t>(config.particles), ranks, kSumBlock)),
@@ -79,7 +109,7 @@ class FastSlam::Impl {
     reported_.push_back(driver_.mean_trajectory().front());
   }
 
-  Status Control(double t_s, double v, double g) {
+  Status Control(double t_s, double v, double g) override {
     if (Status s = CheckInput(InputField::kTime, t_s); !s.ok()) {
       return InvalidArgumentError("control: " + s.message());
     }
@@ -114,7 +144,7 @@ class FastSlam::Impl {
     return Status::Ok();
   }
 
-  Status Scan(double t_s, std::span<const LandmarkObservation> z) {
+  Status Scan(double t_s, std::span<const LandmarkObservation> z) override {
     if (Status s = CheckInput(InputField::kTime, t_s); !s.ok()) {
       return InvalidArgumentError("scan: " + s.message());
     }
@@ -163,7 +193,7 @@ class FastSlam::Impl {
   // Runs the deferred predictions (Defer()): every read-out and Scan() first settles. Their
   // error stops the engine; it is returned here and, when a read-out without a status ran
   // them, by the next call that returns a status (SettleQuietly(), TakeDeferredError()).
-  Status Settle() {
+  Status Settle() override {
     GROVE_RETURN_IF_ERROR(TakeDeferredError());
     if (pending_.empty()) return Status::Ok();
     return driver_.Guarded([&]() -> Status {
@@ -198,15 +228,15 @@ class FastSlam::Impl {
   }
   // Settle() for a read-out that returns no status: its error waits for the next call that
   // returns one.
-  void SettleQuietly() {
+  void SettleQuietly() override {
     Status s = Settle();
     if (!s.ok() && deferred_error_.ok()) deferred_error_ = s;
   }
 
-  const FastSlamConfig& config() const { return config_; }
-  int64_t steps() const { return driver_.steps(); }
-  Pose2 MeanPose() const { return driver_.mean_trajectory().back().pose; }
-  Pose2 HeaviestPose() const {
+  const FastSlamConfig& config() const override { return config_; }
+  int64_t steps() const override { return driver_.steps(); }
+  Pose2 MeanPose() const override { return driver_.mean_trajectory().back().pose; }
+  Pose2 HeaviestPose() const override {
     std::vector<Pose2> mine;
     size_t i;
     if (Holds(driver_.filter().heaviest(), &i)) {
@@ -217,12 +247,12 @@ class FastSlam::Impl {
     StatusOr<std::vector<Pose2>> all = GatherOverRanks(ranks_, std::move(mine));
     return all.ok() && all->size() == 1 ? all->front() : MeanPose();
   }
-  const std::vector<StampedPose>& MeanTrajectory() const { return reported_; }
+  const std::vector<StampedPose>& MeanTrajectory() const override { return reported_; }
 
   // The weighted covariance of the particles' poses about the weighted mean: sums over fixed
   // blocks of particles, added in block order (across ranks, every rank's blocks), so the same
   // at any thread or rank count. NaN when the ranks fail to exchange them.
-  Pose2Covariance PoseCovariance() const {
+  Pose2Covariance PoseCovariance() const override {
     const Pose2 mean = MeanPose();
     std::span<const double> lw = driver_.filter().log_weights();
     std::vector<Pose2Covariance> blocks;
@@ -260,7 +290,7 @@ class FastSlam::Impl {
 
   // Replays the heaviest particle's predictions segment by segment (fastslam_model.h), on the
   // rank that holds it.
-  StatusOr<std::vector<StampedPose>> HeaviestTrajectory() const {
+  StatusOr<std::vector<StampedPose>> HeaviestTrajectory() const override {
     size_t h;
     if (!Holds(driver_.filter().heaviest(), &h))
       return GatherOverRanks(ranks_, std::vector<StampedPose>{});
@@ -304,7 +334,7 @@ class FastSlam::Impl {
     return out;
   }
 
-  StatusOr<std::vector<LandmarkEstimate>> HeaviestLandmarks() const {
+  StatusOr<std::vector<LandmarkEstimate>> HeaviestLandmarks() const override {
     std::vector<LandmarkEstimate> out;
     size_t h;
     if (Holds(driver_.filter().heaviest(), &h)) {
@@ -318,7 +348,7 @@ class FastSlam::Impl {
     return GatherOverRanks(ranks_, std::move(out));
   }
 
-  FastSlamSummary Summary() const {
+  FastSlamSummary Summary() const override {
     FastSlamSummary s;
     static_cast<FilterSummary&>(s) = driver_.Summary();
     s.controls = controls_;
@@ -358,9 +388,9 @@ class FastSlam::Impl {
     return s;
   }
 
-  Status CheckInvariants() const { return model_.CheckCounts(); }
+  Status CheckInvariants() const override { return model_.CheckCounts(); }
 
-  StatusOr<std::string> Checkpoint(std::string_view user_data) const {
+  StatusOr<std::string> Checkpoint(std::string_view user_data) const override {
     return SaveCheckpoint(kFastSlamCheckpoint, FastSlamConfigFields(), config_, ranks_, driver_,
                           user_data, [&](ByteWriter* w) {
                             model_.Save(w);
@@ -375,7 +405,7 @@ class FastSlam::Impl {
                           });
   }
 
-  Status Load(ByteReader* r) {
+  Status Load(ByteReader* r) override {
     return LoadCheckpoint(r, ranks_, &driver_, [&](ByteReader* body) { return LoadBody(body); });
   }
 
@@ -495,6 +525,18 @@ class FastSlam::Impl {
   int64_t observations_ = 0;
 };
 
+// The model whose map layout suits the association's keys (kLog2CellsPerBottom).
+std::unique_ptr<FastSlam::Impl> MakeImpl(const FastSlamConfig& config, int threads,
+                                         Collective* ranks) {
+  if (config.association == FastSlamAssociation::kKnown) {
+    return std::make_unique<ImplOf<FastSlamModel<kLog2Degree>>>(config, threads, ranks);
+  }
+  using Spatial = FastSlamModel<kLog2Degree, kLog2Degree + kLog2CellsPerBottom>;
+  return std::make_unique<ImplOf<Spatial>>(config, threads, ranks);
+}
+
+}  // namespace
+
 FastSlam::FastSlam(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 FastSlam::~FastSlam() = default;
 
@@ -538,7 +580,7 @@ StatusOr<std::unique_ptr<FastSlam>> FastSlam::Create(const FastSlamConfig& confi
     const int threads = config.threads > 0
                             ? config.threads
                             : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-    return std::unique_ptr<FastSlam>(new FastSlam(std::make_unique<Impl>(config, threads, ranks)));
+    return std::unique_ptr<FastSlam>(new FastSlam(MakeImpl(config, threads, ranks)));
   });
 }
 

@@ -1,5 +1,5 @@
 // FastSlamModel: the landmark FastSLAM particle for ParticleFilter (grove/fastslam.h), generic
-// over the degree of its landmark trees.
+// over the degree of its landmark trees' inner and bottom nodes.
 //
 // Per particle (structure of arrays): the vehicle pose and its unit heading vector, FastSLAM
 // 2.0's pose covariance (ParticlePoses), the map (a version of a PersistentTrie keyed by landmark
@@ -75,10 +75,10 @@ inline bool ValidSegmentStart(const SegmentStart& s) {
          std::fabs(s.heading_rad) <= 4 && s.unused == 0;
 }
 
-template <int kLog2Degree>
+template <int kLog2Degree, int kLog2BottomDegree = kLog2Degree>
 class FastSlamModel {
  public:
-  using Trie = PersistentTrie<Landmark, kLog2Degree>;
+  using Trie = PersistentTrie<Landmark, kLog2Degree, kLog2BottomDegree>;
 
   // A model of every particle, or across ranks of this rank's `share` of the filter's
   // config.particles (particle i here is the filter's first + i; `ranks` carries differential

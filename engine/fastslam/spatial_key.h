@@ -7,8 +7,9 @@
 //   key = Morton(zigzag(cx), zigzag(cy)) << kSlotBits | slot,
 // zigzag mapping 0, -1, 1, -2, 2, ... to 0, 1, 2, 3, 4, ... and Morton interleaving the bits (x
 // in the even bits). Keys near the origin are small, so a map grows in height with its extent
-// (the trie grows above its root), and a cell's kSlotsPerCell slots are one bottom node of a
-// degree-8 trie (so PersistentTrie::ForEachIf, which asks about nodes, decides per cell). A block
+// (the trie grows above its root), and a cell's kSlotsPerCell slots are consecutive keys: one
+// bottom node of a degree-8 trie, or an eighth of a packed bottom node of 64 (FastSLAM's spatial
+// maps; PersistentTrie::ForEachIf, which asks about nodes, then decides per 8 cells). A block
 // of keys sharing a prefix covers, on each axis, at most two intervals of cells (the non-negative
 // and the negative ones): KeyRangeMayHit() tests such a block against a rectangle of cells exactly.
 //

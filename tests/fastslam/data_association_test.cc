@@ -254,8 +254,16 @@ TEST(SearchRadius, GrowsWithRangeAndIsInfiniteWithoutABound) {
 
 // Random maps built as a filter builds them (landmarks initialised from detections and updated),
 // random poses and detections: the candidates of the spatial index and radius give the same
-// matches and decisions as comparing every landmark of the map.
-TEST(FindMatches, IndexGivesTheSameMatchesAsTheWholeMap) {
+// matches and decisions as comparing every landmark of the map. For both layouts of a map: a
+// bottom node per cell, and (as FastSLAM keeps spatial maps) a packed one per 8 cells, whose
+// range query hands the matching some landmarks of cells outside the query.
+template <typename T>
+class FindMatchesTest : public testing::Test {};
+using MapLayouts = testing::Types<PersistentTrie<Landmark, 3>, PersistentTrie<Landmark, 3, 6>>;
+TYPED_TEST_SUITE(FindMatchesTest, MapLayouts);
+
+TYPED_TEST(FindMatchesTest, IndexGivesTheSameMatchesAsTheWholeMap) {
+  using Trie = TypeParam;
   std::mt19937_64 rng(13);
   std::uniform_real_distribution<double> pos(-80, 80), unit(0, 1);
   int associated = 0, created = 0, ignored = 0;
@@ -266,7 +274,7 @@ TEST(FindMatches, IndexGivesTheSameMatchesAsTheWholeMap) {
     p.exclusive = trial % 2 == 1;
     const double max_range = 40;
     Trie trie(1, 1);
-    Trie::Node* root = nullptr;
+    typename Trie::Node* root = nullptr;
     for (int k = 0; k < 300; ++k) {
       const VehiclePose from{pos(rng), pos(rng), (2 * unit(rng) - 1) * kPi};
       Landmark l = InitLandmark(
