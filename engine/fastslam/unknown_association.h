@@ -383,11 +383,11 @@ class UnknownAssociation {
     return -1;
   }
 
-  // ApplyScan's first stage: the updates of the associated landmarks, their keys appended to
-  // sc->keys. The paths to them are copied first, with the evidence and the counts (a path copied
-  // once is the particle's own, so the leaves noted stay where they are), then the updates run
-  // together: the EKF map's in SIMD lanes (UpdateLandmarks()), the others' leaf by leaf. Two
-  // detections associated with one landmark update it in turn.
+  // ApplyScan's first stage: the updates of the associated landmarks, the keys of those whose
+  // mean left its cell in sc->keys. The paths to them are copied first, with the evidence and the
+  // counts (a path copied once is the particle's own, so the leaves noted stay where they are),
+  // then the updates run together: the EKF map's in SIMD lanes (UpdateLandmarks()), the others'
+  // leaf by leaf. Two detections associated with one landmark update it in turn.
   Status UpdateAssociated(const FilterSteps& steps, Trie* trie, Node** root, const ScanStep& scan,
                           size_t i, int slot, const VehiclePose& pose, Scratch* sc) {
     AssociationCounts& counts = counts_[i];
@@ -443,7 +443,18 @@ class UnknownAssociation {
       }
       sc->keys.push_back(d.key);
     }
-    return apply();
+    GROVE_RETURN_IF_ERROR(apply());
+    // Of the updated landmarks, only those whose mean left its cell stay in sc->keys for
+    // MoveToNewCells(): the leaves noted are read while they are still where they are.
+    size_t moved = 0;
+    for (size_t k = 0; k < sc->keys.size(); ++k) {
+      const Landmark& l = *sc->update_leaves[k];
+      Cell cell;
+      if (CellOf(l.x_m, l.y_m, params_.cell_m, &cell) && cell == CellOfKey(sc->keys[k])) continue;
+      sc->keys[moved++] = sc->keys[k];
+    }
+    sc->keys.resize(moved);
+    return Status::Ok();
   }
 
   // ApplyScan's second stage: the evidence of the landmarks in view and not seen (near no
@@ -476,8 +487,8 @@ class UnknownAssociation {
     return Status::Ok();
   }
 
-  // ApplyScan's third stage: an updated landmark (`touched`, reordered) whose mean left its
-  // cell moves to a slot of its new cell.
+  // ApplyScan's third stage: an updated landmark (`touched`, reordered: UpdateAssociated() keeps
+  // those that left their cell) whose mean left its cell moves to a slot of its new cell.
   Status MoveToNewCells(Trie* trie, Node** root, size_t i, int slot,
                         std::vector<uint64_t>* touched) {
     std::sort(touched->begin(), touched->end());
