@@ -109,7 +109,7 @@ BENCHMARK(BM_ScanUpdate<4>)->Apply(MapSizes)->Name("BM_ScanUpdate/degree:16");
 struct UnknownFixture {
   FastSlamConfig config;
   WorkerPool workers{1};
-  std::unique_ptr<FastSlamModel<3>> model;
+  std::unique_ptr<fastslam::CellKeyedModel> model;  // unknown association's, as FastSlam's
   std::vector<double> log_w;
   std::vector<uint32_t> pairs;
   std::vector<LandmarkObservation> scan;
@@ -119,7 +119,7 @@ struct UnknownFixture {
     config.particles = particles;
     config.threads = 1;
     config.association = FastSlamAssociation::kMaximumLikelihood;
-    model = std::make_unique<FastSlamModel<3>>(config, 1);
+    model = std::make_unique<fastslam::CellKeyedModel>(config, 1);
     log_w.assign(static_cast<size_t>(particles), 0.0);
     StatusOr<tools::BaileyMap> map = tools::ParseBaileyMap("webmap", tools::EmbeddedBaileyWebmap());
     if (!map.ok()) std::abort();
@@ -173,7 +173,7 @@ void BM_UnknownAssociation(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * particles * static_cast<int64_t>(f.scan.size()));
   state.counters["landmarks"] = static_cast<double>(35 * state.range(0) * state.range(0));
   state.counters["detections"] = static_cast<double>(f.scan.size());
-  state.counters["tree_height"] = FastSlamModel<3>::Trie::Height(f.model->map(0));
+  state.counters["tree_height"] = fastslam::CellKeyedModel::Trie::Height(f.model->map(0));
   state.counters["map_MiB"] = f.model->map_memory().live_bytes / 1048576.0;
 }
 BENCHMARK(BM_UnknownAssociation)->Arg(1)->Arg(2)->Arg(4)->Arg(8)->Arg(16)->Arg(24);

@@ -19,7 +19,6 @@
 namespace grove {
 
 using fastslam::ControlStep;
-using fastslam::FastSlamModel;
 using fastslam::PredictStep;
 using fastslam::ScanStep;
 using fastslam::SegmentHistory;
@@ -32,17 +31,9 @@ namespace {
 // Version 4: the rank and rank count of the share it holds.
 // Version 5: the association counts' truncated joint-compatibility searches; no segment flag
 // (the step records say where a path segment starts).
-// Version 6: under unknown association, bottom nodes of 2^kLog2CellsPerBottom cells.
+// Version 6: under unknown association, bottom nodes of 2^kLog2CellsPerBottom cells
+// (fastslam_model.h).
 constexpr CheckpointFormat kFastSlamCheckpoint = {"grove fastslam", "FastSLAM", 6};
-
-// The landmark trees' degree, 2^kLog2Degree (engine/fastslam/README.md, "FastSLAM 1.0 and 2.0:
-// accuracy and speed", has the measurement).
-constexpr int kLog2Degree = 3;
-// Under unknown association a bottom node holds the landmarks of 2^kLog2CellsPerBottom cells of
-// the spatial index, packed: most cells hold one landmark or none, so a query visits fewer, fuller
-// nodes (engine/fastslam/README.md, "Unknown data association"). Landmark ids are dense keys: a
-// bottom node holds the leaves of 2^kLog2Degree ids, unpacked.
-constexpr int kLog2CellsPerBottom = 3;
 
 // What each filter step was: the replay of paths and the reported trajectory need it.
 enum StepKind : uint8_t {
@@ -525,14 +516,13 @@ class ImplOf final : public FastSlam::Impl {
   int64_t observations_ = 0;
 };
 
-// The model whose map layout suits the association's keys (kLog2CellsPerBottom).
+// The model whose map layout suits the association's keys.
 std::unique_ptr<FastSlam::Impl> MakeImpl(const FastSlamConfig& config, int threads,
                                          Collective* ranks) {
   if (config.association == FastSlamAssociation::kKnown) {
-    return std::make_unique<ImplOf<FastSlamModel<kLog2Degree>>>(config, threads, ranks);
+    return std::make_unique<ImplOf<fastslam::IdKeyedModel>>(config, threads, ranks);
   }
-  using Spatial = FastSlamModel<kLog2Degree, kLog2Degree + kLog2CellsPerBottom>;
-  return std::make_unique<ImplOf<Spatial>>(config, threads, ranks);
+  return std::make_unique<ImplOf<fastslam::CellKeyedModel>>(config, threads, ranks);
 }
 
 }  // namespace

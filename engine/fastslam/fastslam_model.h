@@ -627,6 +627,21 @@ class FastSlamModel {
   std::vector<Status> batch_status_;  // RunInBatches' scratch
 };
 
+// The landmark trees' degree, 2^kLandmarkLog2Degree (engine/fastslam/README.md, "FastSLAM 1.0
+// and 2.0: accuracy and speed", has the measurement).
+inline constexpr int kLandmarkLog2Degree = 3;
+// Under unknown association a bottom node holds the landmarks of 2^kLog2CellsPerBottom cells of
+// the spatial index, packed: most cells hold one landmark or none, so a query visits fewer,
+// fuller nodes (engine/fastslam/README.md, "Unknown data association"). Landmark ids are dense
+// keys: a bottom node holds the leaves of 2^kLandmarkLog2Degree ids, unpacked.
+inline constexpr int kLog2CellsPerBottom = 3;
+
+// The model of a run under known association (maps keyed by landmark id) and under unknown
+// association (maps keyed by SpatialKey).
+using IdKeyedModel = FastSlamModel<kLandmarkLog2Degree>;
+using CellKeyedModel =
+    FastSlamModel<kLandmarkLog2Degree, kLandmarkLog2Degree + kLog2CellsPerBottom>;
+
 }  // namespace grove::fastslam
 
 #endif  // GROVE_ENGINE_FASTSLAM_FASTSLAM_MODEL_H_
