@@ -506,6 +506,19 @@ class FastSlamModel {
     return Status::Ok();
   }
 
+  // The leaf of `key` in particle i's map, a landmark the scan's range query handed over: the
+  // copy the query noted (the leaf itself unless the map holds square-root factors, which the
+  // copies hold converted), or else found in the map.
+  const Landmark& NotedLeaf(const Scratch& sc, size_t i, uint64_t key) const {
+    if (!traits().square_root_map()) {
+      const std::vector<uint64_t>& keys = sc.matches.key;
+      for (size_t k = 0; k < keys.size(); ++k) {
+        if (keys[k] == key) return sc.matches.leaf[k];
+      }
+    }
+    return *trie_.Find(maps_[i], key);
+  }
+
   // Unknown association's Advance(): particle by particle, the decisions from its pose now,
   // the weight, and (but for the filters that draw after resampling) the map changes.
   Status AdvanceUnknown(const ScanStep& scan, uint64_t step, size_t begin, size_t end, int slot,
@@ -534,8 +547,8 @@ class FastSlamModel {
           lw += d.log_likelihood;
         } else {
           double w = 0;
-          GROVE_RETURN_IF_ERROR(ProposalStepOf(i, scan.observations[j],
-                                               *trie_.Find(maps_[i], d.key), &mu, &sigma, &w));
+          GROVE_RETURN_IF_ERROR(
+              ProposalStepOf(i, scan.observations[j], NotedLeaf(sc, i, d.key), &mu, &sigma, &w));
           lw += w;
         }
       }
