@@ -111,7 +111,10 @@ NodePool::NodePool(size_t node_bytes, int slots)
     : node_bytes_((node_bytes + kNodeAlign - 1) & ~(kNodeAlign - 1)) {
   GROVE_CHECK(node_bytes >= sizeof(FreeNode) && node_bytes <= (size_t{16} << 10));
   GROVE_CHECK(slots >= 1);
-  size_t header = (sizeof(Page) + kNodeAlign - 1) & ~(kNodeAlign - 1);
+  // Nodes of whole cache lines start on one, so no node shares a line with its neighbours: a
+  // reference count one core changes then never evicts another core's copy of the next node.
+  const size_t align = node_bytes_ % 64 == 0 ? 64 : kNodeAlign;
+  size_t header = (sizeof(Page) + align - 1) & ~(align - 1);
   first_node_offset_ = static_cast<uint32_t>(header);
   nodes_per_page_ = static_cast<uint32_t>((kPageBytes - header) / node_bytes_);
   heaps_.reserve(slots);

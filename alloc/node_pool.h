@@ -75,8 +75,9 @@ class NodePool {
   NodePool(const NodePool&) = delete;
   NodePool& operator=(const NodePool&) = delete;
 
-  // Returns uninitialised storage of node_bytes(), 16-byte aligned, or nullptr when no memory
-  // can be had. REQUIRES: 0 <= slot < slots().
+  // Returns uninitialised storage of node_bytes(), 16-byte aligned (64-byte aligned when
+  // node_bytes() is a multiple of 64: each such node has its cache lines to itself), or nullptr
+  // when no memory can be had. REQUIRES: 0 <= slot < slots().
   void* Allocate(int slot);
   // REQUIRES: p came from Allocate on this pool; slot is the caller's slot or kForeignSlot.
   void Free(void* p, int slot);
