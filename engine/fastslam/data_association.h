@@ -228,10 +228,7 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
   const double pad = 1e-6 * std::max(x1 - x0, y1 - y0);
   const double bx0 = x0 - pad, bx1 = x1 + pad, by0 = y0 - pad, by1 = y1 + pad;
   // The range query notes the pairs to test; their likelihoods follow in SIMD lanes.
-  auto consider = [&](uint64_t key, const Landmark& leaf) {
-    if (use_index && (leaf.x_m < bx0 || leaf.x_m > bx1 || leaf.y_m < by0 || leaf.y_m > by1)) {
-      return;
-    }
+  auto note = [&](uint64_t key, const Landmark& leaf) [[gnu::noinline]] {
     const Landmark l = params.square_root_leaves ? WithCovariance(leaf) : leaf;
     const double lx = l.x_m - pose.x_m, ly = l.y_m - pose.y_m;
     if (view != nullptr && InView(lx, ly, hc, hs, view_range2, cos_half)) in_view->push_back(key);
@@ -256,6 +253,13 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
       scratch->key.push_back(key);
       scratch->leaf.push_back(l);
     }
+  };
+  // The box test inline in the walk, the rest a call.
+  auto consider = [&](uint64_t key, const Landmark& leaf) {
+    if (use_index && (leaf.x_m < bx0 || leaf.x_m > bx1 || leaf.y_m < by0 || leaf.y_m > by1)) {
+      return;
+    }
+    note(key, leaf);
   };
   if (scan.empty() && view == nullptr) return Status::Ok();
   if (use_index && bounded) {
