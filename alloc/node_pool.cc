@@ -17,6 +17,10 @@ constexpr size_t kPageBytes = size_t{64} << 10;
 constexpr size_t kSlabBytes = size_t{4} << 20;
 constexpr size_t kNodeAlign = 16;
 
+// Nodes of whole cache lines start on one, so no node shares a line with its neighbours: a
+// reference count one core changes then never evicts another core's copy of the next node.
+constexpr size_t AlignmentOf(size_t node_bytes) { return node_bytes % 64 == 0 ? 64 : kNodeAlign; }
+
 #ifdef GROVE_NODE_POOL
 constexpr size_t kHugePageBytes = size_t{2} << 20;
 
@@ -111,9 +115,7 @@ NodePool::NodePool(size_t node_bytes, int slots)
     : node_bytes_((node_bytes + kNodeAlign - 1) & ~(kNodeAlign - 1)) {
   GROVE_CHECK(node_bytes >= sizeof(FreeNode) && node_bytes <= (size_t{16} << 10));
   GROVE_CHECK(slots >= 1);
-  // Nodes of whole cache lines start on one, so no node shares a line with its neighbours: a
-  // reference count one core changes then never evicts another core's copy of the next node.
-  const size_t align = node_bytes_ % 64 == 0 ? 64 : kNodeAlign;
+  const size_t align = AlignmentOf(node_bytes_);
   size_t header = (sizeof(Page) + align - 1) & ~(align - 1);
   first_node_offset_ = static_cast<uint32_t>(header);
   nodes_per_page_ = static_cast<uint32_t>((kPageBytes - header) / node_bytes_);
@@ -337,7 +339,7 @@ NodePool::Page* NodePool::Refill(Heap* heap) {
 
 void* NodePool::Allocate(int slot) {
   if (InjectedFailure()) return nullptr;
-  void* p = ::operator new (node_bytes_, std::align_val_t{kNodeAlign}, std::nothrow);
+  void* p = ::operator new (node_bytes_, std::align_val_t{AlignmentOf(node_bytes_)}, std::nothrow);
   if (p == nullptr) return nullptr;
   // Relaxed: a statistic.
   heaps_[slot < 0 ? 0 : slot]->live.fetch_add(1, std::memory_order_relaxed);
@@ -346,7 +348,7 @@ void* NodePool::Allocate(int slot) {
 }
 
 void NodePool::Free(void* p, int slot) {
-  ::operator delete (p, std::align_val_t{kNodeAlign});
+  ::operator delete (p, std::align_val_t{AlignmentOf(node_bytes_)});
   heaps_[slot < 0 ? 0 : slot]->live.fetch_sub(1, std::memory_order_relaxed);
 }
 

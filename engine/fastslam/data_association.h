@@ -222,13 +222,13 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
     y1 = std::max(y1, box.y1);
   }
   // The range query hands over every landmark of the nodes it admits, some beyond the box (a
-  // node spans several cells): with the index, those, neither in view nor within a radius, are
-  // passed over first. The box is widened by a millionth of its size so that rounding never passes
-  // over a landmark the tests below would take.
+  // node spans several cells): with the index and a bounded box, those, neither in view nor
+  // within a radius, are passed over first. The box is widened by a millionth of its size so that
+  // rounding never passes over a landmark the tests below would take.
   const double pad = 1e-6 * std::max(x1 - x0, y1 - y0);
   const double bx0 = x0 - pad, bx1 = x1 + pad, by0 = y0 - pad, by1 = y1 + pad;
   // The range query notes the pairs to test; their likelihoods follow in SIMD lanes.
-  auto note = [&](uint64_t key, const Landmark& leaf) [[gnu::noinline]] {
+  auto note = [&](uint64_t key, const Landmark& leaf) {
     const Landmark l = params.square_root_leaves ? WithCovariance(leaf) : leaf;
     const double lx = l.x_m - pose.x_m, ly = l.y_m - pose.y_m;
     if (view != nullptr && InView(lx, ly, hc, hs, view_range2, cos_half)) in_view->push_back(key);
@@ -256,7 +256,8 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
   };
   // The box test inline in the walk, the rest a call.
   auto consider = [&](uint64_t key, const Landmark& leaf) {
-    if (use_index && (leaf.x_m < bx0 || leaf.x_m > bx1 || leaf.y_m < by0 || leaf.y_m > by1)) {
+    if (use_index && bounded &&
+        (leaf.x_m < bx0 || leaf.x_m > bx1 || leaf.y_m < by0 || leaf.y_m > by1)) {
       return;
     }
     note(key, leaf);
