@@ -487,16 +487,13 @@ class UnknownAssociation {
     return Status::Ok();
   }
 
-  // ApplyScan's third stage: an updated landmark (`touched`, reordered: UpdateAssociated() keeps
-  // those that left their cell) whose mean left its cell moves to a slot of its new cell.
-  Status MoveToNewCells(Trie* trie, Node** root, size_t i, int slot,
-                        std::vector<uint64_t>* touched) {
-    std::sort(touched->begin(), touched->end());
-    touched->erase(std::unique(touched->begin(), touched->end()), touched->end());
-    for (uint64_t key : *touched) {
+  // ApplyScan's third stage: the updated landmarks whose mean left its cell (`moved`, from
+  // UpdateAssociated(); reordered) move to a slot of their new cell.
+  Status MoveToNewCells(Trie* trie, Node** root, size_t i, int slot, std::vector<uint64_t>* moved) {
+    std::sort(moved->begin(), moved->end());
+    moved->erase(std::unique(moved->begin(), moved->end()), moved->end());
+    for (uint64_t key : *moved) {
       const Landmark l = *trie->Find(*root, key);
-      Cell cell;
-      if (CellOf(l.x_m, l.y_m, params_.cell_m, &cell) && cell == CellOfKey(key)) continue;
       if (!trie->Erase(root, key, slot)) return NoMemoryError(first_ + i, "map");
       GROVE_RETURN_IF_ERROR(Insert(trie, root, i, slot, l));
     }

@@ -15,6 +15,7 @@
 #include "alloc/node_pool.h"
 #include "concurrency/worker_pool.h"
 #include "engine/fastslam/fastslam_model.h"
+#include "engine/fastslam/spatial_key.h"
 #include "engine/fastslam/vehicle_model.h"
 #include "engine/filter/filter_model.h"
 #include "engine/filter/filter_options.h"
@@ -623,6 +624,30 @@ TEST(UnknownAssociationAccuracy, FastSlam2OnTheWebmapStaysWithinItsBounds) {
     }
   }
   EXPECT_LT(rmse[1], 7.5);
+}
+
+// Under unknown association a landmark lives under the key of the cell of its mean: a landmark
+// whose update moves it across a cell boundary moves to its new cell (the range query relies on
+// it). Cells of 0.25 m, so that the updates move many landmarks across.
+TEST_P(ByFilter, SpatialMapsKeepEachLandmarkInItsCell) {
+  tools::BaileySimOptions o = tools::WebmapPreset();
+  o.loops = 1;
+  const BaileySimulation sim = Simulate(o);
+  FastSlamConfig config = Config(GetParam(), 20, 2);
+  config.association = FastSlamAssociation::kMaximumLikelihood;
+  config.index_cell_m = 0.25;
+  auto slam = FastSlam::Create(config);
+  ASSERT_TRUE(slam.ok());
+  Feed(sim, slam->get(), 3000);
+  StatusOr<std::vector<LandmarkEstimate>> landmarks = (*slam)->HeaviestLandmarks();
+  ASSERT_TRUE(landmarks.ok());
+  ASSERT_GT(landmarks->size(), 10u);
+  for (const LandmarkEstimate& l : *landmarks) {
+    fastslam::Cell cell;
+    ASSERT_TRUE(fastslam::CellOf(l.x_m, l.y_m, config.index_cell_m, &cell));
+    EXPECT_EQ(cell, fastslam::CellOfKey(static_cast<uint64_t>(l.id)))
+        << "landmark " << l.id << " at (" << l.x_m << ", " << l.y_m << ")";
+  }
 }
 
 // The prediction counted 4 KiB a particle whatever the scans held: 149 MB for Victoria Park's
