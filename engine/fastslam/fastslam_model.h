@@ -200,9 +200,14 @@ class FastSlamModel {
     if (traits().map == FilterTraits::Map::kEkf && !traits().evolution && !association_.active()) {
       Status drawn;
       size_t i = begin;
-      for (; i < end; ++i) {
-        drawn = Draw(step, i);
-        if (!drawn.ok()) break;
+      FilterSteps::Deviates d;
+      while (i < end && drawn.ok()) {
+        const size_t from = i, to = std::min(end, from + FilterSteps::kDrawChunk);
+        steps_.DrawDeviates(step, first_ + from, first_ + to, &d);
+        for (; i < to; ++i) {
+          drawn = DrawWith(d.of(i - from), i);
+          if (!drawn.ok()) break;
+        }
       }
       if (!scan.observations.empty() && i > begin) {
         GROVE_RETURN_IF_ERROR(updates_.Apply(steps_, &trie_, &maps_[begin], &poses_.pose(begin),
@@ -210,10 +215,15 @@ class FastSlamModel {
       }
       return drawn;
     }
-    for (size_t i = begin; i < end; ++i) {
-      GROVE_RETURN_IF_ERROR(Draw(step, i));
-      if (traits().evolution || scan.observations.empty()) continue;
-      GROVE_RETURN_IF_ERROR(UpdateMap(scan, i, slot));
+    FilterSteps::Deviates d;
+    for (size_t from = begin; from < end; from += FilterSteps::kDrawChunk) {
+      const size_t to = std::min(end, from + FilterSteps::kDrawChunk);
+      steps_.DrawDeviates(step, first_ + from, first_ + to, &d);
+      for (size_t i = from; i < to; ++i) {
+        GROVE_RETURN_IF_ERROR(DrawWith(d.of(i - from), i));
+        if (traits().evolution || scan.observations.empty()) continue;
+        GROVE_RETURN_IF_ERROR(UpdateMap(scan, i, slot));
+      }
     }
     return Status::Ok();
   }
@@ -582,11 +592,12 @@ class FastSlamModel {
     return association_.ApplyScan(steps_, &trie_, &maps_[i], scan, i, poses_.pose(i), slot, sc);
   }
 
-  // Particle i's pose drawn from its proposal at `step`; its covariance restarts.
-  Status Draw(uint64_t step, size_t i) {
+  // Particle i's pose drawn from its proposal with the given deviates (FilterSteps::Deviates,
+  // those of its stream at the scan's step); its covariance restarts.
+  Status DrawWith(const Eigen::Vector3d& normals, size_t i) {
     VehiclePose& pose = poses_.pose(i);
-    GROVE_RETURN_IF_ERROR(steps_.Draw(step, first_ + i, poses_.proposal_mu(i),
-                                      steps_.Stored(poses_.proposal_sigma(i)), &pose));
+    GROVE_RETURN_IF_ERROR(steps_.DrawWith(normals, first_ + i, poses_.proposal_mu(i),
+                                          steps_.Stored(poses_.proposal_sigma(i)), &pose));
     poses_.unit(i) = HeadingUnit{std::cos(pose.heading_rad), std::sin(pose.heading_rad)};
     poses_.cov(i) = steps_.restart_covariance();
     return Status::Ok();

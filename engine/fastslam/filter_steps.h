@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <span>
 
+#include "concurrency/normal_batch.h"
 #include "concurrency/normal_pairs.h"
 #include "concurrency/random_stream.h"
 #include "engine/fastslam/filter_traits.h"
@@ -220,7 +221,31 @@ class FilterSteps {
   Status Draw(uint64_t step, uint64_t particle, const Eigen::Vector3d& mu,
               const Eigen::Matrix3d& sigma, VehiclePose* out) const {
     RandomStream rs(seed_, step + 1, static_cast<uint32_t>(particle), StreamPurpose::kProposal);
-    const Eigen::Vector3d normals(rs.NextNormal(), rs.NextNormal(), rs.NextNormal());
+    Eigen::Vector3d normals;
+    for (int k = 2; k >= 0; --k) normals(k) = rs.NextNormal();
+    return DrawWith(normals, particle, mu, sigma, out);
+  }
+
+  // The deviates Draw() takes, for up to kDrawChunk consecutive particles drawn at once
+  // (DrawNormals: the same numbers as their streams, particles in SIMD lanes).
+  static constexpr size_t kDrawChunk = 64;
+  struct Deviates {
+    double normal[3][kDrawChunk];  // normal[j][k]: the k-th particle's j-th
+    // The k-th particle's, by pose entry (x, y, heading): its third, second and first, the
+    // order Draw() has always used.
+    Eigen::Vector3d of(size_t k) const { return {normal[2][k], normal[1][k], normal[0][k]}; }
+  };
+  // Draws the deviates of the filter's particles [begin, end) at `step` into *d.
+  // REQUIRES: end - begin <= kDrawChunk.
+  void DrawDeviates(uint64_t step, uint64_t begin, uint64_t end, Deviates* d) const {
+    double* out[3] = {d->normal[0], d->normal[1], d->normal[2]};
+    DrawNormals(seed_, step + 1, StreamPurpose::kProposal, static_cast<uint32_t>(begin),
+                static_cast<uint32_t>(end), std::span<double* const>(out, 3));
+  }
+
+  // Draw() with its deviates given, normals(k) for entry k of the pose (x, y, heading).
+  Status DrawWith(const Eigen::Vector3d& normals, uint64_t particle, const Eigen::Vector3d& mu,
+                  const Eigen::Matrix3d& sigma, VehiclePose* out) const {
     Status s = traits_.square_root_pose() ? SamplePoseFromFactor(mu, sigma, normals, out)
                                           : SamplePose(mu, sigma, normals, out);
     if (!s.ok()) {

@@ -245,6 +245,35 @@ TEST(LandmarkBatchTest, BearingsManyTurnsOffAreWrapped) {
   }
 }
 
+// The proposal draws of a chunk of particles, their deviates drawn at once, are each particle's
+// own Draw(): for both pose readings (a covariance, a factor), from a chunk not starting at 0.
+TEST(FilterStepsTest, DeviatesDrawnAtOnceGiveEachParticlesDraw) {
+  for (FastSlamFilter filter : {FastSlamFilter::kFastSlam2, FastSlamFilter::kSrcd}) {
+    FastSlamConfig config;
+    config.filter = filter;
+    config.seed = 77;
+    const FilterSteps steps(config);
+    const Eigen::Vector3d mu(1.5, -2.0, 0.3);
+    Eigen::Matrix3d sigma;
+    sigma << 0.04, 0.01, 0.002, 0.01, 0.09, -0.003, 0.002, -0.003, 0.01;
+    if (filter == FastSlamFilter::kSrcd) sigma = Eigen::Matrix3d(sigma.llt().matrixL());
+    const uint64_t step = 41, first = 1000;
+    const size_t n = FilterSteps::kDrawChunk - 3;
+    FilterSteps::Deviates d;
+    steps.DrawDeviates(step, first, first + n, &d);
+    for (size_t k = 0; k < n; ++k) {
+      VehiclePose one, chunk;
+      ASSERT_TRUE(steps.Draw(step, first + k, mu, sigma, &one).ok());
+      ASSERT_TRUE(steps.DrawWith(d.of(k), first + k, mu, sigma, &chunk).ok());
+      EXPECT_EQ(std::bit_cast<uint64_t>(one.x_m), std::bit_cast<uint64_t>(chunk.x_m)) << k;
+      EXPECT_EQ(std::bit_cast<uint64_t>(one.y_m), std::bit_cast<uint64_t>(chunk.y_m)) << k;
+      EXPECT_EQ(std::bit_cast<uint64_t>(one.heading_rad),
+                std::bit_cast<uint64_t>(chunk.heading_rad))
+          << k;
+    }
+  }
+}
+
 using Trie = PersistentTrie<Landmark, 3>;
 
 // n particles sharing one map of landmarks 0..4 seen from the origin, the filter's FastSLAM 1.0
