@@ -13,10 +13,14 @@ call also simulates the drive and its noisy controls and observations, a small s
 
 Prints, per particle count and thread count, the medians (and per particle-step: over particles
 times the 17,382 control steps), the per-round ratio grove / FasterSLAM (min / median / max),
-grove's 2-thread speed-up, and the load average before and after.
+grove's 2-thread speed-up, the load average before and after, and the round trip of one cache
+line between two threads after every round (grove_machine_benchmark's LineRoundTrip, found
+beside GROVE's build or given by --round-trip): on a virtual machine two threads' speed can
+depend on where the host placed the two virtual CPUs, and that round trip tells the placements
+apart.
 
 Usage: fasterslam_rounds.py FASTERSLAM_BUILD GROVE [--data DIR] [--rounds N] [--particles N ...]
-           [--threads T ...] [--fastslam2] [--out DIR]
+           [--threads T ...] [--fastslam2] [--round-trip BENCHMARK] [--out DIR]
 """
 import argparse
 import json
@@ -80,6 +84,16 @@ def machine():
     return f"{model}, {os.cpu_count()} hardware threads{virtual}"
 
 
+def round_trip_ns(benchmark):
+    """The LineRoundTrip benchmark's round_trip counter, in ns (None without the benchmark)."""
+    if benchmark is None:
+        return None
+    run = subprocess.run([str(benchmark), "--benchmark_filter=LineRoundTrip",
+                          "--benchmark_min_time=0.1", "--benchmark_format=json"],
+                         capture_output=True, text=True, check=True)
+    return json.loads(run.stdout)["benchmarks"][0]["round_trip"] * 1e9
+
+
 def spread(values):
     return (f"{min(values):.2f} / {statistics.median(values):.2f} / {max(values):.2f}")
 
@@ -97,9 +111,15 @@ def main():
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--fastslam2", action="store_true",
                     help="also time grove's FastSLAM 2.0 (known association) on 1 thread")
+    ap.add_argument("--round-trip", type=pathlib.Path,
+                    help="grove_machine_benchmark (default: bench/grove_machine_benchmark of "
+                    "the build GROVE is in, when there)")
     ap.add_argument("--out", type=pathlib.Path, help="keep the runs here (default: a temporary "
                     "directory)")
     args = ap.parse_args()
+    if args.round_trip is None:
+        beside = pathlib.Path(args.grove).resolve().parents[1] / "bench/grove_machine_benchmark"
+        args.round_trip = beside if beside.exists() else None
     if not (args.data / "controls.csv").exists():
         sys.exit(f"{args.data}: no controls.csv (give --data)")
     with tempfile.TemporaryDirectory() as tmp:
@@ -113,6 +133,7 @@ def main():
         if args.fastslam2:
             runs.append(("grove", "fastslam2", 1))
         times = {}
+        trips = []
         for r in range(args.rounds):
             for n in args.particles:
                 order = [("fasterslam", None, 1)] + runs
@@ -121,8 +142,16 @@ def main():
                     t = (fasterslam_once(timer, webmap, n) if kind == "fasterslam" else
                          grove_once(args.grove, args.data, out, filt, n, threads))
                     times.setdefault((n, side), []).append(t)
-            print(f"round {r + 1} of {args.rounds} done, {load()}", file=sys.stderr)
-        print(f"- {load()} after; {args.rounds} rounds, sides alternated\n")
+            trip = round_trip_ns(args.round_trip)
+            if trip is not None:
+                trips.append(trip)
+            print(f"round {r + 1} of {args.rounds} done, {load()}"
+                  + ("" if trip is None else f", line round trip {trip:.0f} ns"), file=sys.stderr)
+        print(f"- {load()} after; {args.rounds} rounds, sides alternated")
+        if trips:
+            print("- line round trip between two threads after each round (ns): "
+                  + ", ".join(f"{t:.0f}" for t in trips))
+        print()
         print("| particles | threads | grove filter time | ns per particle-step | FasterSLAM "
               "(1 core) | ns per particle-step | ratio grove / FasterSLAM, min / median / max "
               "| grove speed-up over 1 thread |")
