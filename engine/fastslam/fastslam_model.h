@@ -229,9 +229,12 @@ class FastSlamModel {
   }
 
   // Differential evolution (kDeSrcd) over the drawn poses, then their landmark updates; nothing
-  // for the other filters.
+  // for the other filters (PopulationMoves() false).
+  bool PopulationMoves(const ScanStep& scan) const {
+    return traits().evolution && !scan.observations.empty();
+  }
   Status Population(const ScanStep& scan, uint64_t step, WorkerPool& workers) {
-    if (!traits().evolution || scan.observations.empty()) return Status::Ok();
+    if (!PopulationMoves(scan)) return Status::Ok();
     GROVE_RETURN_IF_ERROR(
         evolution_.Evolve(step, workers, poses_.poses(),
                           [&](size_t i, const VehiclePose& pose, int slot, int* terms) {

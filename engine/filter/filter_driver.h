@@ -27,6 +27,7 @@
 #include <exception>
 #include <memory>
 #include <new>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -81,11 +82,42 @@ class FilterDriver {
     mean_.push_back({0.0, start});
   }
 
-  // A weighting step on `input` at time t_s.
+  // A weighting step on `input` at time t_s. Alone (not across ranks), each batch of the loop
+  // that completes the step sums its own sub-blocks of the mean pose when the filter lets it
+  // (ParticleFilter::Update with a per-batch call), so the mean needs no pass of its own on the
+  // driving thread; the same sums, added in the same order, as ComputeMeanPose().
   template <typename Input>
   Status Update(double t_s, const Input& input) {
     weights_current_ = false;
-    return Step(t_s, [&] { return filter_.Update(input); });
+    if (filter_.options().collective != nullptr) {
+      return Step(t_s, [&] { return filter_.Update(input); });
+    }
+    return Step(t_s, [&] {
+      settled_mean_.reset();
+      const size_t n = model_->size();
+      weights_.resize(n);
+      sub_sums_.resize(SubBlocks(n));
+      bool summed = false;
+      Status s = filter_.Update(
+          input,
+          [&](size_t begin, size_t end) {
+            FillWeights(filter_.log_weights(), begin, end);
+            for (size_t b = begin; b < end; b += kMeanSubBlock) {
+              sub_sums_[b / kMeanSubBlock] = SubBlockSum(b, std::min(end, b + kMeanSubBlock),
+                                                         [&](size_t i) { return SampleOf(i); });
+            }
+          },
+          &summed);
+      if (s.ok() && summed) {
+        std::vector<Sum> sums((n + kSumBlock - 1) / kSumBlock);
+        for (size_t k = 0; k < sub_sums_.size(); ++k) {
+          AddSum(&sums[k * kMeanSubBlock / kSumBlock], sub_sums_[k]);
+        }
+        settled_mean_ = PoseOf(sums);
+        weights_current_ = true;
+      }
+      return s;
+    });
   }
   // A predict-only step on `input` at time t_s.
   template <typename Input>
@@ -392,7 +424,8 @@ class FilterDriver {
       }
 #endif
       auto t0 = std::chrono::steady_clock::now();
-      StatusOr<Pose2> mean = ComputeMeanPose();
+      StatusOr<Pose2> mean = settled_mean_.has_value() ? *settled_mean_ : ComputeMeanPose();
+      settled_mean_.reset();
       if (!mean.ok()) return Stop(mean.status());
       mean_.push_back({t_s, *mean});
       bookkeeping_s_ +=
@@ -494,9 +527,10 @@ class FilterDriver {
   std::vector<double> times_;  // times_[k]: time of the state after step k (k = 0: the start)
   std::vector<StampedPose> mean_;
   double bookkeeping_s_ = 0;
-  std::vector<double> weights_;   // exp of the log weights, for the mean pose
-  std::vector<Sum> sub_sums_;     // PredictRun(): each input's sub-block sums in a part
-  bool weights_current_ = false;  // weights_ holds the filter's weights now
+  std::vector<double> weights_;        // exp of the log weights, for the mean pose
+  std::vector<Sum> sub_sums_;          // PredictRun(): each input's sub-block sums in a part
+  std::optional<Pose2> settled_mean_;  // Update(): the step's mean, summed in its batches
+  bool weights_current_ = false;       // weights_ holds the filter's weights now
   bool start_time_unset_ = true;
   bool failed_ = false;
 };

@@ -66,7 +66,9 @@ concept PredictingModel = FilterModel<M> &&
 
 // A model with a population phase for `Input`, run once its particles are drawn (after
 // Complete(), or after Advance() when the model has no Complete()): Population(input, step,
-// workers) may move particles (not their weights) and runs its own parallel loops.
+// workers) may move particles (not their weights) and runs its own parallel loops. A model may
+// also say, by a member bool PopulationMoves(const Input&) const, whether it will for an input;
+// without it, it is taken to.
 template <typename M, typename Input>
 concept PopulationModel = requires(M& m, const Input& in, uint64_t step, WorkerPool& workers) {
   { m.Population(in, step, workers) } -> std::same_as<Status>;

@@ -112,6 +112,20 @@ class ParticleFilter {
   // caller must not step again.
   template <typename Input>
   requires WeightingModel<Model, Input> Status Update(const Input& input) {
+    bool unused = false;
+    return Update(
+        input, [](size_t, size_t) {}, &unused);
+  }
+
+  // Update() that also calls settled(begin, end) on each batch of particles once the step has
+  // made them final (their poses and weights), inside the loop that completes the step: when the
+  // model completes it and no population phase moves particles after (PopulationMoves()). A
+  // caller's per-batch work on the final particles (the driver's mean pose) then needs no loop
+  // of its own. *all_settled: whether every batch was passed to it.
+  template <typename Input, typename Settled>
+  requires WeightingModel<Model, Input> Status Update(const Input& input, Settled&& settled,
+                                                      bool* all_settled) {
+    *all_settled = false;
     using Clock = std::chrono::steady_clock;
     auto t0 = Clock::now();
     if (!options_checked_) {
@@ -179,16 +193,27 @@ class ParticleFilter {
       if (!in_pieces) FinishRelease();
       auto t3 = Clock::now();
       times_.release_s += Seconds(t3 - t_release);
+      bool final = true;
+      if constexpr (PopulationModel<Model, Input>) {
+        if constexpr (requires { model_->PopulationMoves(input); }) {
+          final = !model_->PopulationMoves(input);
+        } else {
+          final = false;
+        }
+      }
       status = ForBatches([&](int slot, size_t begin, size_t end) {
         if constexpr (PieceReleasingModel<Model>) {
           if (in_pieces) model_->ReleaseDeadRange(DeadFrom(begin), DeadFrom(end), slot);
         }
-        return model_->Complete(input, step_, begin, end, slot);
+        Status s = model_->Complete(input, step_, begin, end, slot);
+        if (s.ok() && final) settled(begin, end);
+        return s;
       });
       if constexpr (PieceReleasingModel<Model>) {
         if (in_pieces) model_->DeadReleased();
       }
       release_pending_ = false;
+      *all_settled = final && status.ok();
       if constexpr (PopulationModel<Model, Input>) {
         if (status.ok()) status = model_->Population(input, step_, *workers_);
       }

@@ -681,6 +681,9 @@ class PosedToy {
   double cos_heading(size_t i) const { return std::cos(h_[i]); }
   double sin_heading(size_t i) const { return std::sin(h_[i]); }
 
+ protected:
+  void Nudge(size_t i, double dx) { x_[i] += dx; }
+
  private:
   void Move(size_t i, uint64_t step, double dx = 0) {
     RandomStream rs(9, step, static_cast<uint32_t>(i));
@@ -689,6 +692,26 @@ class PosedToy {
     h_[i] = rs.NextNormal();
   }
   std::vector<double> x_, y_, h_;
+};
+
+// PosedToy whose update ends after resampling (Complete() moves every particle), then runs a
+// population phase that moves them again when `population_moves`.
+class CompletingToy : public PosedToy {
+ public:
+  CompletingToy(size_t n, bool population_moves) : PosedToy(n), moves_(population_moves) {}
+  Status Complete(const double&, uint64_t, size_t begin, size_t end, int) {
+    for (size_t i = begin; i < end; ++i) Nudge(i, 0.125 * static_cast<double>(i % 7));
+    return Status::Ok();
+  }
+  bool PopulationMoves(const double&) const { return moves_; }
+  Status Population(const double&, uint64_t, WorkerPool&) {
+    if (!moves_) return Status::Ok();
+    for (size_t i = 0; i < size(); ++i) Nudge(i, -0.5 * static_cast<double>(i % 5));
+    return Status::Ok();
+  }
+
+ private:
+  bool moves_;
 };
 
 // The documented mean pose: per block of kSumBlock particles, the sums of its sub-blocks of
@@ -743,6 +766,37 @@ TEST(FilterDriverTest, MeanPoseIsTheSumOfFixedSubBlocksAtAnyThreadCount) {
       EXPECT_EQ(mean[4].pose.x_m, after_run.x_m);
       EXPECT_EQ(mean[4].pose.y_m, after_run.y_m);
       EXPECT_EQ(mean[4].pose.heading_rad, after_run.heading_rad);
+    }
+  }
+}
+
+// An update's mean pose is the documented sum of the particles as the whole step left them:
+// summed in the batches of the loop that completes it when nothing moves them after, on the
+// driving thread after a population phase that does.
+TEST(FilterDriverTest, UpdateMeanPoseCountsWhatCompletesTheStep) {
+  constexpr size_t kN = 5000;
+  for (bool population_moves : {false, true}) {
+    for (int threads : {1, 2, 3}) {
+      for (size_t batch : {1, 50, 512}) {
+        SCOPED_TRACE(testing::Message() << "population moves " << population_moves << ", "
+                                        << threads << " threads, batch " << batch);
+        WorkerPool workers(threads);
+        CompletingToy model(kN, population_moves);
+        FilterOptions options;
+        options.batch = batch;
+        options.resample_threshold = 1e-9;  // keep the uneven weights
+        FilterDriver<CompletingToy> driver(&model, &workers, options, threads, Pose2{},
+                                           TimeOrder::kNonDecreasing);
+        const double x0 = model.x(6);
+        ASSERT_TRUE(driver.Update(1.0, 0.0).ok());
+        ASSERT_EQ(model.x(6), x0 + 0.75 + (population_moves ? -0.5 : 0.0));
+        const Pose2 want = ReferenceMean(model, driver.filter().log_weights());
+        const std::vector<StampedPose>& mean = driver.mean_trajectory();
+        ASSERT_EQ(mean.size(), 2u);
+        EXPECT_EQ(mean[1].pose.x_m, want.x_m);
+        EXPECT_EQ(mean[1].pose.y_m, want.y_m);
+        EXPECT_EQ(mean[1].pose.heading_rad, want.heading_rad);
+      }
     }
   }
 }
