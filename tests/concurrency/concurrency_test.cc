@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <set>
 #include <thread>
@@ -52,6 +53,27 @@ TEST(WorkerPoolTest, EveryIndexVisitedOnceWithValidSlot) {
     EXPECT_FALSE(bad_slot);
     for (auto& h : hits) ASSERT_EQ(h.load(), 1);
   }
+}
+
+// A helper takes chunks of another home only while more than half of it is unclaimed: an owner
+// that is there, even slow, runs the second half of its home itself. Home 0's first chunk waits
+// (up to a second) for slot 1's thread to start home 1, whose first chunk is slow; when that
+// thread does not come, the others finish its home and there is nothing to check.
+TEST(WorkerPoolTest, AHelperLeavesAPresentOwnerTheSecondHalfOfItsHome) {
+  WorkerPool pool(2);
+  std::vector<std::atomic<int>> ran_on(16);  // slot + 1; homes of 8 chunks
+  pool.ParallelFor(ran_on.size(), 1, [&](int slot, size_t b, size_t) {
+    ran_on[b] = slot + 1;
+    if (b == 0) {
+      for (int i = 0; i < 2000 && ran_on[8] == 0; ++i) {
+        std::this_thread::sleep_for(std::chrono::microseconds(500));
+      }
+    }
+    if (b == 8 && slot == 1) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  });
+  for (size_t c = 0; c < ran_on.size(); ++c) ASSERT_NE(ran_on[c].load(), 0) << c;
+  if (ran_on[8] != 2) GTEST_SKIP() << "slot 1's thread did not start its home";
+  for (size_t c = 12; c < 16; ++c) EXPECT_EQ(ran_on[c].load(), 2) << "chunk " << c;
 }
 
 TEST(WorkerPoolTest, ASlotIsHeldByOneThreadAtATime) {
