@@ -254,12 +254,9 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
       scratch->leaf.push_back(l);
     }
   };
-  // The box test inline in the walk, the rest a call.
+  // The range query's: the box test inline in the walk, the rest a call.
   auto consider = [&](uint64_t key, const Landmark& leaf) {
-    if (use_index && bounded &&
-        (leaf.x_m < bx0 || leaf.x_m > bx1 || leaf.y_m < by0 || leaf.y_m > by1)) {
-      return;
-    }
+    if (leaf.x_m < bx0 || leaf.x_m > bx1 || leaf.y_m < by0 || leaf.y_m > by1) return;
     note(key, leaf);
   };
   if (scan.empty() && view == nullptr) return Status::Ok();
@@ -271,7 +268,7 @@ Status FindMatches(const Trie& trie, const typename Trie::Node* root, const Vehi
     trie.ForEachIf(
         root, [&](uint64_t lo, uint64_t hi) { return KeyRangeMayHit(lo, hi, rect); }, consider);
   } else {
-    trie.ForEach(root, consider);
+    trie.ForEach(root, note);
   }
   // The pairs' likelihoods (ObservationLogLikelihoods()), the matches in the order noted.
   const size_t n = scratch->key.size();

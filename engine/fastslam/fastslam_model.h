@@ -198,34 +198,23 @@ class FastSlamModel {
     // particles drawn, observation by observation across them (LandmarkUpdates), reporting the
     // lowest failing particle's error as the loop below does.
     if (traits().map == FilterTraits::Map::kEkf && !traits().evolution && !association_.active()) {
-      Status drawn;
-      size_t i = begin;
-      FilterSteps::Deviates d;
-      while (i < end && drawn.ok()) {
-        const size_t from = i, to = std::min(end, from + FilterSteps::kDrawChunk);
-        steps_.DrawDeviates(step, first_ + from, first_ + to, &d);
-        for (; i < to; ++i) {
-          drawn = DrawWith(d.of(i - from), i);
-          if (!drawn.ok()) break;
-        }
-      }
+      size_t i = end;
+      const Status drawn = DrawEach(
+          step, begin, end, [](size_t) { return Status::Ok(); }, &i);
       if (!scan.observations.empty() && i > begin) {
         GROVE_RETURN_IF_ERROR(updates_.Apply(steps_, &trie_, &maps_[begin], &poses_.pose(begin),
                                              first_ + begin, scan, i - begin, slot, nullptr));
       }
       return drawn;
     }
-    FilterSteps::Deviates d;
-    for (size_t from = begin; from < end; from += FilterSteps::kDrawChunk) {
-      const size_t to = std::min(end, from + FilterSteps::kDrawChunk);
-      steps_.DrawDeviates(step, first_ + from, first_ + to, &d);
-      for (size_t i = from; i < to; ++i) {
-        GROVE_RETURN_IF_ERROR(DrawWith(d.of(i - from), i));
-        if (traits().evolution || scan.observations.empty()) continue;
-        GROVE_RETURN_IF_ERROR(UpdateMap(scan, i, slot));
-      }
-    }
-    return Status::Ok();
+    size_t unused = 0;
+    return DrawEach(
+        step, begin, end,
+        [&](size_t i) {
+          if (traits().evolution || scan.observations.empty()) return Status::Ok();
+          return UpdateMap(scan, i, slot);
+        },
+        &unused);
   }
 
   // Differential evolution (kDeSrcd) over the drawn poses, then their landmark updates; nothing
@@ -595,6 +584,27 @@ class FastSlamModel {
     return association_.ApplyScan(steps_, &trie_, &maps_[i], scan, i, poses_.pose(i), slot, sc);
   }
 
+  // Draws the poses of particles [begin, end) in order, their deviates kDrawChunk particles at a
+  // time, and calls then(i) -> Status after each; stops at the first error and returns it,
+  // *stopped the particle it came from (end when none).
+  template <typename Then>
+  Status DrawEach(uint64_t step, size_t begin, size_t end, Then&& then, size_t* stopped) {
+    FilterSteps::Deviates d;
+    for (size_t from = begin; from < end; from += FilterSteps::kDrawChunk) {
+      const size_t to = std::min(end, from + FilterSteps::kDrawChunk);
+      steps_.DrawDeviates(step, first_ + from, first_ + to, &d);
+      for (size_t i = from; i < to; ++i) {
+        Status s = DrawWith(d.of(i - from), i);
+        if (s.ok()) s = then(i);
+        if (!s.ok()) {
+          *stopped = i;
+          return s;
+        }
+      }
+    }
+    *stopped = end;
+    return Status::Ok();
+  }
   // Particle i's pose drawn from its proposal with the given deviates (FilterSteps::Deviates,
   // those of its stream at the scan's step); its covariance restarts.
   Status DrawWith(const Eigen::Vector3d& normals, size_t i) {

@@ -102,17 +102,12 @@ class FilterDriver {
           input,
           [&](size_t begin, size_t end) {
             FillWeights(filter_.log_weights(), begin, end);
-            for (size_t b = begin; b < end; b += kMeanSubBlock) {
-              sub_sums_[b / kMeanSubBlock] = SubBlockSum(b, std::min(end, b + kMeanSubBlock),
-                                                         [&](size_t i) { return SampleOf(i); });
-            }
+            SumSubBlocks(begin, end, sub_sums_.data());
           },
           &summed);
       if (s.ok() && summed) {
         std::vector<Sum> sums((n + kSumBlock - 1) / kSumBlock);
-        for (size_t k = 0; k < sub_sums_.size(); ++k) {
-          AddSum(&sums[k * kMeanSubBlock / kSumBlock], sub_sums_[k]);
-        }
+        AddSubBlocks(sub_sums_.data(), sub_sums_.size(), sums.data());
         settled_mean_ = PoseOf(sums);
         weights_current_ = true;
       }
@@ -363,16 +358,14 @@ class FilterDriver {
         inputs,
         [&](size_t j, size_t begin, size_t end) {
           if (j == 0 && !current) FillWeights(lw, begin, end);
+          if (!in_order) {
+            SumSubBlocks(begin, end, &sub_sums_[j * subs]);
+            return;
+          }
           auto sub = [&](size_t b) {
             return SubBlockSum(b, std::min(end, b + kMeanSubBlock),
                                [&](size_t i) { return SampleOf(i); });
           };
-          if (!in_order) {
-            for (size_t b = begin; b < end; b += kMeanSubBlock) {
-              sub_sums_[j * subs + b / kMeanSubBlock] = sub(b);
-            }
-            return;
-          }
           // In a local per block: the compiler keeps the chain of adds in registers.
           for (size_t b = begin; b < end;) {
             const size_t e = std::min(end, (b / kSumBlock + 1) * kSumBlock);
@@ -388,9 +381,7 @@ class FilterDriver {
     weights_current_ = current || done > 0;
     auto t0 = std::chrono::steady_clock::now();
     for (size_t j = 0; !in_order && j < done; ++j) {
-      for (size_t k = 0; k < subs; ++k) {
-        AddSum(&sums[j * blocks + k * kMeanSubBlock / kSumBlock], sub_sums_[j * subs + k]);
-      }
+      AddSubBlocks(&sub_sums_[j * subs], subs, &sums[j * blocks]);
     }
     for (size_t j = 0; j < done; ++j) {
       times_.push_back(times[j]);
@@ -500,6 +491,20 @@ class FilterDriver {
     Sum s;
     for (size_t i = b; i < e; ++i) Add(&s, weights_[i], pose(i));
     return s;
+  }
+  // The sums of the sub-blocks of particles [begin, end) as they are now (begin a multiple of
+  // kMeanSubBlock), into subs[b / kMeanSubBlock] for each sub-block starting at b: one batch's
+  // part of a step's mean, on its thread.
+  void SumSubBlocks(size_t begin, size_t end, Sum* subs) const {
+    for (size_t b = begin; b < end; b += kMeanSubBlock) {
+      subs[b / kMeanSubBlock] =
+          SubBlockSum(b, std::min(end, b + kMeanSubBlock), [&](size_t i) { return SampleOf(i); });
+    }
+  }
+  // Adds `count` sub-block sums, in order, to the sums of their blocks of kSumBlock particles:
+  // the blocks' sums as SumOf() adds them.
+  static void AddSubBlocks(const Sum* subs, size_t count, Sum* blocks) {
+    for (size_t k = 0; k < count; ++k) AddSum(&blocks[k * kMeanSubBlock / kSumBlock], subs[k]);
   }
   // The weighted sums of block [b, e) (b a multiple of kMeanSubBlock): its sub-blocks' sums,
   // added in order.

@@ -737,6 +737,13 @@ Pose2 ReferenceMean(const PosedToy& m, std::span<const double> lw) {
   return Pose2{x / w, y / w, std::atan2(s, c)};
 }
 
+// Bit for bit.
+void ExpectSamePose(const Pose2& got, const Pose2& want) {
+  EXPECT_EQ(got.x_m, want.x_m);
+  EXPECT_EQ(got.y_m, want.y_m);
+  EXPECT_EQ(got.heading_rad, want.heading_rad);
+}
+
 // Mean poses after an update and over a run of predictions: the documented sums, bit for bit,
 // at any thread count and batch size (5,000 particles: two blocks, a partial sub-block).
 TEST(FilterDriverTest, MeanPoseIsTheSumOfFixedSubBlocksAtAnyThreadCount) {
@@ -760,12 +767,8 @@ TEST(FilterDriverTest, MeanPoseIsTheSumOfFixedSubBlocksAtAnyThreadCount) {
       const Pose2 after_run = ReferenceMean(model, driver.filter().log_weights());
       const std::vector<StampedPose>& mean = driver.mean_trajectory();
       ASSERT_EQ(mean.size(), 5u);
-      EXPECT_EQ(mean[1].pose.x_m, after_update.x_m);
-      EXPECT_EQ(mean[1].pose.y_m, after_update.y_m);
-      EXPECT_EQ(mean[1].pose.heading_rad, after_update.heading_rad);
-      EXPECT_EQ(mean[4].pose.x_m, after_run.x_m);
-      EXPECT_EQ(mean[4].pose.y_m, after_run.y_m);
-      EXPECT_EQ(mean[4].pose.heading_rad, after_run.heading_rad);
+      ExpectSamePose(mean[1].pose, after_update);
+      ExpectSamePose(mean[4].pose, after_run);
     }
   }
 }
@@ -793,9 +796,7 @@ TEST(FilterDriverTest, UpdateMeanPoseCountsWhatCompletesTheStep) {
         const Pose2 want = ReferenceMean(model, driver.filter().log_weights());
         const std::vector<StampedPose>& mean = driver.mean_trajectory();
         ASSERT_EQ(mean.size(), 2u);
-        EXPECT_EQ(mean[1].pose.x_m, want.x_m);
-        EXPECT_EQ(mean[1].pose.y_m, want.y_m);
-        EXPECT_EQ(mean[1].pose.heading_rad, want.heading_rad);
+        ExpectSamePose(mean[1].pose, want);
       }
     }
   }
