@@ -18,6 +18,7 @@
 
 #include "concurrency/worker_pool.h"
 #include "engine/fastslam/fastslam_model.h"
+#include "engine/filter/filter_model.h"
 #include "tools/sim/fastslam_simulator.h"
 
 namespace grove {
@@ -59,14 +60,14 @@ struct MapFixture {
     }
     ++step;
     std::vector<uint32_t> zeros(static_cast<size_t>(particles), 0);
-    model->Gather(zeros, workers);
+    GatherGeneration(*model, zeros, 64, workers);
     model->ReleaseDead(workers);
     for (uint32_t k = 0; k < particles; ++k) pairs.push_back(k & ~1u);
   }
 
   // One scan of 2 observations of random landmarks, after a resampling into pairs.
   void Scan(std::mt19937_64& rng) {
-    model->Gather(pairs, workers);
+    GatherGeneration(*model, pairs, 64, workers);
     model->ReleaseDead(workers);
     const LandmarkObservation z[2] = {Sighting(static_cast<int64_t>(rng() % landmarks), side),
                                       Sighting(static_cast<int64_t>(rng() % landmarks), side)};
@@ -148,13 +149,13 @@ struct UnknownFixture {
       }
     }
     std::vector<uint32_t> zeros(static_cast<size_t>(particles), 0);
-    model->Gather(zeros, workers);
+    GatherGeneration(*model, zeros, 64, workers);
     model->ReleaseDead(workers);
     for (uint32_t k = 0; k < particles; ++k) pairs.push_back(k & ~1u);
   }
 
   void Scan() {
-    model->Gather(pairs, workers);
+    GatherGeneration(*model, pairs, 64, workers);
     model->ReleaseDead(workers);
     const ScanStep s{scan};
     const size_t n = log_w.size();

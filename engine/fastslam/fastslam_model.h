@@ -272,12 +272,27 @@ class FastSlamModel {
     return std::isfinite(f) ? f : -std::numeric_limits<double>::infinity();
   }
 
-  void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
-    poses_.Gather(parents, workers);
-    association_.Gather(parents, workers);
-    maps_.Gather(parents, workers);
-    paths_.Gather(parents, workers);
-    n_ = parents.size();  // imported particles were named by parents or are dropped
+  // The next generation in chunks (ChunkGatheringModel). Imported particles are named by
+  // parents or dropped.
+  void GatherBegin(std::span<const uint32_t> parents) {
+    const size_t n = parents.size();
+    poses_.GatherBegin(n);
+    association_.GatherBegin(n);
+    maps_.GatherBegin(n);
+    paths_.GatherBegin(n);
+  }
+  void GatherRange(std::span<const uint32_t> parents, size_t begin, size_t end) {
+    poses_.GatherRange(parents, begin, end);
+    association_.GatherRange(parents, begin, end);
+    maps_.GatherRange(parents, begin, end);
+    paths_.GatherRange(parents, begin, end);
+  }
+  void GatherEnd(std::span<const uint32_t> parents, size_t grain) {
+    poses_.GatherEnd();
+    association_.GatherEnd();
+    maps_.GatherEnd(parents, grain);
+    paths_.GatherEnd(parents, grain);
+    n_ = parents.size();
   }
 
   void ReleaseDead(WorkerPool& workers) {

@@ -47,14 +47,16 @@ class ParticlePoses {
   PoseCovariance& proposal_sigma(size_t i) { return proposal_sigma_[i]; }
   std::span<VehiclePose> poses() { return pose_; }
 
-  void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
-    GatherValues(parents, workers, &pose_);
-    GatherValues(parents, workers, &unit_);
-    GatherValues(parents, workers, &cov_);
-    if (proposals_) {
-      GatherValues(parents, workers, &proposal_mu_);
-      GatherValues(parents, workers, &proposal_sigma_);
-    }
+  // The next generation in parts (ChunkGatheringModel): GatherBegin(), GatherRange() on each
+  // chunk of new particles, GatherEnd().
+  void GatherBegin(size_t n) {
+    ForEachValue([&](auto g) { g.Begin(n); });
+  }
+  void GatherRange(std::span<const uint32_t> parents, size_t b, size_t e) {
+    ForEachValue([&](auto g) { g.Range(parents, b, e); });
+  }
+  void GatherEnd() {
+    ForEachValue([](auto g) { g.End(); });
   }
 
   // The checkpoint's part: poses, covariances and heading vectors (a checkpoint is taken after
@@ -157,12 +159,32 @@ class ParticlePoses {
     return Status::Ok();
   }
 
+  // Calls f(Gathered<T>) on each value with its gather's buffer.
+  template <typename F>
+  void ForEachValue(F f) {
+    f(Gathered<VehiclePose>{&pose_, &spare_.pose});
+    f(Gathered<HeadingUnit>{&unit_, &spare_.unit});
+    f(Gathered<PoseCovariance>{&cov_, &spare_.cov});
+    if (proposals_) {
+      f(Gathered<Eigen::Vector3d>{&proposal_mu_, &spare_.proposal_mu});
+      f(Gathered<PoseCovariance>{&proposal_sigma_, &spare_.proposal_sigma});
+    }
+  }
+
   const bool proposals_;
   std::vector<VehiclePose> pose_;
   std::vector<HeadingUnit> unit_;
   std::vector<PoseCovariance> cov_;
   std::vector<Eigen::Vector3d> proposal_mu_;
   std::vector<PoseCovariance> proposal_sigma_;
+  // The previous generation's values, kept as the next gather's buffers.
+  struct {
+    std::vector<VehiclePose> pose;
+    std::vector<HeadingUnit> unit;
+    std::vector<PoseCovariance> cov;
+    std::vector<Eigen::Vector3d> proposal_mu;
+    std::vector<PoseCovariance> proposal_sigma;
+  } spare_;
 };
 
 }  // namespace grove::fastslam

@@ -210,9 +210,15 @@ class UnknownAssociation {
     return Status::Ok();
   }
 
-  void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
-    if (active_) GatherValues(parents, workers, &counts_);
-    if (!pending_.empty()) GatherValues(parents, workers, &pending_);
+  // The next generation in parts, as ParticlePoses'.
+  void GatherBegin(size_t n) {
+    ForEachValue([&](auto g) { g.Begin(n); });
+  }
+  void GatherRange(std::span<const uint32_t> parents, size_t b, size_t e) {
+    ForEachValue([&](auto g) { g.Range(parents, b, e); });
+  }
+  void GatherEnd() {
+    ForEachValue([](auto g) { g.End(); });
   }
 
   // The checkpoint's part: the longest range and the counts.
@@ -311,6 +317,13 @@ class UnknownAssociation {
   }
 
  private:
+  // Calls f(Gathered<T>) on each per-particle value this association keeps.
+  template <typename F>
+  void ForEachValue(F f) {
+    if (active_) f(Gathered<AssociationCounts>{&counts_, &spare_counts_});
+    if (!pending_.empty()) f(Gathered<ScanQuery>{&pending_, &spare_pending_});
+  }
+
   static Status CheckCounts(ByteReader* r, const AssociationCounts& c) {
     for (int64_t v : {c.associated, c.created, c.ignored, c.removed, c.dropped, c.tagged, c.wrong,
                       c.truncated}) {
@@ -516,6 +529,9 @@ class UnknownAssociation {
   std::vector<AssociationCounts> counts_;  // per particle, along its ancestry
   // Each particle's query of the current scan, from Advance() to Complete().
   std::vector<ScanQuery> pending_;
+  // The previous generation's, kept as the next gather's buffers.
+  std::vector<AssociationCounts> spare_counts_;
+  std::vector<ScanQuery> spare_pending_;
   mutable std::vector<Scratch> scratch_;  // per worker slot
 };
 

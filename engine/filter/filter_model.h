@@ -15,16 +15,49 @@
 
 namespace grove {
 
-// What a model provides (checked where a filter is instantiated).
+// A model that gathers its next generation in chunks, in a loop the filter runs in the shape
+// of its batches: GatherBegin(parents) before the loop, GatherRange(parents, begin, end) on each
+// chunk [c * grain, min((c + 1) * grain, n)), GatherEnd(parents, grain) after it. Each new
+// particle's values are then written by the thread that advances it next (WorkerPool's homes),
+// not all by the driving thread, whose writes the other threads would fetch from its core.
 template <typename M>
-concept FilterModel = requires(M& m, const M& cm, std::span<const uint32_t> parents,
-                               WorkerPool& workers) {
-  { cm.size() } -> std::convertible_to<size_t>;
-  // The next generation: particle k copies parents[k] (nondecreasing); maps are shared.
+concept ChunkGatheringModel = requires(M& m, std::span<const uint32_t> parents, size_t k) {
+  { m.GatherBegin(parents) } -> std::same_as<void>;
+  { m.GatherRange(parents, k, k) } -> std::same_as<void>;
+  { m.GatherEnd(parents, k) } -> std::same_as<void>;
+};
+
+// A model that gathers its next generation itself: particle k copies parents[k]
+// (nondecreasing); maps are shared.
+template <typename M>
+concept WholeGatheringModel = requires(M& m, std::span<const uint32_t> parents,
+                                       WorkerPool& workers) {
   { m.Gather(parents, workers) } -> std::same_as<void>;
+};
+
+// What a model provides (checked where a filter is instantiated): a gather, either kind.
+template <typename M>
+concept GatheringModel = WholeGatheringModel<M> || ChunkGatheringModel<M>;
+template <typename M>
+concept FilterModel = GatheringModel<M> && requires(M& m, const M& cm, WorkerPool& workers) {
+  { cm.size() } -> std::convertible_to<size_t>;
   // Frees what only the previous generation reached.
   { m.ReleaseDead(workers) } -> std::same_as<void>;
 };
+
+// The next generation of `m`: particle k copies parents[k]. A chunk-gathering model's in one
+// loop of chunks of `grain` (the filter's batch size), another's by its Gather().
+template <typename M>
+void GatherGeneration(M& m, std::span<const uint32_t> parents, size_t grain, WorkerPool& workers) {
+  if constexpr (ChunkGatheringModel<M>) {
+    m.GatherBegin(parents);
+    workers.ParallelFor(parents.size(), grain,
+                        [&](int, size_t b, size_t e) { m.GatherRange(parents, b, e); });
+    m.GatherEnd(parents, grain);
+  } else {
+    m.Gather(parents, workers);
+  }
+}
 
 // A model that can free its dead generation in pieces: ReleaseDeadRange(lo, hi, slot) releases
 // what the previous generation's particles [lo, min(hi, its size)) held, DeadReleased() ends

@@ -547,7 +547,8 @@ class ParticleFilter {
   void TakeGeneration(std::chrono::steady_clock::time_point t0) {
     using Clock = std::chrono::steady_clock;
     FinishRelease();  // (an advance always comes between two resamplings)
-    model_->Gather(parents_, *workers_);
+    GatherGeneration(*model_, std::span<const uint32_t>(parents_),
+                     BatchSize(*workers_, parents_.size(), options_.batch), *workers_);
     auto t1 = Clock::now();
     // Alone (parents_ then nondecreasing), a piece-releasing model frees the dead generation in
     // the next advance.

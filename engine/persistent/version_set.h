@@ -84,6 +84,21 @@ class VersionSet {
     dead_.swap(roots_);
     roots_.swap(spare_);
   }
+  // Gather() in parts, for a caller that gathers several things in one loop of chunks of
+  // `grain`: GatherBegin(), GatherRange() on each chunk, GatherEnd() after the loop.
+  void GatherBegin(size_t n) {
+    GROVE_DCHECK(dead_.empty());
+    spare_.resize(n);
+  }
+  void GatherRange(std::span<const uint32_t> parents, size_t b, size_t e) {
+    GatherSharedRange(
+        parents, &roots_, [](Root r) { return Store::Share(r); }, &spare_, b, e);
+  }
+  void GatherEnd(std::span<const uint32_t> parents, size_t grain) {
+    GatherSharedSeams(parents, grain, &roots_);
+    dead_.swap(roots_);
+    roots_.swap(spare_);
+  }
 
   // Frees the dead generation's references (what no live version shares), in parallel.
   void ReleaseDead(WorkerPool& workers) {

@@ -445,7 +445,7 @@ TEST(FastSlamModelMaps, CopiesUpdatedDifferentlyKeepTwoMaps) {
   const LandmarkObservation first[] = {{10, 0.1, 5}};
   ASSERT_TRUE(model.Advance(fastslam::ScanStep{first}, 0, 0, 2, 0, log_w).ok());
   const uint32_t parents[] = {0, 0};
-  model.Gather(parents, workers);
+  GatherGeneration(model, parents, 64, workers);
   model.ReleaseDead(workers);
   EXPECT_EQ(model.map(0), model.map(1));  // shared after resampling
   const LandmarkObservation a[] = {{10.5, 0.1, 5}};
@@ -478,7 +478,7 @@ TEST(FastSlamModelMaps, TreesGrowPastAnyHeight) {
     EXPECT_EQ(fastslam::FastSlamModel<2>::Trie::Height(model.map(0)),
               fastslam::FastSlamModel<2>::Trie::HeightFor(static_cast<uint64_t>(id)));
     const uint32_t parents[] = {0, 1, 1};
-    model.Gather(parents, workers);
+    GatherGeneration(model, parents, 64, workers);
     model.ReleaseDead(workers);
     ASSERT_TRUE(model.CheckCounts().ok());
   }
