@@ -276,20 +276,17 @@ class FastSlamModel {
   // parents or dropped.
   void GatherBegin(std::span<const uint32_t> parents) {
     const size_t n = parents.size();
-    poses_.GatherBegin(n);
-    association_.GatherBegin(n);
+    ForEachGathered([&](auto g) { g.Begin(n); });
     maps_.GatherBegin(n);
     paths_.GatherBegin(n);
   }
   void GatherRange(std::span<const uint32_t> parents, size_t begin, size_t end) {
-    poses_.GatherRange(parents, begin, end);
-    association_.GatherRange(parents, begin, end);
+    ForEachGathered([&](auto g) { g.Range(parents, begin, end); });
     maps_.GatherRange(parents, begin, end);
     paths_.GatherRange(parents, begin, end);
   }
   void GatherEnd(std::span<const uint32_t> parents, size_t grain) {
-    poses_.GatherEnd();
-    association_.GatherEnd();
+    ForEachGathered([](auto g) { g.End(); });
     maps_.GatherEnd(parents, grain);
     paths_.GatherEnd(parents, grain);
     n_ = parents.size();
@@ -420,6 +417,13 @@ class FastSlamModel {
   }
 
  private:
+  // Calls f on each per-particle value the model gathers by copying (Gathered<T>).
+  template <typename F>
+  void ForEachGathered(F f) {
+    poses_.ForEachGathered(f);
+    association_.ForEachGathered(f);
+  }
+
   using Scratch = typename UnknownAssociation<Trie>::Scratch;
 
   static bool ValidLandmark(const Landmark& l) {

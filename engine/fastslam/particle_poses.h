@@ -47,16 +47,17 @@ class ParticlePoses {
   PoseCovariance& proposal_sigma(size_t i) { return proposal_sigma_[i]; }
   std::span<VehiclePose> poses() { return pose_; }
 
-  // The next generation in parts (ChunkGatheringModel): GatherBegin(), GatherRange() on each
-  // chunk of new particles, GatherEnd().
-  void GatherBegin(size_t n) {
-    ForEachValue([&](auto g) { g.Begin(n); });
-  }
-  void GatherRange(std::span<const uint32_t> parents, size_t b, size_t e) {
-    ForEachValue([&](auto g) { g.Range(parents, b, e); });
-  }
-  void GatherEnd() {
-    ForEachValue([](auto g) { g.End(); });
+  // Calls f(Gathered<T>) on each value with its buffer for the next generation, which
+  // FastSlamModel gathers in chunks (Gathered's Begin, Range and End).
+  template <typename F>
+  void ForEachGathered(F f) {
+    f(Gathered<VehiclePose>{&pose_, &spare_.pose});
+    f(Gathered<HeadingUnit>{&unit_, &spare_.unit});
+    f(Gathered<PoseCovariance>{&cov_, &spare_.cov});
+    if (proposals_) {
+      f(Gathered<Eigen::Vector3d>{&proposal_mu_, &spare_.proposal_mu});
+      f(Gathered<PoseCovariance>{&proposal_sigma_, &spare_.proposal_sigma});
+    }
   }
 
   // The checkpoint's part: poses, covariances and heading vectors (a checkpoint is taken after
@@ -157,18 +158,6 @@ class ParticlePoses {
       return r->Error("pose covariances", "a variance is negative");
     }
     return Status::Ok();
-  }
-
-  // Calls f(Gathered<T>) on each value with its gather's buffer.
-  template <typename F>
-  void ForEachValue(F f) {
-    f(Gathered<VehiclePose>{&pose_, &spare_.pose});
-    f(Gathered<HeadingUnit>{&unit_, &spare_.unit});
-    f(Gathered<PoseCovariance>{&cov_, &spare_.cov});
-    if (proposals_) {
-      f(Gathered<Eigen::Vector3d>{&proposal_mu_, &spare_.proposal_mu});
-      f(Gathered<PoseCovariance>{&proposal_sigma_, &spare_.proposal_sigma});
-    }
   }
 
   const bool proposals_;

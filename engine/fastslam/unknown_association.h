@@ -210,15 +210,12 @@ class UnknownAssociation {
     return Status::Ok();
   }
 
-  // The next generation in parts, as ParticlePoses'.
-  void GatherBegin(size_t n) {
-    ForEachValue([&](auto g) { g.Begin(n); });
-  }
-  void GatherRange(std::span<const uint32_t> parents, size_t b, size_t e) {
-    ForEachValue([&](auto g) { g.Range(parents, b, e); });
-  }
-  void GatherEnd() {
-    ForEachValue([](auto g) { g.End(); });
+  // Calls f(Gathered<T>) on each per-particle value kept, with its buffer for the next
+  // generation (as ParticlePoses::ForEachGathered).
+  template <typename F>
+  void ForEachGathered(F f) {
+    if (active_) f(Gathered<AssociationCounts>{&counts_, &spare_counts_});
+    if (!pending_.empty()) f(Gathered<ScanQuery>{&pending_, &spare_pending_});
   }
 
   // The checkpoint's part: the longest range and the counts.
@@ -317,13 +314,6 @@ class UnknownAssociation {
   }
 
  private:
-  // Calls f(Gathered<T>) on each per-particle value this association keeps.
-  template <typename F>
-  void ForEachValue(F f) {
-    if (active_) f(Gathered<AssociationCounts>{&counts_, &spare_counts_});
-    if (!pending_.empty()) f(Gathered<ScanQuery>{&pending_, &spare_pending_});
-  }
-
   static Status CheckCounts(ByteReader* r, const AssociationCounts& c) {
     for (int64_t v : {c.associated, c.created, c.ignored, c.removed, c.dropped, c.tagged, c.wrong,
                       c.truncated}) {
