@@ -50,7 +50,7 @@ class WorkerPool {
   int num_slots() const { return threads_; }
 
   // Calls body(slot, begin, end) over [0, n) in chunks of `grain` items: chunk c is
-  // [c * grain, min((c + 1) * grain, n)) (GatherShared relies on it).
+  // [c * grain, min((c + 1) * grain, n)) (the gathers of generation.h rely on it).
   // Chunks have a home slot: slot k owns the k-th contiguous share of [0, n) and runs it first,
   // in order. So the same particles meet the same worker from one loop to the next, and nodes
   // are mostly freed by the slot whose pool they came from (a local free, not a cross-thread

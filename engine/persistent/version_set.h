@@ -78,11 +78,8 @@ class VersionSet {
   // adjacent in `parents` (as in any nondecreasing list).
   void Gather(std::span<const uint32_t> parents, WorkerPool& workers) {
     GROVE_DCHECK(dead_.empty());
-    // A lambda, not &Store::Share: a function pointer would stay an indirect call per copy.
-    GatherShared(
-        parents, &roots_, workers, [](Root r) { return Store::Share(r); }, &spare_);
-    dead_.swap(roots_);
-    roots_.swap(spare_);
+    GatherShared(parents, &roots_, workers, kShare, &spare_);
+    TakeGathered();
   }
   // Gather() in parts, for a caller that gathers several things in one loop of chunks of
   // `grain`: GatherBegin(), GatherRange() on each chunk, GatherEnd() after the loop.
@@ -91,13 +88,11 @@ class VersionSet {
     spare_.resize(n);
   }
   void GatherRange(std::span<const uint32_t> parents, size_t b, size_t e) {
-    GatherSharedRange(
-        parents, &roots_, [](Root r) { return Store::Share(r); }, &spare_, b, e);
+    GatherSharedRange(parents, &roots_, kShare, &spare_, b, e);
   }
   void GatherEnd(std::span<const uint32_t> parents, size_t grain) {
     GatherSharedSeams(parents, grain, &roots_);
-    dead_.swap(roots_);
-    roots_.swap(spare_);
+    TakeGathered();
   }
 
   // Frees the dead generation's references (what no live version shares), in parallel.
@@ -152,6 +147,15 @@ class VersionSet {
   }
 
  private:
+  // A lambda, not &Store::Share: a function pointer would stay an indirect call per copy.
+  static constexpr auto kShare = [](Root r) { return Store::Share(r); };
+
+  // The gathered versions (in spare_) become the live ones, the old ones the dead generation.
+  void TakeGathered() {
+    dead_.swap(roots_);
+    roots_.swap(spare_);
+  }
+
   Store* store_;
   std::vector<Root> roots_;
   std::vector<Root> dead_;
